@@ -1,0 +1,23 @@
+# One-command set-up on a fresh machine: `make demo` runs the main job, `make test` the test suite.
+# Both create the virtual environment .venv and install snoworm into it first.
+PYTHON ?= python3
+VENV ?= .venv
+PY := $(VENV)/bin/python
+OUT ?= out
+
+.PHONY: demo test bench paper clean
+
+$(VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	touch $@
+
+demo: $(VENV)/.installed
+	$(VENV)/bin/snoworm run scenarios/tow6_uniform.yaml --out $(OUT)/tow6_uniform
+
+test: $(VENV)/.installed
+	$(PY) -m pytest -q
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis

@@ -1,0 +1,348 @@
+r"""Longitudinal dynamics of a chain of wheeled segments (MODEL.md section 4).
+
+::
+
+        direction of travel  -->                                   x (forward, m)
+
+      link N-2        link 1          link 0
+    [seg N-1]==T==> ... [seg 1]==T==>[seg 0]      T_k > 0: link k in tension
+      <-- F_tow                                   segment 0 is the leader (front)
+      each segment: 2 axles at x_k +- wheelbase/2, each axle with 2 wheels
+
+    m_k dv_k/dt = n_w * sum_axles (F_t - F_tr) + T_{k-1} - T_k - F_tow [k = N-1]
+    J   dw/dt   = T_m - R_w (F_t - F_tr) - T_rr                 (per wheel, per axle)
+    T_k = k_c (x_k - x_{k+1} - L_0 - s_k) + c_c (v_k - v_{k+1})  (s_k: prismatic extension)
+
+One kernel, :meth:`ChainModel.evaluate`, computes every force of the model from the state for
+any leading batch shape: the right-hand side calls it on one state (or a stack of batch
+members), the results module calls it on all output samples at once after the solve.
+
+State layout (one block of ``n_s`` fields per segment, interleaved so the Jacobian is banded)::
+
+    x_m, v_mps, omega_front, omega_rear, integral_front_Nm, integral_rear_Nm
+    [, q_mps (outer force-loop integral, force-control mode)]
+    [, s_m (extension of the prismatic joint in the link *behind* the segment)]
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from . import drivetrain, terrain
+from .terrain import TerrainParams, TerrainProfile
+
+__all__ = ["Controls", "ChainModel", "SegmentArrays"]
+
+
+@dataclass(frozen=True)
+class SegmentArrays:
+    """Per-segment physical parameters as arrays of length N (SI units)."""
+
+    mass_kg: np.ndarray
+    wheel_radius_m: np.ndarray
+    wheel_inertia_kgm2: np.ndarray
+    wheelbase_m: np.ndarray
+    wheels_per_axle: np.ndarray
+    gravity_mps2: np.ndarray
+    motor_slope_Nms_per_rad: np.ndarray
+    no_load_speed_radps: np.ndarray
+    torque_limit_Nm: np.ndarray
+    drivetrain_efficiency: np.ndarray
+    speed_kp_Nms_per_rad: np.ndarray
+    speed_ki_Nm_per_rad: np.ndarray
+
+    @classmethod
+    def from_list(cls, segments) -> "SegmentArrays":
+        """Stack a list of per-segment parameter objects (with the same attribute names)."""
+        names = cls.__dataclass_fields__
+        return cls(**{n: np.array([float(getattr(s, n)) for s in segments]) for n in names})
+
+    @property
+    def normal_force_N(self) -> np.ndarray:
+        """Static normal load per wheel, ``m g / (2 n_w)`` (no load transfer)."""
+        return self.mass_kg * self.gravity_mps2 / (2.0 * self.wheels_per_axle)
+
+
+@dataclass(frozen=True)
+class LinkArrays:
+    """Per-link parameters as arrays of length N-1."""
+
+    stiffness_N_per_m: np.ndarray
+    damping_Ns_per_m: np.ndarray
+    rest_spacing_m: np.ndarray
+    prismatic: np.ndarray          # 1.0 for an active prismatic joint, 0.0 for a fixed link
+    stroke_min_m: np.ndarray
+    stroke_max_m: np.ndarray
+    force_max_N: np.ndarray
+    rate_max_mps: np.ndarray
+    force_gain_per_s: np.ndarray
+
+
+#: Gain of the soft end stops of a prismatic joint [1/s]: the extension rate is limited to
+#: ``K_STOP * (distance to the stop)``, so the stroke is never exceeded.
+K_STOP = 50.0
+
+
+@dataclass(frozen=True)
+class Controls:
+    """Piecewise-constant inputs of the chain during one integration interval.
+
+    Modes (``snoworm.modes``) produce these; the physics stays the same for every mode.
+    Arrays have length N (segments) or N-1 (links).
+
+    Attributes
+    ----------
+    motor_on : (N,) 1 where the segment's motors run (after its start time), else 0.
+    speed_sp_mps : (N,) wheel-speed set-point ``R_w w_ref`` [m/s]; 0 locks the wheels.
+    fc_active : (N,) 1 where an outer force loop sets the wheel-speed set-point.
+    fc_link : (N,) int, index of the controlled force: link ``j`` (0..N-2) or ``N-1`` = the tow.
+    fc_sigma : (N,) +1 if the controlled link is behind the segment, -1 if ahead.
+    fc_ref_N, fc_nominal_mps, fc_kp, fc_ki, fc_vmax_mps : (N,) outer PI loop settings:
+        ``v_sp = clip(v_nom + kp e + q, 0, v_max)``, ``e = sigma (F_ref - F)``.
+    joint_active : (N-1,) 1 where a prismatic joint is force-commanded, 0 where it holds length.
+    joint_dir : (N-1,) +1 to push (extend, compression), -1 to pull (contract, tension).
+    joint_ff_N, joint_kv, joint_vtarget_mps, joint_limit_N : (N-1,) force command
+        ``|F| = clip(ff + kv (v_target - v_mover), 0, limit)``.
+    joint_mover : (N-1,) int, index of the segment whose speed the joint regulates.
+    """
+
+    motor_on: np.ndarray
+    speed_sp_mps: np.ndarray
+    fc_active: np.ndarray
+    fc_link: np.ndarray
+    fc_sigma: np.ndarray
+    fc_ref_N: np.ndarray
+    fc_nominal_mps: np.ndarray
+    fc_kp: np.ndarray
+    fc_ki: np.ndarray
+    fc_vmax_mps: np.ndarray
+    joint_active: np.ndarray
+    joint_dir: np.ndarray
+    joint_ff_N: np.ndarray
+    joint_kv: np.ndarray
+    joint_vtarget_mps: np.ndarray
+    joint_limit_N: np.ndarray
+    joint_mover: np.ndarray
+
+    @classmethod
+    def rolling(cls, n: int, motor_on, speed_sp_mps) -> "Controls":
+        """Plain wheel-speed control: no force loop, every joint holding its length."""
+        z = np.zeros(n)
+        zl = np.zeros(max(n - 1, 0))
+        return cls(
+            motor_on=np.asarray(motor_on, float) * np.ones(n),
+            speed_sp_mps=np.asarray(speed_sp_mps, float) * np.ones(n),
+            fc_active=z.copy(), fc_link=np.full(n, n - 1, dtype=int), fc_sigma=np.ones(n),
+            fc_ref_N=z.copy(), fc_nominal_mps=z.copy(), fc_kp=np.ones(n), fc_ki=z.copy(),
+            fc_vmax_mps=z.copy(),
+            joint_active=zl.copy(), joint_dir=np.ones_like(zl), joint_ff_N=zl.copy(),
+            joint_kv=zl.copy(), joint_vtarget_mps=zl.copy(), joint_limit_N=zl.copy(),
+            joint_mover=np.arange(max(n - 1, 0), dtype=int),
+        )
+
+    def with_(self, **kw) -> "Controls":
+        """A copy with some arrays replaced (converted to float arrays)."""
+        return replace(self, **{k: np.asarray(v) for k, v in kw.items()})
+
+
+class ChainModel:
+    """An assembled chain: parameter arrays, state layout, Jacobian pattern and the force kernel.
+
+    Parameters
+    ----------
+    seg : SegmentArrays
+        Per-segment parameters (length N >= 1).
+    links : LinkArrays
+        Per-link parameters (length N-1).
+    terrain_params : TerrainParams
+        Terrain coefficients (Eqs. 1-3 and the resistance torque).
+    profile : TerrainProfile
+        X_t along the track.
+    tow_force_N : float
+        Constant towed load on the rear segment (pulls backward when positive).
+    force_loop : bool
+        Whether the state includes the outer force-loop integrators (force-control mode).
+    """
+
+    def __init__(self, seg: SegmentArrays, links: LinkArrays, terrain_params: TerrainParams,
+                 profile: TerrainProfile, tow_force_N: float, force_loop: bool = False):
+        self.seg = seg
+        self.links = links
+        self.tp = terrain_params
+        self.profile = profile
+        self.tow_force_N = float(tow_force_N)
+        self.n = len(seg.mass_kg)
+        self.force_loop = bool(force_loop)
+        self.has_joints = bool(np.any(links.prismatic > 0))
+        fields = ["x_m", "v_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm"]
+        if self.force_loop:
+            fields.append("q_mps")
+        if self.has_joints:
+            fields.append("s_m")
+        self.fields = tuple(fields)
+        self.idx = {f: j for j, f in enumerate(fields)}
+        self.n_s = len(fields)
+        self.n_states = self.n * self.n_s
+        # constants prepared once (shapes broadcast against (..., N, 2) axle arrays)
+        col = lambda a: np.asarray(a, float)[:, None]
+        self._R = col(seg.wheel_radius_m)
+        self._J = col(seg.wheel_inertia_kgm2)
+        self._Fn = col(seg.normal_force_N)
+        self._axle_offset = np.stack([seg.wheelbase_m / 2.0, -seg.wheelbase_m / 2.0], axis=-1)
+        self._kp = col(seg.speed_kp_Nms_per_rad)
+        self._ki = col(seg.speed_ki_Nm_per_rad)
+        self._slope = col(seg.motor_slope_Nms_per_rad)
+        self._wnl = col(seg.no_load_speed_radps)
+        self._Tmax = col(seg.torque_limit_Nm)
+        self._nw = seg.wheels_per_axle.astype(float)
+        self._m = seg.mass_kg.astype(float)
+
+    # ------------------------------------------------------------------ layout
+    def unpack(self, y):
+        """View a flat state (or stack of states, leading dims) as ``(..., N, n_s)``."""
+        y = np.asarray(y)
+        return y.reshape(y.shape[:-1] + (self.n, self.n_s))
+
+    def field(self, Y, name):
+        """One named field of an unpacked state, shape ``(..., N)``."""
+        return Y[..., self.idx[name]]
+
+    def initial_state(self, joint_extension_m=None) -> np.ndarray:
+        """Chain at rest: leader at x = 0, links at their rest spacing (zero force)."""
+        Y = np.zeros((self.n, self.n_s))
+        spacing = self.links.rest_spacing_m.copy()
+        if self.has_joints:
+            s0 = np.zeros(self.n) if joint_extension_m is None else np.append(joint_extension_m, 0.0)
+            Y[:, self.idx["s_m"]] = s0
+            spacing = spacing + s0[:-1]
+        Y[1:, 0] = -np.cumsum(spacing)
+        return Y.reshape(-1)
+
+    def jac_sparsity(self) -> np.ndarray:
+        """Structural non-zero pattern of the Jacobian ``d(dy/dt)/dy`` (dense bool array).
+
+        Within a segment every field may depend on every other; across neighbouring segments
+        the rows of v, s, q (and, with a force loop, the wheel states that follow its
+        set-point) depend on the neighbours' x, v and s.
+        """
+        ns, n = self.n_s, self.n
+        own = np.ones((ns, ns), bool)
+        own[self.idx["x_m"], :] = False
+        own[self.idx["x_m"], self.idx["v_mps"]] = True
+        nb = np.zeros((ns, ns), bool)
+        rows = ["v_mps"] + (["s_m"] if self.has_joints else [])
+        if self.force_loop:
+            rows += ["q_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm"]
+        cols = ["x_m", "v_mps"] + (["s_m"] if self.has_joints else [])
+        for r in rows:
+            for c in cols:
+                nb[self.idx[r], self.idx[c]] = True
+        P = np.zeros((n * ns, n * ns), bool)
+        for k in range(n):
+            P[k * ns:(k + 1) * ns, k * ns:(k + 1) * ns] = own
+            for kk in (k - 1, k + 1):
+                if 0 <= kk < n:
+                    P[k * ns:(k + 1) * ns, kk * ns:(kk + 1) * ns] = nb
+        return P
+
+    def bandwidths(self):
+        """``(lband, uband)`` of :meth:`jac_sparsity`, for LSODA's banded Jacobian."""
+        r, c = np.nonzero(self.jac_sparsity())
+        return int(max(0, np.max(r - c))), int(max(0, np.max(c - r)))
+
+    # ------------------------------------------------------------------ kernel
+    def evaluate(self, Y, ctl: Controls, outputs: bool = False):
+        """All forces and derivatives for unpacked states ``Y`` of shape ``(..., N, n_s)``.
+
+        Returns
+        -------
+        dY : ndarray, shape ``(..., N, n_s)``
+            Time derivatives of every field.
+        out : dict or None
+            With ``outputs=True``: named intermediate quantities (per axle arrays have a
+            trailing axis of 2: front, rear), used for results after the solve.
+        """
+        tp = self.tp
+        I = self.idx
+        x = Y[..., I["x_m"]]
+        v = Y[..., I["v_mps"]]
+        w = Y[..., 2:4]
+        integ = Y[..., 4:6]
+        R = self._R
+        # terrain, per axle (Eqs. 1-3, resistance torque), X_t evaluated at each axle
+        xa = x[..., None] + self._axle_offset
+        X = self.profile(xa)
+        wm = w * R
+        V = v[..., None]
+        i = terrain.slip(wm, V, tp.slip_eps_mps)
+        Ft = terrain.traction_force(i, self._Fn, X, tp)
+        Ftr = terrain.resistance_force(V, self._Fn, X, tp)
+        Trr = terrain.resistance_torque(wm, self._Fn, X, R, tp)
+        # links (tension positive)
+        L = self.links
+        if self.n > 1:
+            d = x[..., :-1] - x[..., 1:] - L.rest_spacing_m
+            if self.has_joints:
+                s = Y[..., :-1, I["s_m"]]
+                d = d - s
+            T = L.stiffness_N_per_m * d + L.damping_Ns_per_m * (v[..., :-1] - v[..., 1:])
+        else:
+            T = np.zeros(x.shape[:-1] + (0,))
+        dY = np.empty_like(Y)
+        # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
+        sp = ctl.speed_sp_mps
+        if self.force_loop:
+            tow = np.broadcast_to(self.tow_force_N, T.shape[:-1] + (1,))
+            Fsel = np.concatenate([T, tow], axis=-1)[..., ctl.fc_link]
+            e = ctl.fc_sigma * (ctl.fc_ref_N - Fsel)
+            q = Y[..., I["q_mps"]]
+            raw = ctl.fc_nominal_mps + ctl.fc_kp * e + q
+            vsp = np.minimum(np.maximum(raw, 0.0), ctl.fc_vmax_mps)
+            dY[..., I["q_mps"]] = (ctl.fc_ki * e + (ctl.fc_ki / ctl.fc_kp) * (vsp - raw)) * ctl.fc_active * ctl.motor_on
+            sp = np.where(ctl.fc_active > 0, vsp, sp)
+        on = ctl.motor_on[:, None]
+        w_ref = (sp / self.seg.wheel_radius_m)[..., None]
+        T_lo, T_hi = drivetrain.motor_envelope(w, self._slope, self._wnl, self._Tmax)
+        Tm, dI = drivetrain.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, on)
+        reaction = terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)
+        dY[..., 2:4] = (Tm - reaction) / self._J
+        dY[..., 4:6] = dI
+        # chassis
+        wheel_net = self._nw * np.sum(Ft - Ftr, axis=-1)
+        Fl = np.zeros_like(wheel_net)
+        if self.n > 1:
+            Fl[..., :-1] -= T
+            Fl[..., 1:] += T
+        Fl[..., -1] -= self.tow_force_N
+        dY[..., I["x_m"]] = v
+        dY[..., I["v_mps"]] = (wheel_net + Fl) / self._m
+        # prismatic joints: force-limited, rate-limited servos with soft end stops
+        if self.has_joints:
+            s = Y[..., :-1, I["s_m"]]
+            vm = v[..., ctl.joint_mover]
+            mag = np.minimum(np.maximum(ctl.joint_ff_N + ctl.joint_kv * (ctl.joint_vtarget_mps - vm), 0.0),
+                             ctl.joint_limit_N)
+            T_ref = -ctl.joint_dir * mag
+            rate = (T - T_ref) * L.force_gain_per_s / L.stiffness_N_per_m
+            rate = np.minimum(np.maximum(rate, -L.rate_max_mps), L.rate_max_mps)
+            rate = np.minimum(rate, K_STOP * (L.stroke_max_m - s))
+            rate = np.maximum(rate, K_STOP * (L.stroke_min_m - s))
+            ds = rate * ctl.joint_active * L.prismatic
+            dY[..., :-1, I["s_m"]] = ds
+            dY[..., -1, I["s_m"]] = 0.0
+        if not outputs:
+            return dY, None
+        nw = self._nw
+        out = {
+            "X": X, "slip": i, "traction_axle_N": Ft * nw[:, None], "resistance_axle_N": Ftr * nw[:, None],
+            "resistance_torque_Nm": Trr, "motor_torque_Nm": Tm, "link_force_N": T,
+            "wheel_net_N": wheel_net, "link_net_N": Fl, "speed_sp_mps": np.broadcast_to(sp, x.shape),
+            "omega": w,
+        }
+        return dY, out
+
+    def rhs(self, t, y, ctl: Controls):
+        """``dy/dt`` for :func:`scipy.integrate.solve_ivp` (pure: records nothing)."""
+        dY, _ = self.evaluate(y.reshape(self.n, self.n_s), ctl)
+        return dY.reshape(-1)

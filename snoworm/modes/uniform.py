@@ -1,0 +1,50 @@
+"""Uniform wheel-speed mode: every segment drives at a wheel-speed set-point (paper Figs 6-7).
+
+The simplest way to drive the chain, "without using the inter-segment forces as a control
+input" (paper section 5.2).  Each segment's motors switch on at its start time; the
+integration restarts there so the switch never falls inside a solver step.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..dynamics import Controls
+from ..schema import ScenarioError, field
+from . import Interval, Mode, start_times
+
+__all__ = ["UniformConfig", "UniformMode"]
+
+
+@dataclass(frozen=True)
+class UniformConfig:
+    """``mode: {type: uniform, speed_mps: ..., start_time_s: ...}``."""
+
+    type: str = field(choices=("uniform",), doc="mode name")
+    speed_mps: tuple[float, ...] = field(ge=0, unit="m/s",
+                                         doc="wheel-speed set-point R_w*omega, one for all segments or one per segment")
+    start_time_s: tuple[float, ...] = field(ge=0, unit="s", doc="motor start time, one for all or one per segment")
+
+    def check_vehicle(self, vehicle, path):
+        start_times(self.start_time_s, vehicle.segments, f"{path}.start_time_s")
+        if len(self.speed_mps) not in (1, vehicle.segments):
+            raise ScenarioError(f"{path}.speed_mps: give one speed for all segments or {vehicle.segments}; "
+                                f"got {len(self.speed_mps)}.")
+
+
+class UniformMode(Mode):
+    """Drive every segment at its wheel-speed set-point from its start time on."""
+
+    def __init__(self, cfg, scenario, model):
+        super().__init__(cfg, scenario, model)
+        n = model.n
+        self.t_start = start_times(cfg.start_time_s, n)
+        self.speed = np.asarray(cfg.speed_mps, float) * np.ones(n)
+        self.breaks = np.unique(self.t_start)
+
+    def interval(self, t, y):
+        on = (self.t_start <= t + 1e-12).astype(float)
+        later = self.breaks[self.breaks > t + 1e-12]
+        t_end = float(later[0]) if later.size else np.inf
+        return Interval(t_end, Controls.rolling(self.model.n, on, self.speed), [], "rolling")

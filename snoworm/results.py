@@ -1,0 +1,215 @@
+"""Results of a simulation: time series per segment and per link, summary, files on disk.
+
+Every output quantity is recomputed from the solved states after the solve, in one vectorised
+pass of the same force kernel the right-hand side uses (:meth:`ChainModel.evaluate`).
+"""
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .fileio import atomic_write_text
+
+__all__ = ["Result", "SEGMENT_COLUMNS", "LINK_COLUMNS"]
+
+#: Columns of ``segments.csv`` (after ``t_s, segment``): name -> description.
+SEGMENT_COLUMNS = {
+    "x_m": "position of the segment's reference point [m]",
+    "v_mps": "ground speed [m/s]",
+    "wheel_speed_mps": "wheel circumferential speed R_w*omega, mean of the axles [m/s]",
+    "slip": "slip (Eq. 1, regularised), mean of the axles",
+    "traction_N": "tractive force F_t summed over the segment's wheels [N]",
+    "resistance_N": "terrain resistance force F_tr summed over the segment's wheels [N]",
+    "net_force_N": "traction - resistance, summed over the wheels [N]",
+    "motor_torque_Nm": "motor torque per wheel at the wheel, mean of the axles [N m]",
+    "speed_setpoint_mps": "wheel-speed set-point R_w*omega_ref [m/s]",
+    "connector_net_N": "net force of the links (and tow) on the segment, forward positive [N]",
+    "xt": "terrain coefficient X_t under the segment, mean of the axles",
+    "motor_power_W": "mechanical motor power at the wheels, summed over the wheels [W]",
+}
+
+#: Columns of ``links.csv`` (after ``t_s, link``).
+LINK_COLUMNS = {
+    "force_N": "link force, tension positive [N]",
+    "length_m": "centre-to-centre distance of the two segments [m]",
+    "extension_m": "prismatic joint extension (0 for a fixed link) [m]",
+    "joint_power_W": "mechanical power delivered by the prismatic joint [W]",
+}
+
+
+def _trapz(y, t):
+    if len(t) < 2:
+        return np.zeros(np.shape(y)[1:])
+    return np.trapezoid(y, t, axis=0)
+
+
+@dataclass
+class Result:
+    """A finished simulation.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The resolved scenario.
+    t : ndarray (n_t,)
+        Output times [s].
+    segments : dict of str -> ndarray (n_t, N)
+        Per-segment series, keys of :data:`SEGMENT_COLUMNS`.
+    links : dict of str -> ndarray (n_t, N-1)
+        Per-link series, keys of :data:`LINK_COLUMNS`.
+    phases : list of dict
+        Integration intervals (start, end, label).
+    events : list of dict
+        Mode events (gait phase changes, switches), with time and cause.
+    stats : dict
+        Solver statistics (nfev, njev, nlu, intervals, wall_time_s).
+    mode_summary : dict
+        Mode-specific metrics.
+    """
+
+    scenario: object
+    t: np.ndarray
+    segments: dict
+    links: dict
+    phases: list
+    events: list
+    stats: dict
+    mode_summary: dict = field(default_factory=dict)
+
+    @classmethod
+    def from_pieces(cls, sc, model, mode, pieces, phases, stats):
+        seg_parts, link_parts, ts = [], [], []
+        eta = model.seg.drivetrain_efficiency
+        for t, ys, ctl in pieces:
+            Y = model.unpack(ys)
+            dY, out = model.evaluate(Y, ctl, outputs=True)
+            R = model.seg.wheel_radius_m
+            nw = model.seg.wheels_per_axle
+            w = out["omega"]
+            Tm = out["motor_torque_Nm"]
+            Ft = out["traction_axle_N"].sum(-1)
+            Ftr = out["resistance_axle_N"].sum(-1)
+            seg = {
+                "x_m": Y[..., model.idx["x_m"]], "v_mps": Y[..., model.idx["v_mps"]],
+                "wheel_speed_mps": (w * R[:, None]).mean(-1), "slip": out["slip"].mean(-1),
+                "traction_N": Ft, "resistance_N": Ftr, "net_force_N": Ft - Ftr,
+                "motor_torque_Nm": Tm.mean(-1), "speed_setpoint_mps": np.array(out["speed_sp_mps"], float),
+                "connector_net_N": out["link_net_N"], "xt": out["X"].mean(-1),
+                "motor_power_W": (Tm * w).sum(-1) * nw,
+                "_electrical_W": (np.maximum(Tm * w, 0.0)).sum(-1) * nw / eta,
+            }
+            x = seg["x_m"]
+            lk = {"force_N": out["link_force_N"], "length_m": x[..., :-1] - x[..., 1:]}
+            if model.has_joints:
+                s = Y[..., :-1, model.idx["s_m"]]
+                ds = dY[..., :-1, model.idx["s_m"]]
+                lk["extension_m"] = s
+                lk["joint_power_W"] = -out["link_force_N"] * ds
+            else:
+                lk["extension_m"] = np.zeros_like(lk["length_m"])
+                lk["joint_power_W"] = np.zeros_like(lk["length_m"])
+            seg_parts.append(seg)
+            link_parts.append(lk)
+            ts.append(t)
+        t = np.concatenate(ts)
+        segments = {k: np.concatenate([p[k] for p in seg_parts]) for k in seg_parts[0]}
+        links = {k: np.concatenate([p[k] for p in link_parts]) for k in link_parts[0]}
+        res = cls(sc, t, segments, links, phases, list(mode.log), stats)
+        res.mode_summary = mode.summary(res)
+        return res
+
+    # ------------------------------------------------------------------ metrics
+    @property
+    def n_segments(self) -> int:
+        return self.segments["x_m"].shape[1]
+
+    def energy(self) -> dict:
+        """Energy used [J]: motors (mechanical and electrical, with the drivetrain loss) and joints.
+
+        Electrical energy counts only motoring power (``T w > 0``) divided by the drivetrain
+        efficiency; braking and holding power are not recovered.  Joint energy counts the
+        positive mechanical work of the prismatic actuators.
+        """
+        t = self.t
+        motor_el = _trapz(self.segments["_electrical_W"], t)
+        motor_mech = _trapz(self.segments["motor_power_W"], t)
+        joint = _trapz(np.maximum(self.links["joint_power_W"], 0.0), t) if self.links["force_N"].shape[1] else np.zeros(0)
+        total = float(motor_el.sum() + joint.sum())
+        return {"motor_electrical_J": motor_el.tolist(), "motor_mechanical_J": motor_mech.tolist(),
+                "joint_work_J": joint.tolist(), "total_J": total}
+
+    def summary(self) -> dict:
+        """The metrics written to ``summary.json``."""
+        x = self.segments["x_m"]
+        dist = float(np.mean(x[-1] - x[0]))
+        dur = float(self.t[-1] - self.t[0]) if self.t.size > 1 else 0.0
+        e = self.energy()
+        s = {
+            "scenario": self.scenario.name,
+            "snoworm_version": __version__,
+            "segments": self.n_segments,
+            "duration_s": dur,
+            "distance_m": dist,
+            "mean_speed_mps": dist / dur if dur > 0 else 0.0,
+            "final_link_forces_N": self.links["force_N"][-1].tolist(),
+            "final_net_forces_N": self.segments["net_force_N"][-1].tolist(),
+            "final_slip": self.segments["slip"][-1].tolist(),
+            "final_speed_mps": self.segments["v_mps"][-1].tolist(),
+            "max_abs_link_force_N": float(np.max(np.abs(self.links["force_N"]))) if self.links["force_N"].size else 0.0,
+            "energy": e,
+            "energy_per_metre_J_per_m": e["total_J"] / dist if dist > 1e-9 else None,
+            "solver": dict(self.stats),
+            "events": self.events,
+        }
+        s.update(self.mode_summary)
+        return s
+
+    # ------------------------------------------------------------------ tables
+    def segments_csv(self) -> str:
+        n_t, n = self.segments["x_m"].shape
+        cols = ["t_s", "segment"] + list(SEGMENT_COLUMNS)
+        data = np.column_stack([np.repeat(self.t, n), np.tile(np.arange(n), n_t)]
+                               + [self.segments[c].reshape(-1) for c in SEGMENT_COLUMNS])
+        return _csv(cols, data, int_cols=(1,))
+
+    def links_csv(self) -> str:
+        n_t, n = self.links["force_N"].shape
+        cols = ["t_s", "link"] + list(LINK_COLUMNS)
+        data = np.column_stack([np.repeat(self.t, n), np.tile(np.arange(n), n_t)]
+                               + [self.links[c].reshape(-1) for c in LINK_COLUMNS])
+        return _csv(cols, data, int_cols=(1,))
+
+    def write(self, out_dir, plot: bool = True) -> list:
+        """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots).
+
+        Each file is written atomically (temporary file, then rename).  Returns the paths.
+        """
+        from .scenario import dump_scenario
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [
+            atomic_write_text(out / "segments.csv", self.segments_csv()),
+            atomic_write_text(out / "links.csv", self.links_csv()),
+            atomic_write_text(out / "summary.json", json.dumps(self.summary(), indent=2) + "\n"),
+            atomic_write_text(out / "scenario.yaml", dump_scenario(self.scenario)),
+        ]
+        if plot:
+            from . import plotting
+            paths += plotting.plot_result(self, out)
+        return paths
+
+
+def _csv(cols, data, int_cols=()):
+    buf = io.StringIO()
+    buf.write(",".join(cols) + "\n")
+    fmt = ["%.6g"] * data.shape[1]
+    fmt[0] = "%.4f"
+    for c in int_cols:
+        fmt[c] = "%d"
+    np.savetxt(buf, data, fmt=fmt, delimiter=",")
+    return buf.getvalue()

@@ -1,0 +1,187 @@
+"""Declarative validation of nested mappings into frozen dataclasses.
+
+A config dataclass declares each field with :func:`field`, giving its bounds, allowed choices,
+unit and help text.  :func:`build` turns a mapping (parsed YAML) into the dataclass, rejecting
+unknown keys (with "did you mean" suggestions), wrong types, missing required values and values
+out of bounds, each with a one-paragraph :class:`ScenarioError` that names the dotted field and
+says how to fix it.  :func:`dump` turns the dataclass back into plain YAML-able data.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import typing
+from typing import Any
+
+__all__ = ["ScenarioError", "field", "build", "dump", "suggest"]
+
+_MISSING = dataclasses.MISSING
+
+
+class ScenarioError(ValueError):
+    """Bad user input: the message names the field and the fix (CLI exit status 2)."""
+
+
+def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None, unit="", doc="",
+          default_factory=_MISSING):
+    """A dataclass field with validation metadata.
+
+    Parameters
+    ----------
+    default : optional
+        Default value; omit for a required field.
+    gt, ge, lt, le : float, optional
+        Strict/inclusive bounds for numbers (applied to each element of a sequence).
+    choices : sequence, optional
+        Allowed values.
+    unit : str
+        SI unit, shown in messages.
+    doc : str
+        One-line meaning, shown in messages.
+    """
+    md = dict(gt=gt, ge=ge, lt=lt, le=le, choices=choices, unit=unit, doc=doc)
+    kw = {"metadata": md}
+    if default is not _MISSING:
+        kw["default"] = default
+    if default_factory is not _MISSING:
+        kw["default_factory"] = default_factory
+    return dataclasses.field(**kw)
+
+
+def suggest(word: str, options) -> str:
+    """A ' Did you mean ...?' suffix for a misspelt key, or ''."""
+    close = difflib.get_close_matches(str(word), [str(o) for o in options], n=3, cutoff=0.6)
+    if not close:
+        return ""
+    return " Did you mean " + " or ".join(repr(c) for c in close) + "?"
+
+
+def _fail(path, msg):
+    raise ScenarioError(f"{path}: {msg}")
+
+
+def _describe(md):
+    bits = []
+    if md.get("doc"):
+        bits.append(md["doc"])
+    if md.get("unit"):
+        bits.append(f"in {md['unit']}")
+    return f" ({', '.join(bits)})" if bits else ""
+
+
+def _check_number(path, value, md, kind):
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if isinstance(value, str):
+            try:
+                value = float(value)
+            except ValueError:
+                _fail(path, f"expected a number{_describe(md)}, got the text {value!r}. Write a plain number, e.g. 1.5.")
+        else:
+            _fail(path, f"expected a number{_describe(md)}, got {type(value).__name__} {value!r}. Write a plain number.")
+    if kind is int:
+        if float(value) != int(value):
+            _fail(path, f"expected a whole number{_describe(md)}, got {value!r}.")
+        value = int(value)
+    else:
+        value = float(value)
+        if not math.isfinite(value):
+            _fail(path, f"must be a finite number{_describe(md)}, got {value!r}.")
+    unit = f" {md.get('unit')}" if md.get("unit") else ""
+    for key, op, word in (("gt", lambda a, b: a > b, "greater than"), ("ge", lambda a, b: a >= b, "at least"),
+                          ("lt", lambda a, b: a < b, "less than"), ("le", lambda a, b: a <= b, "at most")):
+        bound = md.get(key)
+        if bound is not None and not op(value, bound):
+            _fail(path, f"must be {word} {bound}{unit}{_describe(md)}, got {value!r}. Change it to a value {word} {bound}.")
+    return value
+
+
+def _convert(path, value, tp, md):
+    origin = typing.get_origin(tp)
+    args = typing.get_args(tp)
+    if origin is typing.Union:
+        if value is None and type(None) in args:
+            return None
+        non_none = [a for a in args if a is not type(None)]
+        errors = []
+        for a in non_none:
+            try:
+                return _convert(path, value, a, md)
+            except ScenarioError as exc:
+                errors.append(str(exc))
+        raise ScenarioError(errors[-1])
+    if dataclasses.is_dataclass(tp):
+        if not isinstance(value, dict):
+            _fail(path, f"expected a mapping of keys for {tp.__name__}, got {type(value).__name__} {value!r}.")
+        return build(tp, value, path)
+    if origin in (tuple, list):
+        if isinstance(value, (int, float, str)) and not isinstance(value, bool):
+            value = [value]
+        if not isinstance(value, (list, tuple)):
+            _fail(path, f"expected a list{_describe(md)}, got {type(value).__name__} {value!r}.")
+        inner = args[0] if args else Any
+        return tuple(_convert(f"{path}[{j}]", v, inner, md) for j, v in enumerate(value))
+    if origin is dict:
+        if not isinstance(value, dict):
+            _fail(path, f"expected a mapping{_describe(md)}, got {type(value).__name__} {value!r}.")
+        kt, vt = args
+        out = {}
+        for k, v in value.items():
+            kk = _convert(f"{path}.{k}", k, kt, {}) if kt is not Any else k
+            out[kk] = _convert(f"{path}.{k}", v, vt, md)
+        return out
+    if tp is float or tp is int:
+        value = _check_number(path, value, md, tp)
+    elif tp is bool:
+        if not isinstance(value, bool):
+            _fail(path, f"expected true or false{_describe(md)}, got {value!r}.")
+    elif tp is str:
+        if not isinstance(value, str):
+            _fail(path, f"expected text{_describe(md)}, got {type(value).__name__} {value!r}.")
+    choices = md.get("choices")
+    if choices is not None and value not in choices:
+        _fail(path, f"must be one of {', '.join(repr(c) for c in choices)}; got {value!r}.{suggest(value, choices)}")
+    return value
+
+
+def build(cls, data: dict, path: str = ""):
+    """Validate ``data`` against dataclass ``cls`` and construct it.
+
+    Raises
+    ------
+    ScenarioError
+        Unknown key (with suggestions), missing required key, wrong type or value out of bounds.
+    """
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        _fail(path or "scenario", f"expected a mapping of keys, got {type(data).__name__} {data!r}.")
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    prefix = f"{path}." if path else ""
+    for key in data:
+        if key not in fields:
+            _fail(f"{prefix}{key}", f"unknown key.{suggest(key, fields)} Known keys here: {', '.join(fields)}.")
+    kwargs = {}
+    for name, f in fields.items():
+        p = f"{prefix}{name}"
+        if name in data:
+            kwargs[name] = _convert(p, data[name], hints[name], f.metadata)
+        elif f.default is _MISSING and f.default_factory is _MISSING:
+            _fail(p, f"is required but missing{_describe(f.metadata)}. Add it to the scenario.")
+    obj = cls(**kwargs)
+    check = getattr(obj, "_check", None)
+    if check is not None:
+        check(path)
+    return obj
+
+
+def dump(obj):
+    """Plain (YAML-safe) data for a config dataclass, every field written out."""
+    if dataclasses.is_dataclass(obj):
+        return {f.name: dump(getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.init}
+    if isinstance(obj, (tuple, list)):
+        return [dump(v) for v in obj]
+    if isinstance(obj, dict):
+        return {k: dump(v) for k, v in obj.items()}
+    return obj

@@ -1,0 +1,157 @@
+"""Simulation driver: scenario -> assembled model -> ``solve_ivp`` per interval -> :class:`Result`.
+
+The integration restarts at every controller start time and every gait phase change (state
+events), so no switch of a controller falls inside a solver step (MODEL.md section 6).
+A failed solve raises :class:`SolverError` with the solver's message; it never returns
+a partial result as if it were whole.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from . import modes
+from .dynamics import ChainModel, LinkArrays, SegmentArrays
+from .results import Result
+from .scenario import Scenario
+from .terrain import TerrainParams, TerrainProfile
+
+__all__ = ["SolverError", "build_model", "simulate", "solver_options"]
+
+
+class SolverError(RuntimeError):
+    """The ODE solver failed; the message carries the solver's own message and where it failed."""
+
+
+#: Absolute tolerance of each state field, multiplied by ``simulation.atol_scale``.
+ATOL = {"x_m": 1e-6, "v_mps": 1e-6, "omega_front": 1e-5, "omega_rear": 1e-5,
+        "integral_front_Nm": 1e-4, "integral_rear_Nm": 1e-4, "q_mps": 1e-6, "s_m": 1e-7}
+
+#: Safety bound on consecutive zero-length intervals (a mode whose events re-trigger at once).
+MAX_STUCK_INTERVALS = 50
+
+
+def terrain_profile(sc: Scenario) -> TerrainProfile:
+    t = sc.terrain
+    if t.profile is not None:
+        return TerrainProfile(tuple(p[0] for p in t.profile), tuple(p[1] for p in t.profile))
+    return TerrainProfile.constant(t.xt)
+
+
+def build_model(sc: Scenario) -> ChainModel:
+    """Assemble the :class:`~snoworm.dynamics.ChainModel` of a scenario (arrays built once)."""
+    veh = sc.vehicle
+    seg = SegmentArrays.from_list(veh.segment_params())
+    n_links = max(veh.segments - 1, 0)
+    lc = veh.links
+    ones = np.ones(n_links)
+    links = LinkArrays(
+        stiffness_N_per_m=lc.stiffness_N_per_m * ones, damping_Ns_per_m=lc.damping_Ns_per_m * ones,
+        rest_spacing_m=lc.rest_spacing_m * ones,
+        prismatic=np.array([1.0 if t == "prismatic" else 0.0 for t in veh.link_types()]),
+        stroke_min_m=lc.stroke_min_m * ones, stroke_max_m=lc.stroke_max_m * ones,
+        force_max_N=lc.force_max_N * ones, rate_max_mps=lc.rate_max_mps * ones,
+        force_gain_per_s=lc.force_gain_per_s * ones)
+    m = sc.terrain.model
+    tp = TerrainParams(b_tF=m.b_tF, b_trF=m.b_trF, A=m.A, peak_exponent_d=m.peak_exponent_d, tau0=m.tau0,
+                       tau1=m.tau1, slip_eps_mps=m.slip_eps_mps, sign_eps_mps=m.sign_eps_mps,
+                       torque_balance=m.torque_balance)
+    force_loop = modes.mode_class(sc.mode).force_loop
+    return ChainModel(seg, links, tp, terrain_profile(sc), sc.tow.force_N, force_loop=force_loop)
+
+
+def solver_options(model: ChainModel, sim) -> dict:
+    """``solve_ivp`` keyword arguments for the model: method, tolerances, Jacobian structure."""
+    atol = np.tile([ATOL[f] for f in model.fields], model.n) * sim.atol_scale
+    opts = {"method": sim.method, "rtol": sim.rtol, "atol": atol}
+    if sim.max_step_s is not None:
+        opts["max_step"] = sim.max_step_s
+    if sim.method == "LSODA":
+        lband, uband = model.bandwidths()
+        if lband + uband + 1 < model.n_states:
+            opts["lband"], opts["uband"] = lband, uband
+    elif sim.method in ("BDF", "Radau"):
+        opts["jac_sparsity"] = model.jac_sparsity()
+    return opts
+
+
+def _grid(t0, t1, dt, include_start):
+    k0 = int(np.floor(t0 / dt + 1e-9)) + 1
+    k1 = int(np.ceil(t1 / dt - 1e-9)) - 1
+    g = np.arange(k0, k1 + 1) * dt
+    pts = [t0] if include_start else []
+    return np.array(pts + list(g[(g > t0) & (g < t1)]) + [t1])
+
+
+def simulate(sc: Scenario) -> Result:
+    """Run a scenario and return its :class:`~snoworm.results.Result`.
+
+    Raises
+    ------
+    SolverError
+        If ``solve_ivp`` fails (the message includes the solver's message, the time reached
+        and the interval's label).
+    """
+    wall0 = time.perf_counter()
+    model = build_model(sc)
+    mode = modes.mode_class(sc.mode)(sc.mode, sc, model)
+    sim = sc.simulation
+    opts = solver_options(model, sim)
+    t, y = 0.0, mode.initial_state()
+    T = sim.duration_s
+    pieces, phases = [], []
+    stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0}
+    stuck = 0
+    while t < T - 1e-12:
+        iv = mode.interval(t, y)
+        t1 = float(min(iv.t_end, T))
+        if t1 <= t:
+            raise SolverError(f"mode {sc.mode.type!r} asked for an empty interval at t = {t:.6g} s ({iv.label}).")
+        t_eval = _grid(t, t1, sim.output_dt_s, include_start=not pieces)
+        events = [_wrap_event(ev, iv.controls) for ev in iv.events]
+        try:
+            sol = solve_ivp(model.rhs, (t, t1), y, t_eval=t_eval, events=events or None,
+                            args=(iv.controls,), **opts)
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            raise SolverError(f"solve_ivp ({sim.method}) failed at t = {t:.6g} s in interval '{iv.label}': {exc}") from None
+        stats["nfev"] += int(sol.nfev)
+        stats["njev"] += int(sol.njev)
+        stats["nlu"] += int(sol.nlu)
+        stats["intervals"] += 1
+        if sol.status < 0 or not np.all(np.isfinite(sol.y)):
+            reached = sol.t[-1] if sol.t.size else t
+            raise SolverError(f"solve_ivp ({sim.method}) failed near t = {reached:.6g} s in interval "
+                              f"'{iv.label}': {sol.message}. Try a smaller simulation.rtol or another "
+                              "simulation.method (BDF, Radau).")
+        ts, ys = sol.t, sol.y.T
+        if sol.status == 1:
+            hits = [(te[0], j) for j, te in enumerate(sol.t_events) if len(te)]
+            t_hit, which = min(hits)
+            y_hit = sol.y_events[which][0]
+            ts = np.append(ts[ts < t_hit], t_hit)
+            ys = np.vstack([ys[sol.t < t_hit], y_hit])
+            t_next, y_next = float(t_hit), y_hit.copy()
+        else:
+            t_next, y_next, which = t1, sol.y[:, -1].copy(), None
+        if ts.size:
+            pieces.append((ts, ys, iv.controls))
+        phases.append({"t_start_s": t, "t_end_s": t_next, "label": iv.label})
+        stuck = stuck + 1 if t_next - t < 1e-9 else 0
+        if stuck > MAX_STUCK_INTERVALS:
+            raise SolverError(f"mode {sc.mode.type!r} keeps ending intervals at t = {t:.6g} s without progress "
+                              f"({iv.label}); its phase-change events re-trigger immediately.")
+        t, y = t_next, y_next
+        if which is not None:
+            mode.on_event(t, y, which)
+    stats["wall_time_s"] = time.perf_counter() - wall0
+    return Result.from_pieces(sc, model, mode, pieces, phases, stats)
+
+
+def _wrap_event(ev, ctl):
+    def f(t, y, _ctl):
+        return ev(t, y)
+    f.terminal = True
+    f.direction = getattr(ev, "direction", 0)
+    return f

@@ -1,0 +1,216 @@
+"""Wheel-terrain laws of the SnoWorm terrain model (paper section 3, MODEL.md section 2).
+
+Every function here is a pure NumPy kernel, vectorised over any array shape (wheels, axles,
+segments, batch members).  They are the single implementation of each law: the chain dynamics,
+the steady-state solver, the terrain-curve plots and the calibration all call them.
+
+Sign conventions: forward is positive.  ``V`` is the wheel's longitudinal ground speed [m/s],
+``omega`` its spin rate [rad/s] (positive rolling forward), ``F_n`` its normal load [N].
+Forces returned are per wheel, positive forward on the vehicle.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "TerrainParams",
+    "FROSTYBOY_TERRAIN",
+    "smooth_sign",
+    "slip",
+    "traction_force",
+    "resistance_force",
+    "resistance_torque",
+    "wheel_reaction_torque",
+    "TerrainProfile",
+]
+
+
+@dataclass(frozen=True)
+class TerrainParams:
+    """Coefficients of the terrain model (paper Table 3 and MODEL.md section 2).
+
+    Parameters
+    ----------
+    b_tF : float
+        Slip-to-tractive-force coefficient of Eq. 2 (unitless).
+    b_trF : float
+        Terrain resistance force coefficient of Eq. 3 (unitless).
+    A : float
+        Terrain coefficient exponent of Eq. 3 (unitless).
+    peak_exponent_d : float
+        Exponent ``d`` of X_t in the peak factor of Eq. 2 (``X_t**d``).  The paper's OCR is
+        illegible there; ``d = 2`` satisfies every claim of the paper, ``d = 1`` is the
+        literal reading (MODEL.md section 2).
+    tau0, tau1 : float
+        Resistance-torque law ``T_rr = F_n R_w (tau0 + tau1 (1 - X)) sgn(omega)``, fitted to
+        Table 2 (MODEL.md section 2; the paper names the torque but never writes it out).
+    slip_eps_mps : float
+        Regularisation speed ``v_eps`` of the slip denominator (Eq. 1 made finite at
+        ``omega = 0``).  Steady results do not depend on it.
+    sign_eps_mps : float
+        Speed scale ``v_s`` of the smooth sign ``tanh(V / v_s)`` used in Eq. 3 and in the
+        resistance torque.
+    torque_balance : {"contact", "traction"}
+        ``"contact"``: ``J dw/dt = T_m - R_w (F_t - F_tr) - T_rr`` (MODEL.md default).
+        ``"traction"``: ``J dw/dt = T_m - R_w F_t - T_rrB`` with
+        ``T_rrB = 1.601 F_n R_w (1 - X) sgn(omega)``; same chassis motion and steady slips.
+    """
+
+    b_tF: float
+    b_trF: float
+    A: float
+    peak_exponent_d: float
+    tau0: float
+    tau1: float
+    slip_eps_mps: float
+    sign_eps_mps: float
+    torque_balance: str = "contact"
+
+
+#: FrostyBoy terrain coefficients: paper Table 3 plus the fitted resistance-torque law.
+FROSTYBOY_TERRAIN = TerrainParams(
+    b_tF=0.7,
+    b_trF=0.165,
+    A=0.6,
+    peak_exponent_d=2.0,
+    tau0=0.1710,
+    tau1=1.7096,
+    slip_eps_mps=0.05,
+    sign_eps_mps=0.01,
+    torque_balance="contact",
+)
+
+#: Coefficient of the "traction" torque-balance convention (MODEL.md section 2).
+TRACTION_BALANCE_TAU = 1.601
+
+
+def smooth_sign(u, scale):
+    """Smooth sign ``tanh(u / scale)``, used in place of ``sgn`` in Eq. 3 and ``T_rr``."""
+    return np.tanh(u / scale)
+
+
+def slip(wheel_speed_mps, V, eps_mps):
+    """Regularised longitudinal slip, Eq. 1.
+
+    ``i = (R_w w - V) / max(|R_w w|, |V|, v_eps)``, which equals Eq. 1 whenever the wheel
+    drives forward faster than both the ground speed and ``v_eps``; it is finite for a
+    locked (``R_w w = 0``) or stopped wheel and is ``+1`` for a locked wheel sliding backward.
+
+    Parameters
+    ----------
+    wheel_speed_mps : array_like
+        Wheel circumferential speed ``R_w * omega`` [m/s].
+    V : array_like
+        Longitudinal ground speed of the wheel [m/s].
+    eps_mps : float
+        Regularisation speed ``v_eps`` [m/s].
+
+    Returns
+    -------
+    ndarray
+        Slip, in [-1, 1].
+    """
+    den = np.maximum(np.maximum(np.abs(wheel_speed_mps), np.abs(V)), eps_mps)
+    return (wheel_speed_mps - V) / den
+
+
+def traction_force(i, F_n, X, p: TerrainParams):
+    """Magic-Formula tractive force per wheel, Eq. 2 (as read in MODEL.md section 2).
+
+    ``F_t = F_n X^d b_tF sin(2.8 X atan(atan(4 X^2 i)))`` -- the OCR's "cot" read as atan, E = 1.
+    Odd in slip, bounded by ``F_n X^d b_tF``.
+
+    Parameters
+    ----------
+    i : array_like
+        Slip (Eq. 1).
+    F_n : array_like
+        Normal load on the wheel [N].
+    X : array_like
+        Terrain coefficient X_t (> 0).
+    p : TerrainParams
+        Terrain coefficients (uses ``b_tF`` and ``peak_exponent_d``).
+
+    Returns
+    -------
+    ndarray
+        Tractive force [N], positive forward.
+    """
+    return F_n * X**p.peak_exponent_d * p.b_tF * np.sin(2.8 * X * np.arctan(np.arctan(4.0 * X * X * i)))
+
+
+def resistance_force(V, F_n, X, p: TerrainParams):
+    """Terrain resistance force per wheel, Eq. 3: ``F_tr = b_trF F_n sgn(V) / X^A``.
+
+    ``sgn`` is smoothed as ``tanh(V / v_s)``.  Returned with the sign of ``V`` (it opposes the
+    motion: the chassis sees ``F_t - F_tr``).
+    """
+    return p.b_trF * F_n * smooth_sign(V, p.sign_eps_mps) / X**p.A
+
+
+def resistance_torque(omega_mps, F_n, X, R_w, p: TerrainParams):
+    """Terrain resistance torque per wheel [N m], fitted law of MODEL.md section 2.
+
+    ``T_rr = F_n R_w (tau0 + tau1 (1 - X)) sgn(omega)`` (``"contact"`` balance) or
+    ``T_rrB = 1.601 F_n R_w (1 - X) sgn(omega)`` (``"traction"`` balance).
+
+    Parameters
+    ----------
+    omega_mps : array_like
+        Wheel circumferential speed ``R_w * omega`` [m/s] (only its sign matters).
+    """
+    if p.torque_balance == "traction":
+        coef = TRACTION_BALANCE_TAU * (1.0 - X)
+    else:
+        coef = p.tau0 + p.tau1 * (1.0 - X)
+    return F_n * R_w * coef * smooth_sign(omega_mps, p.sign_eps_mps)
+
+
+def wheel_reaction_torque(F_t, F_tr, T_rr, R_w, p: TerrainParams):
+    """Terrain torque opposing the motor in the wheel torque balance [N m].
+
+    ``J dw/dt = T_m - wheel_reaction_torque``; ``R_w (F_t - F_tr) + T_rr`` for the
+    ``"contact"`` convention, ``R_w F_t + T_rrB`` for ``"traction"`` (MODEL.md section 2).
+    """
+    if p.torque_balance == "traction":
+        return R_w * F_t + T_rr
+    return R_w * (F_t - F_tr) + T_rr
+
+
+@dataclass(frozen=True)
+class TerrainProfile:
+    """Terrain coefficient X_t as a function of position along the track [paper section 3].
+
+    Either a constant (``positions_m`` empty) or a piecewise-linear table of
+    ``(position_m, xt)`` pairs, held constant beyond its ends.  Evaluated per axle, so a segment
+    can straddle two kinds of snow.
+
+    Parameters
+    ----------
+    positions_m : tuple of float
+        Strictly increasing positions [m]; empty for a constant profile.
+    values : tuple of float
+        X_t at each position (or one value for a constant profile); every value > 0.
+    """
+
+    positions_m: tuple
+    values: tuple
+
+    @classmethod
+    def constant(cls, xt: float) -> "TerrainProfile":
+        return cls((), (float(xt),))
+
+    @property
+    def is_constant(self) -> bool:
+        return len(self.positions_m) == 0
+
+    def __call__(self, x_m):
+        """X_t at the positions ``x_m`` (any shape)."""
+        if self.is_constant:
+            return np.full(np.shape(x_m), self.values[0])
+        return np.interp(x_m, self.positions_m, self.values)
+
+    def minimum(self) -> float:
+        return float(min(self.values))
