@@ -185,7 +185,30 @@ def _merge(defaults: dict, given):
     return out
 
 
-def scenario_from_dict(raw: dict, source: str = "scenario") -> Scenario:
+def _read_model_file(mfile, base_dir):
+    """Terrain-model coefficients from a YAML file (e.g. written by ``snoworm calibrate``).
+
+    The file is a mapping of ``terrain.model`` keys, optionally under a ``terrain_model:`` key;
+    a relative path is taken relative to the scenario file.
+    """
+    if not isinstance(mfile, str):
+        raise ScenarioError(f"terrain.model_file: expected a file path, got {mfile!r}.")
+    path = Path(mfile)
+    if not path.is_absolute() and base_dir is not None:
+        path = Path(base_dir) / path
+    try:
+        data = read_yaml(path)
+    except ScenarioError as exc:
+        raise ScenarioError(f"terrain.model_file: {exc}") from None
+    if isinstance(data, dict) and "terrain_model" in data:
+        data = data["terrain_model"]
+    if not isinstance(data, dict):
+        raise ScenarioError(f"terrain.model_file: {path} must hold a mapping of terrain-model coefficients "
+                            "(b_tF, b_trF, A, peak_exponent_d, tau0, tau1, ...).")
+    return data
+
+
+def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Scenario:
     """Validate a scenario mapping (as parsed from YAML) into a :class:`Scenario`.
 
     Raises
@@ -218,7 +241,11 @@ def scenario_from_dict(raw: dict, source: str = "scenario") -> Scenario:
     veh["segment"] = _merge(ps["segment"], veh.get("segment", {}))
     veh["links"] = _merge(ps["links"], veh.get("links", {}))
     if isinstance(raw["terrain"], dict):
-        raw["terrain"]["model"] = _merge(ps["terrain_model"], raw["terrain"].get("model", {}))
+        model_defaults = ps["terrain_model"]
+        mfile = raw["terrain"].pop("model_file", None)
+        if mfile is not None:
+            model_defaults = _merge(model_defaults, _read_model_file(mfile, base_dir))
+        raw["terrain"]["model"] = _merge(model_defaults, raw["terrain"].get("model", {}))
     vehicle = build(VehicleConfig, veh, "vehicle")
     terrain_cfg = build(TerrainConfig, raw["terrain"], "terrain")
     tow = build(TowConfig, raw["tow"], "tow")
@@ -312,7 +339,7 @@ def load_scenario(path, overrides=()) -> Scenario:
         if not isinstance(raw, dict):
             raise ScenarioError(f"{path}: a scenario must be a YAML mapping.")
         raw = apply_overrides(raw, ov)
-    return scenario_from_dict(raw, str(path))
+    return scenario_from_dict(raw, str(path), base_dir=Path(path).parent)
 
 
 def dump_scenario(sc: Scenario) -> str:
