@@ -338,7 +338,10 @@ class ChainModel:
             "X": X, "slip": i, "traction_axle_N": Ft * nw[:, None], "resistance_axle_N": Ftr * nw[:, None],
             "resistance_torque_Nm": Trr, "motor_torque_Nm": Tm, "link_force_N": T,
             "wheel_net_N": wheel_net, "link_net_N": Fl, "speed_sp_mps": np.broadcast_to(sp, x.shape),
-            "omega": w,
+            "omega": w, "reaction_torque_Nm": reaction,
+            # power dissipated at the wheel-terrain contact: what the wheels take from the
+            # motors minus what reaches the chassis, per segment [W]
+            "terrain_dissipation_W": nw * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),
         }
         return dY, out
 

@@ -31,6 +31,7 @@ SEGMENT_COLUMNS = {
     "connector_net_N": "net force of the links (and tow) on the segment, forward positive [N]",
     "xt": "terrain coefficient X_t under the segment, mean of the axles",
     "motor_power_W": "mechanical motor power at the wheels, summed over the wheels [W]",
+    "terrain_dissipation_W": "power dissipated at the wheel-terrain contacts of the segment [W]",
 }
 
 #: Columns of ``links.csv`` (after ``t_s, link``).
@@ -38,7 +39,7 @@ LINK_COLUMNS = {
     "force_N": "link force, tension positive [N]",
     "length_m": "centre-to-centre distance of the two segments [m]",
     "extension_m": "prismatic joint extension (0 for a fixed link) [m]",
-    "joint_power_W": "mechanical power delivered by the prismatic joint [W]",
+    "joint_power_W": "mechanical power delivered by the prismatic joint actuator [W]",
 }
 
 
@@ -101,6 +102,7 @@ class Result:
                 "motor_torque_Nm": Tm.mean(-1), "speed_setpoint_mps": np.array(out["speed_sp_mps"], float),
                 "connector_net_N": out["link_net_N"], "xt": out["X"].mean(-1),
                 "motor_power_W": (Tm * w).sum(-1) * nw,
+                "terrain_dissipation_W": out["terrain_dissipation_W"],
                 "_electrical_W": (np.maximum(Tm * w, 0.0)).sum(-1) * nw / eta,
             }
             x = seg["x_m"]
@@ -109,7 +111,9 @@ class Result:
                 s = Y[..., :-1, model.idx["s_m"]]
                 ds = dY[..., :-1, model.idx["s_m"]]
                 lk["extension_m"] = s
-                lk["joint_power_W"] = -out["link_force_N"] * ds
+                # the actuator is in series with the link spring (the damper acts across it)
+                spring = out["link_force_N"] - model.links.damping_Ns_per_m * np.diff(-Y[..., model.idx["v_mps"]], axis=-1)
+                lk["joint_power_W"] = -spring * ds
             else:
                 lk["extension_m"] = np.zeros_like(lk["length_m"])
                 lk["joint_power_W"] = np.zeros_like(lk["length_m"])

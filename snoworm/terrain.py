@@ -97,6 +97,8 @@ def slip(wheel_speed_mps, V, eps_mps):
     ``i = (R_w w - V) / max(|R_w w|, |V|, v_eps)``, which equals Eq. 1 whenever the wheel
     drives forward faster than both the ground speed and ``v_eps``; it is finite for a
     locked (``R_w w = 0``) or stopped wheel and is ``+1`` for a locked wheel sliding backward.
+    A wheel spinning against its ground speed would exceed 1 in magnitude; slip is clipped
+    to [-1, 1] (full spin or full skid).
 
     Parameters
     ----------
@@ -113,7 +115,7 @@ def slip(wheel_speed_mps, V, eps_mps):
         Slip, in [-1, 1].
     """
     den = np.maximum(np.maximum(np.abs(wheel_speed_mps), np.abs(V)), eps_mps)
-    return (wheel_speed_mps - V) / den
+    return np.minimum(np.maximum((wheel_speed_mps - V) / den, -1.0), 1.0)
 
 
 def traction_force(i, F_n, X, p: TerrainParams):

@@ -1,0 +1,74 @@
+"""The CLI contract of issue 2: files, exit codes, messages (click.testing.CliRunner)."""
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from snoworm.cli import main
+from tests.conftest import SCENARIOS
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_run_writes_contract_files(tmp_path):
+    out = tmp_path / "o"
+    r = run("run", SCENARIOS / "tow6_uniform.yaml", "--out", out, "--set", "simulation.duration_s=8")
+    assert r.exit_code == 0, r.output
+    for f in ("segments.csv", "links.csv", "summary.json", "scenario.yaml", "forces.png"):
+        assert (out / f).stat().st_size > 0
+    head = (out / "segments.csv").read_text().splitlines()[0].split(",")
+    assert head[:10] == ["t_s", "segment", "x_m", "v_mps", "wheel_speed_mps", "slip", "traction_N",
+                         "resistance_N", "net_force_N", "motor_torque_Nm"]
+    assert (out / "links.csv").read_text().splitlines()[0].split(",")[:4] == ["t_s", "link", "force_N", "length_m"]
+    s = json.loads((out / "summary.json").read_text())
+    assert np.allclose(s["final_link_forces_N"], np.arange(1, 6) * 200 / 6, atol=1.0)
+    assert s["solver"]["nfev"] > 0 and s["snoworm_version"]
+    # the resolved scenario re-runs to the same result
+    r2 = run("run", out / "scenario.yaml", "--out", tmp_path / "o2", "--no-plot")
+    assert r2.exit_code == 0, r2.output
+    s2 = json.loads((tmp_path / "o2" / "summary.json").read_text())
+    assert s2["final_link_forces_N"] == pytest.approx(s["final_link_forces_N"], rel=1e-9)
+    assert not (tmp_path / "o2" / "forces.png").exists()
+
+
+@pytest.mark.parametrize("sets, words", [
+    (["vehicle.segments=0"], "vehicle.segments"),
+    (["terrain.xt=-0.3"], "terrain.xt"),
+    (["tow.forc_N=3"], "Did you mean 'force_N'"),
+    (["notakey"], "KEY=VALUE"),
+])
+def test_bad_input_exit_2_no_traceback_nothing_written(tmp_path, sets, words):
+    out = tmp_path / "o"
+    args = ["run", SCENARIOS / "tow6_uniform.yaml", "--out", out]
+    for s in sets:
+        args += ["--set", s]
+    r = run(*args)
+    assert r.exit_code == 2
+    assert words in r.output and "Traceback" not in r.output
+    assert not out.exists()
+
+
+def test_missing_file_exit_2(tmp_path):
+    r = run("validate", tmp_path / "nope.yaml")
+    assert r.exit_code == 2 and "no such file" in r.output
+
+
+def test_validate_ok():
+    r = run("validate", SCENARIOS / "tow6_uniform.yaml")
+    assert r.exit_code == 0 and "valid" in r.output
+
+
+def test_solver_failure_exit_1_nothing_written(tmp_path, monkeypatch):
+    import importlib
+    S = importlib.import_module("snoworm.simulate")
+
+    def boom(sc):
+        raise S.SolverError("solve_ivp (LSODA) failed near t = 3 s: test")
+    monkeypatch.setattr(S, "simulate", boom)
+    out = tmp_path / "o"
+    r = run("run", SCENARIOS / "tow6_uniform.yaml", "--out", out)
+    assert r.exit_code == 1 and "solver failure" in r.output
+    assert not out.exists()
