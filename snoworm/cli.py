@@ -6,6 +6,7 @@ one-paragraph message naming the field and the fix, never a traceback).
 from __future__ import annotations
 
 import functools
+import os
 import sys
 
 import click
@@ -33,6 +34,13 @@ def handle_errors(fn):
             _fail(str(exc), EXIT_INPUT)
         except SolverError as exc:
             _fail(f"solver failure: {exc}", EXIT_SOLVER)
+        except KeyboardInterrupt:
+            _fail("interrupted; files already finished were kept.", 130)
+        except Exception as exc:  # a bug: one paragraph, the traceback on request
+            if os.environ.get("SNOWORM_DEBUG"):
+                raise
+            _fail(f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
+                  "rerun with SNOWORM_DEBUG=1 for the traceback and report it.", EXIT_SOLVER)
     return wrapper
 
 

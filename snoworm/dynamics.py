@@ -324,7 +324,9 @@ class ChainModel:
             mag = np.minimum(np.maximum(ctl.joint_ff_N + ctl.joint_kv * (ctl.joint_vtarget_mps - vm), 0.0),
                              ctl.joint_limit_N)
             T_ref = -ctl.joint_dir * mag
-            rate = (T - T_ref) * L.force_gain_per_s / L.stiffness_N_per_m
+            # velocity feed-forward (follow the segments' relative motion) plus a proportional
+            # force loop: d(T_spring)/dt = -g (T - T_ref), so the force tracks without lag
+            rate = (v[..., :-1] - v[..., 1:]) + (T - T_ref) * L.force_gain_per_s / L.stiffness_N_per_m
             rate = np.minimum(np.maximum(rate, -L.rate_max_mps), L.rate_max_mps)
             rate = np.minimum(rate, K_STOP * (L.stroke_max_m - s))
             rate = np.maximum(rate, K_STOP * (L.stroke_min_m - s))

@@ -120,18 +120,20 @@ def simulate(sc: Scenario) -> Result:
         stats["njev"] += int(sol.njev)
         stats["nlu"] += int(sol.nlu)
         stats["intervals"] += 1
-        if sol.status < 0 or not np.all(np.isfinite(sol.y)):
+        if sol.status < 0 or not all(np.all(np.isfinite(a)) for a in (sol.y, *(sol.y_events or ()))):
             reached = sol.t[-1] if sol.t.size else t
             raise SolverError(f"solve_ivp ({sim.method}) failed near t = {reached:.6g} s in interval "
                               f"'{iv.label}': {sol.message}. Try a smaller simulation.rtol or another "
                               "simulation.method (BDF, Radau).")
-        ts, ys = sol.t, sol.y.T
+        ts = np.asarray(sol.t, float)
+        ys = np.asarray(sol.y, float).T if ts.size else np.empty((0, y.size))
         if sol.status == 1:
             hits = [(te[0], j) for j, te in enumerate(sol.t_events) if len(te)]
             t_hit, which = min(hits)
             y_hit = sol.y_events[which][0]
-            ts = np.append(ts[ts < t_hit], t_hit)
-            ys = np.vstack([ys[sol.t < t_hit], y_hit])
+            keep = ts < t_hit
+            ts = np.append(ts[keep], t_hit)
+            ys = np.vstack([ys[keep], y_hit])
             t_next, y_next = float(t_hit), y_hit.copy()
         else:
             t_next, y_next, which = t1, sol.y[:, -1].copy(), None

@@ -72,9 +72,10 @@ def start_times(values, n_segments, path="mode.start_time_s"):
 
 
 def _registry():
-    from . import uniform
+    from . import inchworm, uniform
     return {
         "uniform": (uniform.UniformConfig, uniform.UniformMode),
+        "inchworm": (inchworm.InchwormConfig, inchworm.InchwormMode),
     }
 
 

@@ -1,0 +1,372 @@
+r"""Inchworm mobility mode: push-pull gaits through active prismatic joints (paper section 5.1).
+
+Where rolling immobilises the vehicle, segments push and pull one another through the
+prismatic joints in their links; the held segments' locked wheels (speed control to zero,
+"closed loop speed control to maintain zero speed") act as anchors through their terrain
+resistance.
+
+Gait
+----
+A gait is a cyclic list of phases; each phase names the segments that move.  From it follow,
+for every phase, the role of each joint:
+
+* a joint between a moving segment and a held one *contracts* if the held segment is ahead
+  (it pulls the mover forward) and *extends* if the held segment is behind (it pushes);
+* every other joint holds its length (held segments joined by holding joints form one anchor
+  *cluster*).
+
+A phase ends on events, not timers: a moving group is done when one of its joints reaches its
+stroke limit (it then holds, and the group's wheels lock); the next phase starts when every
+group is done.  Shipped gaits: ``two_segment`` = ``[[1], [0]]`` (section 5.1's sequence: from
+extended, hold the front and pull the rear forward, then hold the rear and push the front) and
+``six_segment`` = ``[[0, 3], [1, 4], [2, 5]]`` (Fig 5: two held for each moving one).
+
+Joint force control (Eqs. 4-5)
+------------------------------
+Each active joint regulates its moving group's speed to ``target_speed_mps`` with a
+proportional force loop, ``|F| = clip(F_ff + K_v (v_target - v), 0, F_lim)``, where the
+feed-forward ``F_ff`` is the group's terrain resistance shared over its joints, and the limit
+keeps the load on every anchor cluster below ``hold_margin`` times what its locked wheels can
+hold (Eq. 5: ``F_tr,rear - F_c >= 0``):
+
+    F_lim,j = min(F_max, F_ff,j * hold_margin * C_cluster / sum(F_ff on the cluster))
+
+with ``C_cluster`` the cluster's full terrain resistance plus its locked-wheel traction.  The
+force is high while the mover breaks loose and falls to ``F_ff`` once it moves, so the anchors'
+backward sliding peaks shortly after motion starts and then drops off, as in Fig 5.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from .. import terrain
+from ..dynamics import Controls
+from ..schema import ScenarioError, field
+from . import Interval, Mode
+
+__all__ = ["InchwormConfig", "InchwormMode", "GAITS", "gait_plan", "progress_conditions"]
+
+#: Named gaits: lists of phases, each the list of moving segments.
+GAITS = {
+    "two_segment": ((1,), (0,)),
+    "six_segment": ((0, 3), (1, 4), (2, 5)),
+}
+
+#: A joint is at its stroke limit this close to it [m] (the soft end stop approaches it smoothly).
+STROKE_TOL_M = 1e-3
+
+
+@dataclass(frozen=True)
+class InchwormConfig:
+    """``mode: {type: inchworm, gait: six_segment, ...}`` (paper section 5.1)."""
+
+    type: str = field(choices=("inchworm",), doc="mode name")
+    gait: object = field(doc="a named gait (two_segment, six_segment) or a list of phases, each a list of moving segments")
+    target_speed_mps: float = field(gt=0, unit="m/s", doc="speed of a moving segment that the joint force loop aims at")
+    mover_wheel_speed_mps: float = field(ge=0, unit="m/s", doc="wheel-speed set-point R_w*omega of moving segments (held: 0)")
+    speed_gain_Ns_per_m: float = field(ge=0, unit="N s/m", doc="joint force loop gain K_v on the mover's speed error")
+    hold_margin: Optional[float] = field(gt=0, doc="fraction of an anchor cluster's resistance the joints may load it with "
+                                                   "(Eq. 5); null: no limit but the joint force limit")
+    start_time_s: float = field(0.0, ge=0, unit="s", doc="time the gait starts (motors off before)")
+    feedforward: str = field("resistance", choices=("resistance", "none"),
+                             doc="joint force feed-forward: the mover's terrain resistance, or none")
+
+    def phases(self):
+        """The gait as a tuple of phases (tuples of moving segment indices)."""
+        if isinstance(self.gait, str):
+            return GAITS[self.gait]
+        return tuple(tuple(int(k) for k in ph) for ph in self.gait)
+
+    def _check(self, path):
+        g = self.gait
+        if isinstance(g, str):
+            if g not in GAITS:
+                from ..schema import suggest
+                raise ScenarioError(f"{path}.gait: unknown gait {g!r}.{suggest(g, GAITS)} Known gaits: "
+                                    f"{', '.join(GAITS)}; or give a list of phases such as [[1], [0]].")
+            return
+        ok = isinstance(g, (list, tuple)) and len(g) > 0 and all(
+            isinstance(ph, (list, tuple)) and len(ph) > 0
+            and all(isinstance(k, int) and not isinstance(k, bool) for k in ph) for ph in g)
+        if not ok:
+            raise ScenarioError(f"{path}.gait: expected a gait name ({', '.join(GAITS)}) or a non-empty list of phases, "
+                                f"each a non-empty list of segment indices, e.g. [[0], [1], [2], [3]]; got {g!r}.")
+
+    def check_vehicle(self, vehicle, path):
+        gait_plan(self.phases(), vehicle.segments, vehicle.link_types(), f"{path}.gait")
+
+
+@dataclass(frozen=True)
+class PhasePlan:
+    """Joint roles of one gait phase."""
+
+    moving: tuple          # moving segment indices
+    groups: tuple          # tuples of consecutive moving segments
+    role: np.ndarray       # per link: +1 extend, -1 contract, 0 hold
+    group_of_joint: np.ndarray   # per link: index into groups, -1 if holding
+    mover_of_joint: np.ndarray   # per link: the adjacent moving segment (or the link index)
+    cluster_of_joint: np.ndarray  # per link: index into clusters of its anchor, -1 if holding
+    clusters: tuple        # tuples of consecutive held segments
+
+
+def _runs(indices):
+    runs, cur = [], []
+    for k in indices:
+        if cur and k != cur[-1] + 1:
+            runs.append(tuple(cur))
+            cur = []
+        cur.append(k)
+    if cur:
+        runs.append(tuple(cur))
+    return tuple(runs)
+
+
+def gait_plan(phases, n, link_types, path="mode.gait"):
+    """Derive the joint roles of every phase and check the gait can run.
+
+    Raises
+    ------
+    ScenarioError
+        A segment index out of range, a phase moving nothing or everything, a moving group with
+        no joint, a joint that is not prismatic, or a joint that would extend (or contract) twice
+        in a row and jam at its stroke limit.
+    """
+    if n < 2:
+        raise ScenarioError(f"{path}: inchworm movement needs at least 2 segments (vehicle.segments = {n}).")
+    plans = []
+    for p, ph in enumerate(phases):
+        moving = tuple(sorted(set(ph)))
+        bad = [k for k in moving if not 0 <= k < n]
+        if bad:
+            raise ScenarioError(f"{path}[{p}]: segment {bad[0]} out of range 0..{n - 1}.")
+        if len(moving) == n:
+            raise ScenarioError(f"{path}[{p}]: moves every segment; inching needs held segments as anchors.")
+        held = tuple(k for k in range(n) if k not in moving)
+        groups, clusters = _runs(moving), _runs(held)
+        role = np.zeros(n - 1)
+        group_of = np.full(n - 1, -1)
+        mover_of = np.arange(n - 1)
+        cluster_of = np.full(n - 1, -1)
+        for g, grp in enumerate(groups):
+            joints = []
+            if grp[0] > 0:                       # held segment ahead: pull (contract)
+                j = grp[0] - 1
+                role[j], group_of[j], mover_of[j] = -1, g, grp[0]
+                joints.append(j)
+            if grp[-1] < n - 1:                  # held segment behind: push (extend)
+                j = grp[-1]
+                role[j], group_of[j], mover_of[j] = 1, g, grp[-1]
+                joints.append(j)
+            for j in joints:
+                if link_types[j] != "prismatic":
+                    raise ScenarioError(f"vehicle.links.type: link {j} must be 'prismatic' for the gait "
+                                        f"(phase {p} moves segments {list(grp)} through it); it is 'fixed'.")
+                anchor = j if role[j] == -1 else j + 1
+                cluster_of[j] = next(c for c, cl in enumerate(clusters) if anchor in cl)
+        plans.append(PhasePlan(moving, groups, role, group_of, mover_of, cluster_of, clusters))
+    # every joint must alternate extend / contract around the cycle
+    for j in range(n - 1):
+        seq = [(p, pl.role[j]) for p, pl in enumerate(plans) if pl.role[j] != 0]
+        for (p1, r1), (p2, r2) in zip(seq, seq[1:] + seq[:1]):
+            if len(seq) > 1 and r1 == r2:
+                word = "extends" if r1 > 0 else "contracts"
+                raise ScenarioError(f"{path}: joint {j} {word} in phase {p1} and again in phase {p2} without the "
+                                    "opposite stroke between; it would jam at its stroke limit. Reorder the phases.")
+    return plans
+
+
+def progress_conditions(F_c, Ft_front, Ftr_front, Ftr_rear):
+    """The paper's conditions for inchworm progress of a 2-segment push phase, Eqs. 4-6.
+
+    Parameters
+    ----------
+    F_c : float
+        Joint force pushing the segments apart [N].
+    Ft_front, Ftr_front : float
+        Tractive and terrain-resistance force of the moving (front) segment [N].
+    Ftr_rear : float
+        Terrain resistance the held (rear) segment can provide [N].
+
+    Returns
+    -------
+    dict
+        ``eq4_N = F_c + F_t,front - F_tr,front`` (> 0: the mover advances),
+        ``eq5_N = F_tr,rear - F_c`` (>= 0: the anchor holds),
+        ``eq6_N = F_t,front + F_tr,rear - F_tr,front`` (> 0: some F_c satisfies both),
+        and ``progress`` (Eqs. 4 and 5 both hold).
+    """
+    eq4 = F_c + Ft_front - Ftr_front
+    eq5 = Ftr_rear - F_c
+    eq6 = Ft_front + Ftr_rear - Ftr_front
+    return {"eq4_N": float(eq4), "eq5_N": float(eq5), "eq6_N": float(eq6),
+            "progress": bool(eq4 > 0 and eq5 >= 0)}
+
+
+class InchwormMode(Mode):
+    """Run a push-pull gait on a chain with prismatic joints; phases change on stroke-limit events."""
+
+    def __init__(self, cfg, scenario, model):
+        super().__init__(cfg, scenario, model)
+        n = model.n
+        self.plans = gait_plan(cfg.phases(), n, scenario.vehicle.link_types())
+        self.phase = 0
+        self.cycles_done = 0
+        self.group_done = None
+        self.phase_log = []
+        self._phase_start = None
+        L = model.links
+        # initial extension: the opposite end of each joint's first stroke
+        s0 = np.full(n - 1, 0.5) * (L.stroke_min_m + L.stroke_max_m)
+        for j in range(n - 1):
+            first = next((pl.role[j] for pl in self.plans if pl.role[j] != 0), 0)
+            if first > 0:
+                s0[j] = L.stroke_min_m[j]
+            elif first < 0:
+                s0[j] = L.stroke_max_m[j]
+        self.s0 = s0
+
+    def initial_state(self):
+        return self.model.initial_state(joint_extension_m=self.s0)
+
+    # ------------------------------------------------------------ terrain forces for the plan
+    def _segment_forces(self, y):
+        """Per segment: full forward terrain resistance and locked-wheel traction (i = 1) [N]."""
+        m = self.model
+        x = m.field(m.unpack(y), "x_m")
+        X = m.profile(x[:, None] + m._axle_offset)
+        Fn = m._Fn
+        nw = m._nw[:, None]
+        Ftr = (nw * terrain.resistance_force(np.inf, Fn, X, m.tp)).sum(-1)
+        Ft1 = (nw * terrain.traction_force(1.0, Fn, X, m.tp)).sum(-1)
+        return Ftr, Ft1
+
+    def _joint_commands(self, plan, y):
+        cfg, m = self.cfg, self.model
+        n = m.n
+        Ftr, Ft1 = self._segment_forces(y)
+        active = (plan.role != 0) & (plan.group_of_joint >= 0)
+        active &= ~self.group_done[np.maximum(plan.group_of_joint, 0)]
+        ff = np.zeros(n - 1)
+        for g, grp in enumerate(plan.groups):
+            js = np.nonzero(active & (plan.group_of_joint == g))[0]
+            if js.size and cfg.feedforward == "resistance":
+                ff[js] = Ftr[list(grp)].sum() / js.size
+        Fmax = m.links.force_max_N
+        limit = Fmax.copy()
+        capacity = np.array([(Ftr[list(cl)] + Ft1[list(cl)]).sum() for cl in plan.clusters])
+        if cfg.hold_margin is not None:
+            for c in range(len(plan.clusters)):
+                js = np.nonzero(active & (plan.cluster_of_joint == c))[0]
+                if js.size == 0:
+                    continue
+                demand = np.maximum(ff[js], 1e-9)
+                share = cfg.hold_margin * capacity[c] * demand / demand.sum()
+                limit[js] = np.minimum(Fmax[js], share)
+        ff = np.minimum(ff, limit)
+        return active, ff, limit, capacity, Ftr, Ft1
+
+    def interval(self, t, y):
+        cfg, m = self.cfg, self.model
+        n = m.n
+        if t < cfg.start_time_s - 1e-12:
+            ctl = Controls.rolling(n, np.zeros(n), np.zeros(n))
+            return Interval(cfg.start_time_s, ctl, [], "before start")
+        plan = self.plans[self.phase]
+        if self.group_done is None:
+            self.group_done = np.zeros(len(plan.groups), bool)
+            self._begin_phase(t, y)
+        active, ff, limit, capacity, _, _ = self._joint_commands(plan, y)
+        moving = np.zeros(n, bool)
+        for g, grp in enumerate(plan.groups):
+            if not self.group_done[g]:
+                moving[list(grp)] = True
+        ctl = Controls.rolling(n, np.ones(n), np.where(moving, cfg.mover_wheel_speed_mps, 0.0)).with_(
+            joint_active=active.astype(float), joint_dir=plan.role.astype(float), joint_ff_N=ff,
+            joint_kv=np.full(n - 1, cfg.speed_gain_Ns_per_m), joint_vtarget_mps=np.full(n - 1, cfg.target_speed_mps),
+            joint_limit_N=limit, joint_mover=plan.mover_of_joint.astype(int))
+        events, self._event_joints = [], []
+        L = m.links
+        si = m.idx["s_m"]
+        ns = m.n_s
+        for j in np.nonzero(active)[0]:
+            if plan.role[j] > 0:
+                target = L.stroke_max_m[j] - STROKE_TOL_M
+                ev = (lambda t_, y_, j=j, a=target: y_[j * ns + si] - a)
+            else:
+                target = L.stroke_min_m[j] + STROKE_TOL_M
+                ev = (lambda t_, y_, j=j, a=target: a - y_[j * ns + si])
+            ev.direction = 1
+            events.append(ev)
+            self._event_joints.append(int(j))
+        label = f"phase {self.phase} (moving {[k for k in range(n) if moving[k]]})"
+        return Interval(np.inf, ctl, events, label)
+
+    def _begin_phase(self, t, y):
+        plan = self.plans[self.phase]
+        active, ff, limit, capacity, Ftr, Ft1 = self._joint_commands(plan, y)
+        diag = []
+        for g, grp in enumerate(plan.groups):
+            js = np.nonzero(active & (plan.group_of_joint == g))[0]
+            Fc = float(limit[js].sum())
+            cl = sorted({int(plan.cluster_of_joint[j]) for j in js})
+            # Eq. 5 per anchor cluster: its capacity against every planned joint force on it
+            eq5 = min(float(capacity[c] - limit[np.nonzero(active & (plan.cluster_of_joint == c))[0]].sum())
+                      for c in cl)
+            pc = progress_conditions(Fc, float(Ft1[list(grp)].sum()), float(Ftr[list(grp)].sum()),
+                                     float(min(capacity[c] for c in cl)))
+            pc["eq5_N"] = eq5
+            pc["progress"] = bool(pc["eq4_N"] > 0 and eq5 >= 0)
+            diag.append({"segments": list(grp), "joints": [int(j) for j in js], "joint_force_limit_N": Fc, **pc})
+        x = self.model.field(self.model.unpack(y), "x_m")
+        self.phase_log.append({"phase": self.phase, "t_start_s": float(t), "t_end_s": None,
+                               "moving": list(plan.moving), "x_start_m": x.tolist(), "predicted": diag})
+
+    def on_event(self, t, y, index):
+        plan = self.plans[self.phase]
+        j = self._event_joints[index]
+        g = int(plan.group_of_joint[j])
+        self.group_done[g] = True
+        word = "extended" if plan.role[j] > 0 else "contracted"
+        x0 = float(self.model.field(self.model.unpack(y), "x_m")[0])
+        self.log.append({"t_s": float(t), "kind": "joint_limit", "x_m": x0,
+                         "detail": f"joint {j} fully {word}: segments {list(plan.groups[g])} done"})
+        if self.group_done.all():
+            self.phase_log[-1]["t_end_s"] = float(t)
+            self.phase = (self.phase + 1) % len(self.plans)
+            if self.phase == 0:
+                self.cycles_done += 1
+            self.group_done = np.zeros(len(self.plans[self.phase].groups), bool)
+            self.log.append({"t_s": float(t), "kind": "phase_change", "x_m": x0,
+                             "detail": f"phase {self.phase} starts (moving {list(self.plans[self.phase].moving)}) "
+                                       f"after joint {j} reached its stroke limit"})
+            self._begin_phase(t, y)
+
+    def summary(self, result):
+        t = result.t
+        v = result.segments["v_mps"]
+        held = (result.segments["speed_setpoint_mps"] == 0.0) & (t[:, None] >= self.cfg.start_time_s)
+        back = np.where(held, np.minimum(v, 0.0), 0.0)
+        F = result.links["force_N"]
+        prism = self.model.links.prismatic > 0
+        phases = []
+        for ph in self.phase_log:
+            t0, t1 = ph["t_start_s"], ph["t_end_s"] if ph["t_end_s"] is not None else float(t[-1])
+            sel = (t >= t0) & (t <= t1)
+            obs = {}
+            if sel.any():
+                i0, i1 = np.nonzero(sel)[0][[0, -1]]
+                adv = result.segments["x_m"][i1] - result.segments["x_m"][i0]
+                obs = {"advance_m": adv.tolist(),
+                       "peak_backward_speed_mps": float(-back[sel].min()),
+                       "mean_abs_joint_force_N": np.abs(F[sel][:, prism]).mean(0).tolist() if prism.any() else []}
+            phases.append({**ph, "t_end_s": t1, "observed": obs})
+        return {
+            "gait_cycles": self.cycles_done,
+            "gait_phases_completed": sum(1 for p in self.phase_log if p["t_end_s"] is not None),
+            "peak_backward_speed_held_mps": float(-back.min()),
+            "peak_joint_force_N": float(np.abs(F[:, prism]).max()) if prism.any() else 0.0,
+            "phases": phases,
+        }
