@@ -148,5 +148,37 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
 
+@main.command()
+@click.argument("field_csv", metavar="FIELD.csv", type=click.Path(dir_okay=False))
+@click.option("--fit", "fit", multiple=True, required=True, metavar="NAME",
+              help="Parameter to fit (repeatable): b_tF, b_trF, A, peak_exponent_d, tau0, tau1, "
+                   "or xt (fits every case's X_t).")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for terrain_model.yaml and calibration.json.")
+@param_set_option
+@click.option("--model-file", type=click.Path(dir_okay=False), default=None,
+              help="YAML of terrain-model coefficients to start from instead of the parameter set's.")
+@click.option("--torque-scale", "torque_scale_Nm", type=float, default=1.0, show_default=True,
+              help="Torque residual unit [N m]: residual = (model - measured) / this.")
+@click.option("--slip-scale", "slip_scale", type=float, default=0.01, show_default=True,
+              help="Slip residual unit (fraction; 0.01 = one percentage point).")
+@handle_errors
+def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_scale_Nm, slip_scale):
+    """Fit terrain-model coefficients to the steady cases of FIELD.csv (least squares).
+
+    FIELD.csv has the columns case, surface, speed_mps, wheel_speed_mps, slip (a fraction),
+    torque_Nm (per wheel), drawbar_N, xt; lines starting with # are comments (see
+    data/frostyboy_2020.csv).  Each case gives a torque and a slip residual.  Prints fitted
+    values with standard errors and the residual table before and after, and writes
+    --out/terrain_model.yaml (use it in a scenario with terrain.model_file) and
+    --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
+    """
+    from .calibrate import run_calibration
+    _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
+                                     torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale)
+    click.echo(text)
+    click.echo(f"wrote {len(paths)} files to {out_dir}")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
