@@ -99,5 +99,94 @@ def validate(scenario, sets):
                f"{sc.simulation.duration_s:g} s)")
 
 
+# ---------------------------------------------------------------- ground truth and calibration
+# (snoworm/groundtruth.py, snoworm/calibrate.py; paper Table 2 and Figure 3)
+
+param_set_option = click.option("--parameter-set", "parameter_set_name", default="frostyboy", show_default=True,
+                                help="Named set of physical values (segment and terrain model) to use.")
+model_file_option = click.option("--model-file", type=click.Path(dir_okay=False), default=None,
+                                 help="YAML of terrain-model coefficients (e.g. terrain_model.yaml written by "
+                                      "`snoworm calibrate`) replacing the parameter set's.")
+
+
+@main.command()
+@click.option("--data", "data_path", type=click.Path(dir_okay=False), default=None,
+              help="Field-data CSV (default: the shipped FrostyBoy 2020 data, paper Table 2).")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for table2.csv and table2.png.")
+@param_set_option
+@model_file_option
+@click.option("--no-plot", is_flag=True, help="Skip table2.png.")
+@handle_errors
+def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot):
+    """Compare the steady-state model with field data (paper Table 2).
+
+    Runs the steady-state model on every case at its measured wheel speed R_w*omega, drawbar
+    and X_t, prints measured against modelled speed, slip and torque, and writes
+    --out/table2.csv (with residuals, model minus measured) and --out/table2.png.
+    """
+    from .groundtruth import run_groundtruth
+    _, text, paths = run_groundtruth(out_dir, data_path, parameter_set_name, model_file, plot=not no_plot)
+    click.echo(text)
+    click.echo(f"wrote {len(paths)} files to {out_dir}")
+
+
+@main.command("terrain-curves")
+@click.option("--xt", "xts", type=float, multiple=True, required=True,
+              help="Terrain coefficient X_t (repeatable), e.g. --xt 1 --xt 0.5 for paper Figure 3.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for terrain_curves.csv and terrain_curves.png.")
+@param_set_option
+@model_file_option
+@click.option("--points", "n_points", type=click.IntRange(min=3), default=1001, show_default=True,
+              help="Number of slip values on [0, 1].")
+@click.option("--no-plot", is_flag=True, help="Skip terrain_curves.png.")
+@handle_errors
+def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_plot):
+    """Tractive, resistive and net force per wheel against slip (paper Figure 3).
+
+    Normal load per wheel is the static one (a quarter of the segment weight); the resistance is
+    that of forward motion (Eq. 3 with sgn = +1).  Prints the slip at which the net force
+    crosses zero for each X_t, or says that it stays negative.
+    """
+    from .groundtruth import run_terrain_curves
+    _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name, model_file, plot=not no_plot,
+                                        n_points=n_points)
+    click.echo(text)
+    click.echo(f"wrote {len(paths)} files to {out_dir}")
+
+
+@main.command()
+@click.argument("field_csv", metavar="FIELD.csv", type=click.Path(dir_okay=False))
+@click.option("--fit", "fit", multiple=True, required=True, metavar="NAME",
+              help="Parameter to fit (repeatable): b_tF, b_trF, A, peak_exponent_d, tau0, tau1, "
+                   "or xt (fits every case's X_t).")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for terrain_model.yaml and calibration.json.")
+@param_set_option
+@click.option("--model-file", type=click.Path(dir_okay=False), default=None,
+              help="YAML of terrain-model coefficients to start from instead of the parameter set's.")
+@click.option("--torque-scale", "torque_scale_Nm", type=float, default=1.0, show_default=True,
+              help="Torque residual unit [N m]: residual = (model - measured) / this.")
+@click.option("--slip-scale", "slip_scale", type=float, default=0.01, show_default=True,
+              help="Slip residual unit (fraction; 0.01 = one percentage point).")
+@handle_errors
+def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_scale_Nm, slip_scale):
+    """Fit terrain-model coefficients to the steady cases of FIELD.csv (least squares).
+
+    FIELD.csv has the columns case, surface, speed_mps, wheel_speed_mps, slip (a fraction),
+    torque_Nm (per wheel), drawbar_N, xt; lines starting with # are comments (see
+    data/frostyboy_2020.csv).  Each case gives a torque and a slip residual.  Prints fitted
+    values with standard errors and the residual table before and after, and writes
+    --out/terrain_model.yaml (use it in a scenario with terrain.model_file) and
+    --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
+    """
+    from .calibrate import run_calibration
+    _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
+                                     torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale)
+    click.echo(text)
+    click.echo(f"wrote {len(paths)} files to {out_dir}")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -97,3 +97,51 @@ def plot_result(result, out_dir) -> list:
     out = Path(out_dir)
     return [plot_forces(result, out / "forces.png"), plot_speeds(result, out / "speeds.png"),
             plot_positions(result, out / "positions.png")]
+
+
+# ------------------------------------------------------------------ ground truth (groundtruth.py)
+
+def plot_table2(rows, path):
+    """Measured against modelled slip and torque per field case (paper Table 2)."""
+    lab = [str(r["case"]) for r in rows]
+    x = np.arange(len(rows))
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.2))
+    w = 0.38
+    a1.bar(x - w / 2, [100 * r["slip_measured"] for r in rows], w, label="measured")
+    a1.bar(x + w / 2, [100 * r["slip_model"] for r in rows], w, label="model")
+    a1.set_ylabel("steady slip [%]")
+    a2.bar(x - w / 2, [r["torque_measured_Nm"] for r in rows], w, label="measured")
+    a2.bar(x + w / 2, [r["torque_model_Nm"] for r in rows], w, label="model")
+    a2.set_ylabel("motor torque per wheel [N m]")
+    for a in (a1, a2):
+        a.set_xticks(x, [f"{c}\nX_t={r['xt']:g}" for c, r in zip(lab, rows)])
+        a.set_xlabel("case")
+        a.grid(alpha=0.3, axis="y")
+        a.legend(fontsize=8)
+    fig.suptitle("FrostyBoy field cases (paper Table 2): measured vs steady-state model")
+    fig.tight_layout()
+    return save(fig, path)
+
+
+def plot_terrain_curves(curves, path):
+    """Tractive, resistive and net force per wheel against slip at each X_t (paper Figure 3)."""
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for m, x in enumerate(curves.xt):
+        col = f"C{m % 10}"
+        s = 100 * curves.slip
+        ax.plot(s, curves.traction_N[m], color=col, ls="--", lw=1, label=f"traction, X_t={x:g}")
+        ax.plot(s, -curves.resistance_N[m], color=col, ls=":", lw=1, label=f"-resistance, X_t={x:g}")
+        ax.plot(s, curves.net_N[m], color=col, lw=2, label=f"net, X_t={x:g}")
+        zc = curves.zero_crossing_slip[m]
+        if np.isfinite(zc):
+            ax.plot([100 * zc], [0.0], "o", color=col, ms=7, mfc="none")
+            ax.annotate(f"{100 * zc:.2f} %", (100 * zc, 0.0), textcoords="offset points", xytext=(6, -14),
+                        color=col, fontsize=8)
+    ax.axhline(0.0, color="0.4", lw=0.8)
+    ax.set_xlabel("slip [%]")
+    ax.set_ylabel("longitudinal force per wheel [N]")
+    ax.set_title(f"Terrain forces per wheel (F_n = {curves.normal_load_N:.1f} N), forward motion")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc="best")
+    fig.tight_layout()
+    return save(fig, path)

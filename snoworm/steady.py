@@ -19,7 +19,7 @@ from . import terrain
 from .terrain import TerrainParams
 
 __all__ = ["SteadyState", "Immobilised", "steady_state", "max_drawbar_N", "net_force_per_segment_N",
-           "immobilisation_limit_xt", "segment_geometry"]
+           "immobilisation_limit_xt", "segment_geometry", "state_at_slip"]
 
 
 class Immobilised(ValueError):
@@ -84,6 +84,15 @@ def _state(i, X, wheel_speed_mps, seg, tp):
     Trr = float(terrain.resistance_torque(wheel_speed_mps, F_n, X, R, tp))
     T = float(terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp))
     return SteadyState(float(i), float(V), float(wheel_speed_mps), T, Ft, Ftr, n_w * (Ft - Ftr))
+
+
+def state_at_slip(i, X, wheel_speed_mps, seg, tp: TerrainParams) -> SteadyState:
+    """Forces and torque of a segment whose wheels run at slip ``i`` and wheel speed ``R_w w``.
+
+    Not necessarily an equilibrium: its ``drawbar_N`` is whatever the wheels develop at ``i``.
+    The calibration uses it to score an immobilised case (``i = 1``).
+    """
+    return _state(float(i), X, float(wheel_speed_mps), seg, tp)
 
 
 def _peak_slip(X, wheel_speed_mps, seg, tp):
