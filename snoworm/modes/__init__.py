@@ -72,9 +72,10 @@ def start_times(values, n_segments, path="mode.start_time_s"):
 
 
 def _registry():
-    from . import uniform
+    from . import force_control, uniform
     return {
         "uniform": (uniform.UniformConfig, uniform.UniformMode),
+        "force_control": (force_control.ForceControlConfig, force_control.ForceControlMode),
     }
 
 
