@@ -140,8 +140,8 @@ class ForceControlConfig:
     targets: TargetsConfig = field(doc="link forces, load shares or net connector forces")
     free_segment: Optional[int] = field(
         None, ge=0, doc="segment driven at its nominal speed without a force loop (default: the rear one)")
-    kp_mps_per_N: float = field(2.0e-4, gt=0, unit="m/s per N", doc="force-loop proportional gain [assumed]")
-    ki_mps_per_Ns: float = field(1.0e-3, ge=0, unit="m/s per N s", doc="force-loop integral gain [assumed]")
+    kp_mps_per_N: float = field(1.6e-3, gt=0, unit="m/s per N", doc="force-loop proportional gain [assumed]")
+    ki_mps_per_Ns: float = field(4.0e-3, ge=0, unit="m/s per N s", doc="force-loop integral gain [assumed]")
     max_speed_mps: Optional[float] = field(
         None, gt=0, unit="m/s", doc="upper limit of a loop's set-point (default: the no-load wheel speed R_w*w_nl)")
 
@@ -306,7 +306,7 @@ def plan(cfg: ForceControlConfig, sc, model, path="mode") -> ForcePlan:
         W = np.zeros(n)
         fixed = np.zeros(n, bool)
         for k, C in t.net_connector_N.items():
-            W[k], fixed[k] = 0.0 - float(C) + 0.0, True
+            W[k], fixed[k] = 0.0 - float(C), True  # 0.0 - avoids -0.0
         rest = np.flatnonzero(~fixed)
         remaining = F_tow - W[fixed].sum()
         W[rest] = remaining * _shares(t.load_shares or "even", rest, remaining, xt, segs, tp, nominal)
