@@ -17,7 +17,7 @@ from click.testing import CliRunner
 
 from snoworm.cli import main
 from snoworm.modes.force_control import available_drawbar_N, plan
-from snoworm.scenario import ScenarioError, load_scenario, scenario_from_dict
+from snoworm.scenario import ScenarioError, dump_scenario, load_scenario, scenario_from_dict
 from snoworm.simulate import build_model, simulate
 
 SCEN = Path(__file__).resolve().parent.parent / "scenarios"
@@ -171,6 +171,20 @@ def test_impossible_target_exit_2(tmp_path):
     assert "mode.targets" in r.output and "impossible target" in r.output
 
 
+def test_tow_beyond_whole_chain_exit_2():
+    r = CliRunner().invoke(main, ["validate", str(SCEN / "pi3_equal.yaml"), "--set", "tow.force_N=1100"])
+    assert r.exit_code == 2
+    assert "whole chain" in r.output and "tow.force_N" in r.output
+
+
+def test_resolved_scenario_round_trip(tmp_path, runs):
+    # the scenario.yaml written with the results re-validates to the same configuration
+    for name, res in runs.items():
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(dump_scenario(res.scenario))
+        assert load_scenario(path).mode == res.scenario.mode, name
+
+
 def test_setpoint_above_vmax_exit_2():
     r = CliRunner().invoke(main, ["validate", str(SCEN / "pi3_equal.yaml"), "--set", "mode.max_speed_mps=1.75"])
     assert r.exit_code == 2
@@ -214,3 +228,16 @@ def test_force_diagram_written(tmp_path, runs):
     names = {Path(p).name for p in paths}
     assert {"force_diagram.png", "forces.png", "speeds.png"} <= names
     assert (tmp_path / "force_diagram.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("rule", ["drawbar", "inverse_slip"])
+def test_share_rules_favour_the_stronger_segment(rule):
+    # a heavier leader (more normal load) pulls more at less slip: it gets the larger share
+    raw = _raw("pi3_equal")
+    raw["vehicle"]["segment_overrides"] = {0: {"mass_kg": 120.0}}
+    raw["mode"]["targets"] = {"load_shares": rule}
+    sc = scenario_from_dict(raw)
+    W = plan(sc.mode, sc, build_model(sc)).wheel_net_N
+    assert W.sum() == pytest.approx(200.0, abs=1e-9)
+    assert W[1] == pytest.approx(W[2], rel=1e-9)
+    assert W[0] > 1.05 * W[1]      # drawbar: 80 vs 60 N; inverse_slip: 70.6 vs 64.7 N

@@ -326,6 +326,11 @@ def plan(cfg: ForceControlConfig, sc, model, path="mode") -> ForcePlan:
     # feasibility
     avail, why = zip(*(available_drawbar_N(xt[j], segs[j], tp, nominal[j]) for j in range(n)))
     avail = np.array(avail)
+    if F_tow > avail.sum() + 1e-9:
+        raise ScenarioError(
+            f"{tpath}: impossible target: the tow of {F_tow:g} N exceeds the drawbar the whole chain can pull, "
+            f"{avail.sum():.1f} N (per segment {np.round(avail, 1).tolist()} N on X_t = {np.round(xt, 3).tolist()}); "
+            "no load sharing can carry it. Lower tow.force_N or add segments.")
     for j in range(n):
         if W[j] > avail[j] + 1e-9:
             raise ScenarioError(
