@@ -95,8 +95,11 @@ def plot_positions(result, path):
 def plot_result(result, out_dir) -> list:
     """Every standard plot of a run: ``forces.png``, ``speeds.png``, ``positions.png``."""
     out = Path(out_dir)
-    return [plot_forces(result, out / "forces.png"), plot_speeds(result, out / "speeds.png"),
-            plot_positions(result, out / "positions.png")]
+    paths = [plot_forces(result, out / "forces.png"), plot_speeds(result, out / "speeds.png"),
+             plot_positions(result, out / "positions.png")]
+    for name in getattr(result.scenario.mode, "extra_plots", ()):  # mode-specific plots, e.g. force_diagram
+        paths.append(globals()[f"plot_{name}"](result, out / f"{name}.png"))
+    return paths
 
 
 # ------------------------------------------------------------------ ground truth (groundtruth.py)
@@ -143,5 +146,59 @@ def plot_terrain_curves(curves, path):
     ax.set_title(f"Terrain forces per wheel (F_n = {curves.normal_load_N:.1f} N), forward motion")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=2, loc="best")
+    fig.tight_layout()
+    return save(fig, path)
+
+
+def plot_force_diagram(result, path, window_s=1.0):
+    """Steady-state force diagram of the chain (paper Fig 10): the forces acting on each segment.
+
+    Each segment is a box (the leader on the right, travel to the right).  Below it, the net
+    wheel force (traction - resistance); above it, the force of the link ahead (``T_{k-1}``,
+    pulling forward when in tension) and of the link behind (``-T_k``) or the tow.  Values are
+    means over the last ``window_s`` seconds of the run; arrows point the way the force acts on
+    the segment and their length is proportional to it.
+    """
+    t = result.t
+    last = t >= t[-1] - window_s
+    W = result.segments["net_force_N"][last].mean(0)
+    T = result.links["force_N"][last].mean(0) if result.links["force_N"].shape[1] else np.zeros(0)
+    sp = result.segments["speed_setpoint_mps"][last].mean(0)
+    n = W.size
+    tow = float(result.scenario.tow.force_N)
+    ahead = np.concatenate([[0.0], T])             # force of the link ahead, forward positive
+    behind = -np.concatenate([T, [tow]])           # force of the link behind (or tow), forward positive
+    fmax = max(np.max(np.abs(np.concatenate([W, ahead, behind]))), 1.0)
+    scale = 0.9 / fmax                             # the longest arrow is 0.9 box spacings
+    fig, ax = plt.subplots(figsize=(2.6 * n + 1.5, 4.2))
+    pos = lambda k: (n - 1 - k) * 2.0              # leader on the right
+    for k in range(n):
+        x0 = pos(k)
+        ax.add_patch(plt.Rectangle((x0 - 0.45, -0.3), 0.9, 0.6, fc="0.9", ec="0.2"))
+        ax.text(x0, 0.0, f"{_seg_label(k)}\nset-point {sp[k]:.3f} m/s", ha="center", va="center", fontsize=8)
+        rows = [(-0.75, W[k], "tab:green", f"wheels {W[k]:+.1f} N"),
+                (0.6, ahead[k], "tab:blue", f"link ahead {ahead[k]:+.1f} N" if k else None),
+                (0.95, behind[k], "tab:red" if k < n - 1 else "tab:purple",
+                 f"link behind {behind[k]:+.1f} N" if k < n - 1 else f"tow {behind[k]:+.1f} N")]
+        for yy, F, c, lab in rows:
+            if lab is None:
+                continue
+            if abs(F) > 1e-9 * fmax:
+                ax.annotate("", xy=(x0 + F * scale / 2, yy), xytext=(x0 - F * scale / 2, yy),
+                            arrowprops=dict(arrowstyle="-|>", color=c, lw=2))
+            else:
+                ax.plot([x0], [yy], "o", color=c, ms=4)
+            ax.text(x0, yy + 0.12, lab, ha="center", va="bottom", fontsize=7.5, color=c)
+        ax.text(x0, -1.1, f"net connector {ahead[k] + behind[k]:+.1f} N", ha="center", va="top", fontsize=7.5)
+    for j in range(n - 1):
+        ax.text((pos(j) + pos(j + 1)) / 2, 0.0, f"T{j}\n{T[j]:+.1f} N", ha="center", va="center", fontsize=8,
+                color="0.3")
+    ax.annotate("travel", xy=(pos(0) + 0.9, -1.55), xytext=(pos(0) + 0.2, -1.55),
+                arrowprops=dict(arrowstyle="-|>", color="0.4"), va="center", fontsize=8, color="0.4")
+    ax.set_xlim(-1.1, pos(0) + 1.1)
+    ax.set_ylim(-1.75, 1.35)
+    ax.axis("off")
+    ax.set_title(f"{result.scenario.name}: steady-state forces on each segment "
+                 f"(mean of the last {window_s:g} s; tension positive)", fontsize=9)
     fig.tight_layout()
     return save(fig, path)

@@ -253,6 +253,9 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
     mode = modes.build_config(raw["mode"], vehicle)
     sc = Scenario(name=_text(raw["name"], "name"), description=_text(raw.get("description", ""), "description"),
                   vehicle=vehicle, terrain=terrain_cfg, tow=tow, mode=mode, simulation=sim)
+    check = getattr(mode, "check_scenario", None)   # checks needing terrain and tow (e.g. force control)
+    if check is not None:
+        check(sc, "mode")
     return sc
 
 
