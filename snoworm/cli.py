@@ -34,6 +34,9 @@ def handle_errors(fn):
             _fail(str(exc), EXIT_INPUT)
         except SolverError as exc:
             _fail(f"solver failure: {exc}", EXIT_SOLVER)
+        except BrokenPipeError:  # output piped into e.g. `head`: not an error of ours
+            sys.stderr.close()
+            sys.exit(0)
         except KeyboardInterrupt:
             _fail("interrupted; files already finished were kept.", 130)
         except Exception as exc:  # a bug: one paragraph, the traceback on request

@@ -11,7 +11,8 @@ r"""Longitudinal dynamics of a chain of wheeled segments (MODEL.md section 4).
 
     m_k dv_k/dt = n_w * sum_axles (F_t - F_tr) + T_{k-1} - T_k - F_tow [k = N-1]
     J   dw/dt   = T_m - R_w (F_t - F_tr) - T_rr                 (per wheel, per axle)
-    T_k = k_c (x_k - x_{k+1} - L_0 - s_k) + c_c (v_k - v_{k+1})  (s_k: prismatic extension)
+    T_k = k_c (x_k - x_{k+1} - L_0 - s_k) + c_c (v_k - v_{k+1} - ds_k/dt)
+          (spring-damper in series with the prismatic actuator of extension s_k; s_k = 0 fixed)
 
 One kernel, :meth:`ChainModel.evaluate`, computes every force of the model from the state for
 any leading batch shape: the right-hand side calls it on one state (or a stack of batch
@@ -79,6 +80,9 @@ class LinkArrays:
     force_gain_per_s: np.ndarray
 
 
+#: Gain of the length servo of a length-commanded prismatic joint [1/s].
+K_LENGTH = 20.0
+
 #: Gain of the soft end stops of a prismatic joint [1/s]: the extension rate is limited to
 #: ``K_STOP * (distance to the stop)``, so the stroke is never exceeded.
 K_STOP = 50.0
@@ -100,7 +104,10 @@ class Controls:
     fc_sigma : (N,) +1 if the controlled link is behind the segment, -1 if ahead.
     fc_ref_N, fc_nominal_mps, fc_kp, fc_ki, fc_vmax_mps : (N,) outer PI loop settings:
         ``v_sp = clip(v_nom + kp e + q, 0, v_max)``, ``e = sigma (F_ref - F)``.
-    joint_active : (N-1,) 1 where a prismatic joint is force-commanded, 0 where it holds length.
+    joint_active : (N-1,) 1 where a prismatic joint is driven, 0 where it is locked at its length.
+    joint_length_mode : (N-1,) 1: commanded in length (to ``joint_sref_m`` at rate
+        ``joint_vtarget_mps``, force limited to ``joint_limit_N``); 0: commanded in force.
+    joint_sref_m : (N-1,) length command (extension) of length-commanded joints [m].
     joint_dir : (N-1,) +1 to push (extend, compression), -1 to pull (contract, tension).
     joint_ff_N, joint_kv, joint_vtarget_mps, joint_limit_N : (N-1,) force command
         ``|F| = clip(ff + kv (v_target - v_mover), 0, limit)``.
@@ -118,6 +125,8 @@ class Controls:
     fc_ki: np.ndarray
     fc_vmax_mps: np.ndarray
     joint_active: np.ndarray
+    joint_length_mode: np.ndarray
+    joint_sref_m: np.ndarray
     joint_dir: np.ndarray
     joint_ff_N: np.ndarray
     joint_kv: np.ndarray
@@ -136,7 +145,8 @@ class Controls:
             fc_active=z.copy(), fc_link=np.full(n, n - 1, dtype=int), fc_sigma=np.ones(n),
             fc_ref_N=z.copy(), fc_nominal_mps=z.copy(), fc_kp=np.ones(n), fc_ki=z.copy(),
             fc_vmax_mps=z.copy(),
-            joint_active=zl.copy(), joint_dir=np.ones_like(zl), joint_ff_N=zl.copy(),
+            joint_active=zl.copy(), joint_length_mode=zl.copy(), joint_sref_m=zl.copy(),
+            joint_dir=np.ones_like(zl), joint_ff_N=zl.copy(),
             joint_kv=zl.copy(), joint_vtarget_mps=zl.copy(), joint_limit_N=zl.copy(),
             joint_mover=np.arange(max(n - 1, 0), dtype=int),
         )
@@ -222,34 +232,93 @@ class ChainModel:
     def jac_sparsity(self) -> np.ndarray:
         """Structural non-zero pattern of the Jacobian ``d(dy/dt)/dy`` (dense bool array).
 
-        Within a segment every field may depend on every other; across neighbouring segments
-        the rows of v, s, q (and, with a force loop, the wheel states that follow its
-        set-point) depend on the neighbours' x, v and s.
+        Within a segment every field may depend on every other (except ``x``, which is the
+        integral of ``v``).  Across segments only the link forces couple: the force of link
+        ``k-1`` (ahead) depends on ``x, v`` of segments ``k-1, k`` and on ``s_{k-1}``; link ``k``
+        (behind) on ``x, v`` of ``k, k+1`` and on ``s_k``.  Rows that see a link force: ``v``;
+        ``s`` (its own link, and the mover speed of the link's other segment); with a force
+        loop also ``q`` and the wheel states that follow its set-point.
         """
-        ns, n = self.n_s, self.n
+        ns, n, I = self.n_s, self.n, self.idx
         own = np.ones((ns, ns), bool)
-        own[self.idx["x_m"], :] = False
-        own[self.idx["x_m"], self.idx["v_mps"]] = True
-        nb = np.zeros((ns, ns), bool)
-        rows = ["v_mps"] + (["s_m"] if self.has_joints else [])
+        own[I["x_m"], :] = False
+        own[I["x_m"], I["v_mps"]] = True
+        prev = np.zeros((ns, ns), bool)    # rows of segment k, columns of segment k-1
+        nxt = np.zeros((ns, ns), bool)     # rows of segment k, columns of segment k+1
+        ahead_rows = ["v_mps"]             # rows that see link k-1
+        behind_rows = ["v_mps"]            # rows that see link k
+        if self.has_joints:
+            behind_rows.append("s_m")
         if self.force_loop:
-            rows += ["q_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm"]
-        cols = ["x_m", "v_mps"] + (["s_m"] if self.has_joints else [])
-        for r in rows:
-            for c in cols:
-                nb[self.idx[r], self.idx[c]] = True
+            loop_rows = ["q_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm"]
+            ahead_rows += loop_rows
+            behind_rows += loop_rows
+        for r in ahead_rows:
+            for c in ("x_m", "v_mps"):
+                prev[I[r], I[c]] = True
+            if self.has_joints:
+                prev[I[r], I["s_m"]] = True
+        for r in behind_rows:
+            for c in ("x_m", "v_mps"):
+                nxt[I[r], I[c]] = True
         P = np.zeros((n * ns, n * ns), bool)
         for k in range(n):
             P[k * ns:(k + 1) * ns, k * ns:(k + 1) * ns] = own
-            for kk in (k - 1, k + 1):
-                if 0 <= kk < n:
-                    P[k * ns:(k + 1) * ns, kk * ns:(kk + 1) * ns] = nb
+            if k > 0:
+                P[k * ns:(k + 1) * ns, (k - 1) * ns:k * ns] = prev
+            if k < n - 1:
+                P[k * ns:(k + 1) * ns, (k + 1) * ns:(k + 2) * ns] = nxt
         return P
 
     def bandwidths(self):
         """``(lband, uband)`` of :meth:`jac_sparsity`, for LSODA's banded Jacobian."""
-        r, c = np.nonzero(self.jac_sparsity())
-        return int(max(0, np.max(r - c))), int(max(0, np.max(c - r)))
+        if getattr(self, "_bands", None) is None:
+            r, c = np.nonzero(self.jac_sparsity())
+            self._bands = int(max(0, np.max(r - c))), int(max(0, np.max(c - r)))
+        return self._bands
+
+    def _fd_plan(self):
+        """Column groups and gather indices of the banded finite-difference Jacobian (built once)."""
+        if getattr(self, "_plan", None) is None:
+            lb, ub = self.bandwidths()
+            n = self.n_states
+            w = min(lb + ub + 1, n)
+            cols = np.arange(n)
+            group = cols % w
+            r = np.arange(lb + ub + 1)[:, None]
+            rows = cols[None, :] + r - ub                 # row i of packed entry (r, j)
+            valid = (rows >= 0) & (rows < n)
+            self._plan = (w, group, rows, valid)
+        return self._plan
+
+    def jacobian_banded(self, t, y, ctl: "Controls", rel_step: float = 1.2e-4):
+        """Finite-difference Jacobian in LAPACK packed band format, from ONE vectorised kernel call.
+
+        All ``lband + uband + 1`` column groups of the band are perturbed at once and
+        evaluated as a stack through :meth:`evaluate` (its leading batch axis), so a Jacobian
+        costs about as much as one or two right-hand-side calls instead of one per group.
+        Returns ``J_packed`` with ``J_packed[uband + i - j, j] = dF_i/dy_j``, the layout
+        ``solve_ivp(method="LSODA", lband=..., uband=...)`` expects.
+        """
+        w, group, rows, valid = self._fd_plan()
+        n = y.size
+        h = rel_step * np.maximum(1e-3, np.abs(y))
+        Yp = np.tile(y, (w + 1, 1))
+        Yp[1 + group, np.arange(n)] += h
+        h = Yp[1 + group, np.arange(n)] - y           # the step actually taken (rounding)
+        dY, _ = self.evaluate(Yp.reshape(w + 1, self.n, self.n_s), ctl)
+        F = dY.reshape(w + 1, n)
+        dF = F[1:] - F[0]
+        g = np.broadcast_to(group, rows.shape)
+        packed = np.where(valid, dF[g, np.where(valid, rows, 0)], 0.0) / h[None, :]
+        return packed
+
+    def jacobian_sparse(self, t, y, ctl: "Controls"):
+        """The same finite-difference Jacobian as a sparse CSC matrix (for BDF and Radau)."""
+        from scipy.sparse import dia_matrix
+        lb, ub = self.bandwidths()
+        packed = self.jacobian_banded(t, y, ctl)
+        return dia_matrix((packed, np.arange(ub, -lb - 1, -1)), shape=(y.size, y.size)).tocsc()
 
     # ------------------------------------------------------------------ kernel
     def evaluate(self, Y, ctl: Controls, outputs: bool = False):
@@ -279,17 +348,25 @@ class ChainModel:
         Ft = terrain.traction_force(i, self._Fn, X, tp)
         Ftr = terrain.resistance_force(V, self._Fn, X, tp)
         Trr = terrain.resistance_torque(wm, self._Fn, X, R, tp)
-        # links (tension positive)
+        # links (tension positive): a spring-damper in series with the prismatic actuator
         L = self.links
+        dY = np.empty_like(Y)
         if self.n > 1:
-            d = x[..., :-1] - x[..., 1:] - L.rest_spacing_m
+            rel = v[..., :-1] - v[..., 1:]
+            stretch = x[..., :-1] - x[..., 1:] - L.rest_spacing_m
             if self.has_joints:
                 s = Y[..., :-1, I["s_m"]]
-                d = d - s
-            T = L.stiffness_N_per_m * d + L.damping_Ns_per_m * (v[..., :-1] - v[..., 1:])
+                T_spring = L.stiffness_N_per_m * (stretch - s)
+                ds = self._joint_rate(s, v, rel, T_spring, ctl)
+                dY[..., :-1, I["s_m"]] = ds
+                dY[..., -1, I["s_m"]] = 0.0
+                T = T_spring + L.damping_Ns_per_m * (rel - ds)
+            else:
+                T = L.stiffness_N_per_m * stretch + L.damping_Ns_per_m * rel
         else:
             T = np.zeros(x.shape[:-1] + (0,))
-        dY = np.empty_like(Y)
+            if self.has_joints:
+                dY[..., I["s_m"]] = 0.0
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
         sp = ctl.speed_sp_mps
         if self.force_loop:
@@ -317,22 +394,6 @@ class ChainModel:
         Fl[..., -1] -= self.tow_force_N
         dY[..., I["x_m"]] = v
         dY[..., I["v_mps"]] = (wheel_net + Fl) / self._m
-        # prismatic joints: force-limited, rate-limited servos with soft end stops
-        if self.has_joints:
-            s = Y[..., :-1, I["s_m"]]
-            vm = v[..., ctl.joint_mover]
-            mag = np.minimum(np.maximum(ctl.joint_ff_N + ctl.joint_kv * (ctl.joint_vtarget_mps - vm), 0.0),
-                             ctl.joint_limit_N)
-            T_ref = -ctl.joint_dir * mag
-            # velocity feed-forward (follow the segments' relative motion) plus a proportional
-            # force loop: d(T_spring)/dt = -g (T - T_ref), so the force tracks without lag
-            rate = (v[..., :-1] - v[..., 1:]) + (T - T_ref) * L.force_gain_per_s / L.stiffness_N_per_m
-            rate = np.minimum(np.maximum(rate, -L.rate_max_mps), L.rate_max_mps)
-            rate = np.minimum(rate, K_STOP * (L.stroke_max_m - s))
-            rate = np.maximum(rate, K_STOP * (L.stroke_min_m - s))
-            ds = rate * ctl.joint_active * L.prismatic
-            dY[..., :-1, I["s_m"]] = ds
-            dY[..., -1, I["s_m"]] = 0.0
         if not outputs:
             return dY, None
         nw = self._nw
@@ -346,6 +407,36 @@ class ChainModel:
             "terrain_dissipation_W": nw * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),
         }
         return dY, out
+
+    def _joint_rate(self, s, v, rel, T_spring, ctl: Controls):
+        """Extension rate of the prismatic actuators: force-limited, rate-limited servos.
+
+        Force command: velocity feed-forward (follow the segments' relative motion) plus a
+        proportional loop on the spring force, ``d(T_spring)/dt = -g (T_spring - T_ref)``, so the
+        force tracks without lag from the segments' accelerations.  Length command: a rate-limited servo to ``s_ref`` that backs off
+        where the spring force would exceed the limit.  Both respect the actuator's rate limit
+        and soft end stops; locked (inactive) joints and fixed links do not move.
+        """
+        L = self.links
+        vm = v[..., ctl.joint_mover]
+        mag = np.minimum(np.maximum(ctl.joint_ff_N + ctl.joint_kv * (ctl.joint_vtarget_mps - vm), 0.0),
+                         ctl.joint_limit_N)
+        T_ref = -ctl.joint_dir * mag
+        # with the damper in series, T = T_spring + c (rel - rate); solving the loop
+        # rate = rel + (T - T_ref) g/k for T gives the effective gain below: T approaches T_ref
+        # monotonically (never beyond it), at the rate g / (1 + c g / k)
+        gk0 = L.force_gain_per_s / L.stiffness_N_per_m
+        gk = gk0 / (1.0 + L.damping_Ns_per_m * gk0)
+        rate_f = rel + (T_spring - T_ref) * gk
+        vt = ctl.joint_vtarget_mps
+        rate_l = np.minimum(np.maximum(K_LENGTH * (ctl.joint_sref_m - s), -vt), vt)
+        rate_l = np.minimum(rate_l, rel + (T_spring + ctl.joint_limit_N) * gk)
+        rate_l = np.maximum(rate_l, rel + (T_spring - ctl.joint_limit_N) * gk)
+        rate = np.where(ctl.joint_length_mode > 0, rate_l, rate_f)
+        rate = np.minimum(np.maximum(rate, -L.rate_max_mps), L.rate_max_mps)
+        rate = np.minimum(rate, K_STOP * (L.stroke_max_m - s))
+        rate = np.maximum(rate, K_STOP * (L.stroke_min_m - s))
+        return rate * ctl.joint_active * L.prismatic
 
     def rhs(self, t, y, ctl: Controls):
         """``dy/dt`` for :func:`scipy.integrate.solve_ivp` (pure: records nothing)."""

@@ -111,9 +111,8 @@ class Result:
                 s = Y[..., :-1, model.idx["s_m"]]
                 ds = dY[..., :-1, model.idx["s_m"]]
                 lk["extension_m"] = s
-                # the actuator is in series with the link spring (the damper acts across it)
-                spring = out["link_force_N"] - model.links.damping_Ns_per_m * np.diff(-Y[..., model.idx["v_mps"]], axis=-1)
-                lk["joint_power_W"] = -spring * ds
+                # the actuator is in series with the link's spring-damper: it carries the link force
+                lk["joint_power_W"] = -out["link_force_N"] * ds
             else:
                 lk["extension_m"] = np.zeros_like(lk["length_m"])
                 lk["joint_power_W"] = np.zeros_like(lk["length_m"])

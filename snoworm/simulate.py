@@ -62,18 +62,25 @@ def build_model(sc: Scenario) -> ChainModel:
     return ChainModel(seg, links, tp, terrain_profile(sc), sc.tow.force_N, force_loop=force_loop)
 
 
-def solver_options(model: ChainModel, sim) -> dict:
+def _fallbacks(method):
+    """The configured method first, then the implicit methods not yet tried (an interval that
+    fails, e.g. in LSODA's event location, is retried before a failure is reported)."""
+    return [method] + [m for m in ("BDF", "Radau") if m != method]
+
+
+def solver_options(model: ChainModel, sim, method=None) -> dict:
     """``solve_ivp`` keyword arguments for the model: method, tolerances, Jacobian structure."""
+    method = method or sim.method
     atol = np.tile([ATOL[f] for f in model.fields], model.n) * sim.atol_scale
-    opts = {"method": sim.method, "rtol": sim.rtol, "atol": atol}
+    opts = {"method": method, "rtol": sim.rtol, "atol": atol}
     if sim.max_step_s is not None:
         opts["max_step"] = sim.max_step_s
-    if sim.method == "LSODA":
+    if method == "LSODA":
         lband, uband = model.bandwidths()
-        if lband + uband + 1 < model.n_states:
-            opts["lband"], opts["uband"] = lband, uband
-    elif sim.method in ("BDF", "Radau"):
-        opts["jac_sparsity"] = model.jac_sparsity()
+        opts["lband"], opts["uband"] = lband, uband
+        opts["jac"] = model.jacobian_banded
+    elif method in ("BDF", "Radau"):
+        opts["jac"] = model.jacobian_sparse
     return opts
 
 
@@ -111,20 +118,30 @@ def simulate(sc: Scenario) -> Result:
             raise SolverError(f"mode {sc.mode.type!r} asked for an empty interval at t = {t:.6g} s ({iv.label}).")
         t_eval = _grid(t, t1, sim.output_dt_s, include_start=not pieces)
         events = [_wrap_event(ev, iv.controls) for ev in iv.events]
-        try:
-            sol = solve_ivp(model.rhs, (t, t1), y, t_eval=t_eval, events=events or None,
-                            args=(iv.controls,), **opts)
-        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
-            raise SolverError(f"solve_ivp ({sim.method}) failed at t = {t:.6g} s in interval '{iv.label}': {exc}") from None
-        stats["nfev"] += int(sol.nfev)
-        stats["njev"] += int(sol.njev)
-        stats["nlu"] += int(sol.nlu)
+        sol, failures = None, []
+        for method in _fallbacks(sim.method):
+            o = opts if method == sim.method else solver_options(model, sim, method)
+            try:
+                sol = solve_ivp(model.rhs, (t, t1), y, t_eval=t_eval, events=events or None,
+                                args=(iv.controls,), **o)
+            except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                failures.append(f"{method}: {exc}")
+                sol = None
+                continue
+            stats["nfev"] += int(sol.nfev)
+            stats["njev"] += int(sol.njev)
+            stats["nlu"] += int(sol.nlu)
+            if sol.status >= 0 and all(np.all(np.isfinite(a)) for a in (sol.y, *(sol.y_events or ()))):
+                break
+            reached = sol.t[-1] if np.size(sol.t) else t
+            failures.append(f"{method}: {sol.message} (near t = {reached:.6g} s)")
+            sol = None
+        if failures:
+            stats["retries"] = stats.get("retries", 0) + len(failures) - (sol is None)
+        if sol is None:
+            raise SolverError(f"every method failed at t = {t:.6g} s in interval '{iv.label}': "
+                              + "; ".join(failures) + ". Try a smaller simulation.rtol or max_step_s.")
         stats["intervals"] += 1
-        if sol.status < 0 or not all(np.all(np.isfinite(a)) for a in (sol.y, *(sol.y_events or ()))):
-            reached = sol.t[-1] if sol.t.size else t
-            raise SolverError(f"solve_ivp ({sim.method}) failed near t = {reached:.6g} s in interval "
-                              f"'{iv.label}': {sol.message}. Try a smaller simulation.rtol or another "
-                              "simulation.method (BDF, Radau).")
         ts = np.asarray(sol.t, float)
         ys = np.asarray(sol.y, float).T if ts.size else np.empty((0, y.size))
         if sol.status == 1:

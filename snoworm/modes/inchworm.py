@@ -27,10 +27,11 @@ Each active joint regulates its moving group's speed to ``target_speed_mps`` wit
 proportional force loop, ``|F| = clip(F_ff + K_v (v_target - v), 0, F_lim)``, where the
 feed-forward ``F_ff`` is the group's terrain resistance shared over its joints, and the limit
 keeps the load on every anchor cluster below ``hold_margin`` times what its locked wheels can
-hold (Eq. 5: ``F_tr,rear - F_c >= 0``):
+hold (Eq. 5: ``F_tr,rear - F_c >= 0``) and no higher than the mover needs:
 
-    F_lim,j = min(F_max, F_ff,j * hold_margin * C_cluster / sum(F_ff on the cluster))
+    F_lim,j = min(F_max, F_ff,j (1 + headroom), F_ff,j * hold_margin * C_cluster / sum(F_ff on the cluster))
 
+and the groups moving in one phase get the same headroom, so identical segments move alike.
 with ``C_cluster`` the cluster's full terrain resistance plus its locked-wheel traction.  The
 force is high while the mover breaks loose and falls to ``F_ff`` once it moves, so the anchors'
 backward sliding peaks shortly after motion starts and then drops off, as in Fig 5.
@@ -67,12 +68,18 @@ class InchwormConfig:
     gait: object = field(doc="a named gait (two_segment, six_segment) or a list of phases, each a list of moving segments")
     target_speed_mps: float = field(gt=0, unit="m/s", doc="speed of a moving segment that the joint force loop aims at")
     mover_wheel_speed_mps: float = field(ge=0, unit="m/s", doc="wheel-speed set-point R_w*omega of moving segments (held: 0)")
-    speed_gain_Ns_per_m: float = field(ge=0, unit="N s/m", doc="joint force loop gain K_v on the mover's speed error")
     hold_margin: Optional[float] = field(gt=0, doc="fraction of an anchor cluster's resistance the joints may load it with "
                                                    "(Eq. 5); null: no limit but the joint force limit")
+    joint_control: str = field("speed", choices=("speed", "length", "force"),
+                               doc="speed: force loop on the mover's speed; length: stroke at target_speed_mps; "
+                                   "force: constant joint_force_N")
+    speed_gain_Ns_per_m: float = field(2000.0, ge=0, unit="N s/m", doc="joint force loop gain K_v on the mover's speed error")
+    joint_force_N: Optional[float] = field(None, gt=0, unit="N", doc="joint force of joint_control: force")
+    force_headroom: float = field(0.2, ge=0, doc="joint force allowed above the feed-forward, as a fraction of it, "
+                                                 "to accelerate the mover (speed and length control)")
     start_time_s: float = field(0.0, ge=0, unit="s", doc="time the gait starts (motors off before)")
     feedforward: str = field("resistance", choices=("resistance", "none"),
-                             doc="joint force feed-forward: the mover's terrain resistance, or none")
+                             doc="speed control's force feed-forward: the mover's terrain resistance, or none")
 
     def phases(self):
         """The gait as a tuple of phases (tuples of moving segment indices)."""
@@ -96,6 +103,9 @@ class InchwormConfig:
                                 f"each a non-empty list of segment indices, e.g. [[0], [1], [2], [3]]; got {g!r}.")
 
     def check_vehicle(self, vehicle, path):
+        if (self.joint_control == "force") != (self.joint_force_N is not None):
+            raise ScenarioError(f"{path}.joint_force_N: give it exactly when joint_control is 'force' "
+                                f"(joint_control = {self.joint_control!r}, joint_force_N = {self.joint_force_N!r}).")
         gait_plan(self.phases(), vehicle.segments, vehicle.link_types(), f"{path}.gait")
 
 
@@ -170,6 +180,11 @@ def gait_plan(phases, n, link_types, path="mode.gait"):
     # every joint must alternate extend / contract around the cycle
     for j in range(n - 1):
         seq = [(p, pl.role[j]) for p, pl in enumerate(plans) if pl.role[j] != 0]
+        if len(seq) == 1:
+            word = "extends" if seq[0][1] > 0 else "contracts"
+            raise ScenarioError(f"{path}: joint {j} only {word} (phase {seq[0][0]}) and never makes the opposite "
+                                "stroke; it would jam at its stroke limit after one cycle. Add a phase that "
+                                "moves the segment on its other side.")
         for (p1, r1), (p2, r2) in zip(seq, seq[1:] + seq[:1]):
             if len(seq) > 1 and r1 == r2:
                 word = "extends" if r1 > 0 else "contracts"
@@ -252,7 +267,9 @@ class InchwormMode(Mode):
         ff = np.zeros(n - 1)
         for g, grp in enumerate(plan.groups):
             js = np.nonzero(active & (plan.group_of_joint == g))[0]
-            if js.size and cfg.feedforward == "resistance":
+            if cfg.joint_control == "force":
+                ff[js] = cfg.joint_force_N
+            elif js.size and cfg.feedforward == "resistance":
                 ff[js] = Ftr[list(grp)].sum() / js.size
         Fmax = m.links.force_max_N
         limit = Fmax.copy()
@@ -265,8 +282,26 @@ class InchwormMode(Mode):
                 demand = np.maximum(ff[js], 1e-9)
                 share = cfg.hold_margin * capacity[c] * demand / demand.sum()
                 limit[js] = np.minimum(Fmax[js], share)
+        if cfg.joint_control != "force":
+            # load the anchors no more than the movers need: feed-forward plus a headroom to accelerate
+            if cfg.feedforward == "resistance":
+                limit = np.where(active, np.minimum(limit, ff * (1.0 + cfg.force_headroom)), limit)
+            # synchronise the groups of a phase: every group gets the same force headroom above
+            # its feed-forward (the smallest any group has), so identical segments accelerate
+            # alike and the groups' speed traces overlap (Fig 5)
+            heads = [limit[js].sum() - ff[js].sum() for js in self._group_joints(plan, active)]
+            common = max(min(heads), 0.0) if heads else 0.0
+            for js in self._group_joints(plan, active):
+                if js.size:
+                    w = ff[js] / ff[js].sum() if ff[js].sum() > 0 else np.full(js.size, 1.0 / js.size)
+                    limit[js] = np.minimum(limit[js], ff[js] + common * w)
         ff = np.minimum(ff, limit)
         return active, ff, limit, capacity, Ftr, Ft1
+
+    @staticmethod
+    def _group_joints(plan, active):
+        """Indices of the active joints of each moving group of a phase."""
+        return [np.nonzero(active & (plan.group_of_joint == g))[0] for g in range(len(plan.groups))]
 
     def interval(self, t, y):
         cfg, m = self.cfg, self.model
@@ -283,12 +318,19 @@ class InchwormMode(Mode):
         for g, grp in enumerate(plan.groups):
             if not self.group_done[g]:
                 moving[list(grp)] = True
+        L = m.links
+        # the speed gain is per group: shared by the group's joints
+        kv = np.zeros(n - 1)
+        if cfg.joint_control == "speed":
+            for js in self._group_joints(plan, active):
+                kv[js] = cfg.speed_gain_Ns_per_m / max(js.size, 1)
         ctl = Controls.rolling(n, np.ones(n), np.where(moving, cfg.mover_wheel_speed_mps, 0.0)).with_(
             joint_active=active.astype(float), joint_dir=plan.role.astype(float), joint_ff_N=ff,
-            joint_kv=np.full(n - 1, cfg.speed_gain_Ns_per_m), joint_vtarget_mps=np.full(n - 1, cfg.target_speed_mps),
+            joint_length_mode=np.full(n - 1, 1.0 if cfg.joint_control == "length" else 0.0),
+            joint_sref_m=np.where(plan.role > 0, L.stroke_max_m, L.stroke_min_m),
+            joint_kv=kv, joint_vtarget_mps=np.full(n - 1, cfg.target_speed_mps),
             joint_limit_N=limit, joint_mover=plan.mover_of_joint.astype(int))
         events, self._event_joints = [], []
-        L = m.links
         si = m.idx["s_m"]
         ns = m.n_s
         for j in np.nonzero(active)[0]:
