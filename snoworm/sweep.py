@@ -177,6 +177,11 @@ def parse_spec(key: str, spec) -> tuple:
             values = _parse_range(opt, text)
         else:
             items = _split_top_level(text)
+            for it in items:
+                if ":" in it and "[" not in it and "{" not in it and _looks_numeric(it.split(":")):
+                    raise ScenarioError(f"{opt}: {it.strip()!r} is not a range: a range is START:STOP:COUNT "
+                                        "(two colons, no commas; a range cannot be mixed with a list), e.g. 0.3:1.0:15 for 15 values "
+                                        "from 0.3 to 1.0.")
             if any(not it.strip() for it in items):
                 raise ScenarioError(f"{opt}: empty item in the list. Separate values by single commas, "
                                     "e.g. 0,100,200, with no trailing comma.")
@@ -212,12 +217,22 @@ def _parse_range(opt, text):
         if start != stop:
             raise ScenarioError(f"{opt}: COUNT 1 needs START = STOP; give {start} alone or COUNT >= 2. {hint}")
         return (start,)
+    if start == stop:
+        raise ScenarioError(f"{opt}: START = STOP with COUNT {count} repeats one value. {hint}")
     if isinstance(start, int) and isinstance(stop, int) and (stop - start) % (count - 1) == 0:
         step = (stop - start) // (count - 1)
         return tuple(start + j * step for j in range(count))
-    if start == stop:
-        raise ScenarioError(f"{opt}: START = STOP with COUNT {count} repeats one value. {hint}")
     return tuple(_clean_float(v) for v in np.linspace(float(start), float(stop), count))
+
+
+def _looks_numeric(parts):
+    for p in parts:
+        if p.strip():
+            try:
+                float(p)
+            except ValueError:
+                return False
+    return True
 
 
 def _number(text):
@@ -538,16 +553,28 @@ class SerialExecutor:
         pass
 
 
+#: Thread-pool variables set to 1 in worker processes (unless the user set them), as Dask does:
+#: one multi-threaded OpenBLAS per worker oversubscribes the cores and halved the speed here.
+_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
 class ProcessExecutor:
     """Run the cases in ``jobs`` local processes (spawned, so safe next to threads).
 
     At most ``2 * jobs`` cases are in flight, so memory stays flat for any number of cases.
+    Workers run with one BLAS/OpenMP thread each (``OMP_NUM_THREADS`` etc. default to 1 while
+    the pool lives, unless already set).  A script calling :func:`run_sweep` with ``jobs > 1``
+    needs the usual ``if __name__ == "__main__":`` guard of spawned processes.
     """
 
     def __init__(self, jobs: int):
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
         self.jobs = int(jobs)
+        self._env = {k: os.environ.get(k) for k in _THREAD_ENV}
+        for k, v in self._env.items():
+            if v is None:
+                os.environ[k] = "1"
         self.pool = ProcessPoolExecutor(self.jobs, mp_context=multiprocessing.get_context("spawn"))
 
     def map_unordered(self, fn, tasks):
@@ -565,7 +592,12 @@ class ProcessExecutor:
                 yield fut.result()
 
     def close(self):
-        self.pool.shutdown(wait=True, cancel_futures=True)
+        try:
+            self.pool.shutdown(wait=True, cancel_futures=True)
+        finally:
+            for k, v in self._env.items():
+                if v is None:
+                    os.environ.pop(k, None)
 
 
 class DaskExecutor:
