@@ -558,6 +558,19 @@ class SerialExecutor:
 _THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
+def _exit_with_parent(ppid: int, poll_s: float = 1.0):
+    """Worker initializer: exit when the sweep process is gone (killed), instead of lingering."""
+    import threading
+
+    def watch():
+        while True:
+            time.sleep(poll_s)
+            if os.getppid() != ppid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="snoworm-parent-watch", daemon=True).start()
+
+
 class ProcessExecutor:
     """Run the cases in ``jobs`` local processes (spawned, so safe next to threads).
 
@@ -575,7 +588,8 @@ class ProcessExecutor:
         for k, v in self._env.items():
             if v is None:
                 os.environ[k] = "1"
-        self.pool = ProcessPoolExecutor(self.jobs, mp_context=multiprocessing.get_context("spawn"))
+        self.pool = ProcessPoolExecutor(self.jobs, mp_context=multiprocessing.get_context("spawn"),
+                                        initializer=_exit_with_parent, initargs=(os.getpid(),))
 
     def map_unordered(self, fn, tasks):
         from concurrent.futures import FIRST_COMPLETED, wait
