@@ -127,12 +127,15 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot):
 
     A failing case is recorded and the sweep goes on. Re-running the same command skips the
     cases already in summary.csv; a different sweep in the same --out is refused (exit 2).
-    Exit status: 0 when the sweep completes (even with failed cases), 2 on bad input.
+    Exit status: 0 when the sweep completes (even with failed cases), 2 on bad input, 1 if a
+    worker process or the Dask cluster fails, 130 when interrupted (re-run to resume).
     """
-    from .sweep import run_sweep
+    from .sweep import SweepExecutionError, run_sweep
     try:
         table = run_sweep(scenario, sets, out_dir=out_dir, jobs=jobs, scheduler=scheduler, zip_=zip_,
                           save_cases=save_cases, plot=not no_plot)
+    except SweepExecutionError as exc:
+        _fail(str(exc), EXIT_SOLVER)
     except KeyboardInterrupt:
         click.echo(f"interrupted: finished cases are in {out_dir}/summary.csv; run the same command "
                    "again to resume.", err=True)

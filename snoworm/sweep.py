@@ -66,7 +66,7 @@ from . import __version__
 from .fileio import atomic_write_text
 from .schema import ScenarioError
 
-__all__ = ["Axis", "Case", "SweepTable", "parse_spec", "parse_sweep_option", "build_cases",
+__all__ = ["Axis", "Case", "SweepTable", "SweepExecutionError", "parse_spec", "parse_sweep_option", "build_cases",
            "case_metrics", "run_case", "run_sweep", "SerialExecutor", "ProcessExecutor", "DaskExecutor",
            "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR", "LATE_FRACTION", "SLIP_FRACTION",
            "METRIC_COLUMNS", "STATUSES"]
@@ -99,6 +99,10 @@ METRIC_COLUMNS = {
 }
 
 _MAX_ERROR_CHARS = 500
+
+
+class SweepExecutionError(RuntimeError):
+    """The executor failed (not a case): e.g. a worker process died or the Dask cluster was lost."""
 
 
 # ---------------------------------------------------------------------------------- specs
@@ -842,6 +846,12 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
                 record(c, {"status": "invalid", "error": invalid[c.index], "wall_time_s": 0.0})
         for result in executor.map_unordered(run_case, tasks()):
             record(by_index[result["index"]], result)
+    except (KeyboardInterrupt, ScenarioError):
+        raise
+    except Exception as exc:  # the executor itself failed (a worker died, the cluster went away)
+        n = len(rows)
+        where = f"; the {n} finished cases are in {out / 'summary.csv'}, re-run to resume" if out is not None else ""
+        raise SweepExecutionError(f"the sweep's executor failed ({type(exc).__name__}: {_one_line(exc)}){where}.") from exc
     finally:
         bar.close()
         if own:

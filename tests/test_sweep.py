@@ -246,3 +246,19 @@ def test_table_round_trips_through_csv(tmp_path):
     back = sweep_mod.SweepTable.from_csv(tmp_path / "summary.csv")
     assert _comparable(back) == _comparable(table)
     assert table.to_csv().splitlines()[0].startswith("case_id,case_key,terrain.xt,simulation.duration_s,status")
+
+
+def test_executor_failure_is_reported_and_rows_kept(tmp_path):
+    class Dying:
+        def map_unordered(self, fn, tasks):
+            it = iter(tasks)
+            yield fn(next(it))
+            raise OSError("worker lost")
+
+        def close(self):
+            pass
+
+    with pytest.raises(sweep_mod.SweepExecutionError, match="worker lost.*1 finished cases"):
+        run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], out_dir=tmp_path, executor=Dying(), plot=False)
+    assert len(_csv_rows(tmp_path / "summary.csv")) == 1
+    assert len(run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], out_dir=tmp_path, plot=False)) == 2
