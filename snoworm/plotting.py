@@ -131,6 +131,9 @@ def plot_sweep(x, metrics, xlabel, path, immobilised=None, ok=None, tick_labels=
     for a, (name, vals) in zip(axs[:, 0], metrics.items()):
         y = np.array([np.nan if v is None else float(v) for v in vals])
         a.plot(x[order], y[order], "o-", ms=4)
+        pos = y[np.isfinite(y)]
+        if pos.size and pos.min() > 0 and pos.max() > 100 * pos.min():
+            a.set_yscale("log")     # e.g. energy per metre of a nearly immobilised vehicle
         if immobilised is not None:
             m = np.array([bool(v) for v in immobilised])
             if m.any():
