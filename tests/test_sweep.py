@@ -262,3 +262,11 @@ def test_executor_failure_is_reported_and_rows_kept(tmp_path):
         run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], out_dir=tmp_path, executor=Dying(), plot=False)
     assert len(_csv_rows(tmp_path / "summary.csv")) == 1
     assert len(run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], out_dir=tmp_path, plot=False)) == 2
+
+
+def test_a_scenario_object_sweeps_like_its_file():
+    from_file = run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], plot=False)
+    from_obj = run_sweep(load_scenario(TOW6), ["terrain.xt=0.7,0.9", SHORT], plot=False)
+    for a, b in zip(from_file, from_obj):
+        assert b["distance_m"] == pytest.approx(a["distance_m"], rel=1e-9)
+        assert b["case_key"] == a["case_key"]
