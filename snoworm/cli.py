@@ -190,6 +190,63 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
+@main.command()
+@click.argument("scenario", type=click.Path(dir_okay=False))
+@click.option("--set", "sets", multiple=True, metavar="KEY=SPEC", required=True,
+              help="A swept scenario key and its values: a list (tow.force_N=0,100,200) or an inclusive "
+                   "range START:STOP:COUNT (terrain.xt=0.3:1.0:15 gives 15 values). Repeat for a grid "
+                   "(first key slowest); a single value just overrides the key.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for sweep.json, summary.csv and sweep.png / heatmap.png. Re-running the same "
+                   "command resumes an interrupted sweep there.")
+@click.option("-j", "--jobs", default=1, show_default=True, type=click.IntRange(min=1),
+              help="Local worker processes.")
+@click.option("--scheduler", metavar="ADDRESS", default=None,
+              help="Run the cases on a Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 "
+                   "(needs pip install 'snoworm[dask]'); overrides -j.")
+@click.option("--zip", "zip_", is_flag=True,
+              help="Pair the --set values element by element (equal lengths) instead of a full grid.")
+@click.option("--save-cases", is_flag=True, help="Also write each case's time series to DIR/cases/<case_id>/.")
+@click.option("--no-plot", is_flag=True, help="Skip sweep.png / heatmap.png.")
+@handle_errors
+def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot):
+    """Run SCENARIO over a grid of values and tabulate the results in --out.
+
+    \b
+    summary.csv has one row per case, appended as each case finishes (completion order):
+      case_id, case_key, the swept values, status (ok, solver_failure, invalid, error), error,
+      n_segments, distance_m, mean_speed_mps, late_speed_mps (mean forward speed over the
+      last 25 % of the run), mean_slip and max_slip (signed slip over the segments and the
+      second half of the run), max_link_force_N (largest |force| over the run),
+      final_link_force_<j>_N, energy_per_m_J, immobilised, wall_time_s.
+    immobilised: late_speed_mps < max(0.05 m/s, 5 * terrain.model.sign_eps_mps), i.e. only the
+    creep allowed by the smooth sign of the terrain resistance is left (for a free-rolling
+    FrostyBoy: X_t below about 0.586).
+
+    A failing case is recorded and the sweep goes on. Re-running the same command skips the
+    cases already in summary.csv; a different sweep in the same --out is refused (exit 2).
+    Exit status: 0 when the sweep completes (even with failed cases), 2 on bad input, 1 if a
+    worker process or the Dask cluster fails, 130 when interrupted (re-run to resume).
+    """
+    from .sweep import SweepExecutionError, run_sweep
+    try:
+        table = run_sweep(scenario, sets, out_dir=out_dir, jobs=jobs, scheduler=scheduler, zip_=zip_,
+                          save_cases=save_cases, plot=not no_plot)
+    except SweepExecutionError as exc:
+        _fail(str(exc), EXIT_SOLVER)
+    except KeyboardInterrupt:
+        click.echo(f"interrupted: finished cases are in {out_dir}/summary.csv; run the same command "
+                   "again to resume.", err=True)
+        sys.exit(130)
+    bad = table.failures()
+    imm = sum(bool(r["immobilised"]) for r in table.rows if r["status"] == "ok")
+    click.echo(f"{len(table)} cases: {len(table) - len(bad)} ok, {len(bad)} failed, {imm} immobilised; "
+               f"summary in {out_dir}/summary.csv")
+    for r in bad[:5]:
+        click.echo(f"  case {r['case_id']} {r['status']}: {r['error']}")
+    if len(bad) > 5:
+        click.echo(f"  ... and {len(bad) - 5} more (see the error column)")
+
 
 if __name__ == "__main__":  # pragma: no cover
     main()

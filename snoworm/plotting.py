@@ -202,3 +202,99 @@ def plot_force_diagram(result, path, window_s=1.0):
                  f"(mean of the last {window_s:g} s; tension positive)", fontsize=9)
     fig.tight_layout()
     return save(fig, path)
+
+
+# ---------------------------------------------------------------------------------- sweeps
+_SWEEP_LABELS = {"mean_speed_mps": "mean speed [m/s]", "mean_slip": "mean slip (2nd half)",
+                 "max_link_force_N": "max |link force| [N]", "energy_per_m_J": "energy per metre [J/m]"}
+
+
+def plot_sweep(x, metrics, xlabel, path, immobilised=None, ok=None, tick_labels=None):
+    """Metrics of a one-axis sweep against the swept value (``sweep.png``).
+
+    Parameters
+    ----------
+    x : list of float
+        Swept values (or positions 0..n-1 with ``tick_labels`` for non-numeric values).
+    metrics : dict of str -> list
+        Metric name -> one value per case (None for failed cases); one panel each.
+    xlabel : str
+        The swept key.
+    path : str or Path
+        Output PNG, written atomically.
+    immobilised : list of bool, optional
+        Cases flagged immobilised, marked with red crosses.
+    ok : list of bool, optional
+        False for failed cases, marked by grey lines at their value.
+    tick_labels : list of str, optional
+        Labels of categorical values.
+    """
+    x = np.asarray(x, float)
+    order = np.argsort(x, kind="stable")
+    n = len(metrics)
+    fig, axs = plt.subplots(n, 1, figsize=(7, 2.1 * n + 0.6), sharex=True, squeeze=False)
+    for a, (name, vals) in zip(axs[:, 0], metrics.items()):
+        y = np.array([np.nan if v is None else float(v) for v in vals])
+        a.plot(x[order], y[order], "o-", ms=4)
+        pos = y[np.isfinite(y)]
+        if pos.size and pos.min() > 0 and pos.max() > 100 * pos.min():
+            a.set_yscale("log")     # e.g. energy per metre of a nearly immobilised vehicle
+        if immobilised is not None:
+            m = np.array([bool(v) for v in immobilised])
+            if m.any():
+                a.plot(x[m], y[m], "x", color="tab:red", ms=8, label="immobilised")
+                a.legend(fontsize=8, loc="best")
+        if ok is not None:
+            for xv, good in zip(x, ok):
+                if not good:
+                    a.axvline(xv, color="0.6", ls=":", lw=1)
+        a.set_ylabel(_SWEEP_LABELS.get(name, name), fontsize=9)
+        a.grid(alpha=0.3)
+    axs[-1, 0].set_xlabel(xlabel)
+    if tick_labels is not None:
+        axs[-1, 0].set_xticks(x, tick_labels)
+    axs[0, 0].set_title(f"sweep over {xlabel}" + (" (dotted lines: failed cases)" if ok is not None and not all(ok) else ""))
+    fig.tight_layout()
+    return save(fig, path)
+
+
+def plot_sweep_heatmap(x_labels, y_labels, values, xlabel, ylabel, label, path, immobilised=None, failed=None):
+    """Heat map of one metric over a two-axis sweep (``heatmap.png``).
+
+    Parameters
+    ----------
+    x_labels, y_labels : list of str
+        Values of the first (columns) and second (rows) swept key.
+    values : ndarray (len(y_labels), len(x_labels))
+        The metric; NaN where the case failed.
+    xlabel, ylabel, label : str
+        Axis names and the colour-bar label.
+    path : str or Path
+        Output PNG, written atomically.
+    immobilised, failed : ndarray of bool, optional
+        Cells annotated "immob." / "failed".
+    """
+    v = np.asarray(values, float)
+    ny, nx = v.shape
+    fig, a = plt.subplots(figsize=(max(5.0, 0.75 * nx + 2.5), max(3.5, 0.55 * ny + 1.8)))
+    im = a.imshow(np.ma.masked_invalid(v), origin="lower", aspect="auto", cmap="viridis")
+    fig.colorbar(im, ax=a, label=label)
+    finite = v[np.isfinite(v)]
+    mid = 0.5 * (finite.min() + finite.max()) if finite.size else 0.0
+    for j in range(ny):
+        for k in range(nx):
+            if failed is not None and failed[j, k]:
+                txt, col = "failed", "tab:red"
+            elif np.isfinite(v[j, k]):
+                txt = f"{v[j, k]:.2f}" + ("\nimmob." if immobilised is not None and immobilised[j, k] else "")
+                col = "white" if v[j, k] < mid else "black"
+            else:
+                continue
+            a.text(k, j, txt, ha="center", va="center", fontsize=7, color=col)
+    a.set_xticks(range(nx), x_labels, rotation=45 if nx > 8 else 0)
+    a.set_yticks(range(ny), y_labels)
+    a.set_xlabel(xlabel)
+    a.set_ylabel(ylabel)
+    a.set_title(f"{label} over {xlabel} x {ylabel}")
+    fig.tight_layout()
+    return save(fig, path)
