@@ -58,6 +58,7 @@ class LinkConfig:
     force_max_N: float = field(gt=0, unit="N", doc="prismatic joint force limit")
     rate_max_mps: float = field(gt=0, unit="m/s", doc="prismatic joint rate limit")
     force_gain_per_s: float = field(gt=0, unit="1/s", doc="bandwidth of the joint's force loop")
+    joint_efficiency: float = field(gt=0, le=1, doc="prismatic actuator efficiency, mechanical work / electrical energy")
 
     def _check(self, path):
         for j, t in enumerate(self.type):
