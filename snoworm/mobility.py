@@ -269,6 +269,9 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
                      else f"tow {f:g} N: no rolling for X_t <= 1")
         lines.append(f"  rolling from X_t = {min(roll):g}" if roll else "  rolling nowhere on the grid")
         lines.append(f"  inching only at X_t = {', '.join(f'{x:g}' for x in inch)}" if inch else "  no inching-only cells")
+        failed = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r.get("inching_note")]
+        if failed:
+            lines.append(f"  inching run failed (solver) at X_t = {', '.join(f'{x:g}' for x in failed)}; see inching_note")
         if cheap:
             lines.append(f"  inching cheaper per metre than rolling at X_t = {', '.join(f'{x:g}' for x in cheap)}")
     return res, "\n".join(lines), paths
