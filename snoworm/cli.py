@@ -248,5 +248,39 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot):
         click.echo(f"  ... and {len(bad) - 5} more (see the error column)")
 
 
+# ---------------------------------------------------------------- mobility map (snoworm/mobility.py)
+
+@main.command("mobility-map")
+@click.argument("scenario", type=click.Path(dir_okay=False))
+@click.option("--xt", "xt_spec", default="0.2:1.0:9", show_default=True,
+              help="Terrain coefficients: START:STOP:COUNT or a comma-separated list.")
+@click.option("--tow", "tow_spec", default="0", show_default=True, help="Tow forces [N], comma-separated.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for mobility_map.csv and mobility_map.png.")
+@set_option
+@click.option("--rolling-speed", "rolling_speed_mps", type=float, default=None,
+              help="Rolling wheel-speed set-point [m/s] (default: the scenario's supervisor or uniform mode).")
+@click.option("--no-inching", is_flag=True, help="Rolling only (steady state, no inching simulations).")
+@click.option("--inch-duration", "inch_duration_s", type=click.FloatRange(min=0, min_open=True), default=8.0,
+              show_default=True, help="Simulated time of each inching run [s].")
+@click.option("--jobs", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Worker processes for the inching runs.")
+@click.option("--no-plot", is_flag=True, help="Skip mobility_map.png.")
+@handle_errors
+def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, no_inching, inch_duration_s, jobs,
+                 no_plot):
+    """Which modes move SCENARIO's vehicle over X_t and tow: rolling, inching only, immobile.
+
+    Rolling by the steady-state solver (each segment's share of the tow below its maximum
+    drawbar); inching by short simulations of the inchworm gait of the scenario's supervisor or
+    inchworm mode.  Writes --out/mobility_map.csv and --out/mobility_map.png.
+    """
+    from .mobility import run_mobility_map
+    _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps=rolling_speed_mps,
+                                      inching=not no_inching, inch_duration_s=inch_duration_s, jobs=jobs,
+                                      plot=not no_plot)
+    click.echo(text)
+    click.echo(f"wrote {len(paths)} files to {out_dir}")
+
 if __name__ == "__main__":  # pragma: no cover
     main()

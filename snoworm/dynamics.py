@@ -360,11 +360,13 @@ class ChainModel:
                 ds = self._joint_rate(s, v, rel, T_spring, ctl)
                 dY[..., :-1, I["s_m"]] = ds
                 dY[..., -1, I["s_m"]] = 0.0
-                T = T_spring + L.damping_Ns_per_m * (rel - ds)
+                damper_v = rel - ds
             else:
-                T = L.stiffness_N_per_m * stretch + L.damping_Ns_per_m * rel
+                T_spring = L.stiffness_N_per_m * stretch
+                damper_v = rel
+            T = T_spring + L.damping_Ns_per_m * damper_v
         else:
-            T = np.zeros(x.shape[:-1] + (0,))
+            T = T_spring = damper_v = np.zeros(x.shape[:-1] + (0,))
             if self.has_joints:
                 dY[..., I["s_m"]] = 0.0
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
@@ -402,6 +404,7 @@ class ChainModel:
             "resistance_torque_Nm": Trr, "motor_torque_Nm": Tm, "link_force_N": T,
             "wheel_net_N": wheel_net, "link_net_N": Fl, "speed_sp_mps": np.broadcast_to(sp, x.shape),
             "omega": w, "reaction_torque_Nm": reaction,
+            "link_spring_N": T_spring, "link_damper_W": L.damping_Ns_per_m * damper_v**2 if self.n > 1 else T,
             # power dissipated at the wheel-terrain contact: what the wheels take from the
             # motors minus what reaches the chassis, per segment [W]
             "terrain_dissipation_W": nw * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),

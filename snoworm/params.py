@@ -57,6 +57,7 @@ PARAMETER_SETS = {
             "force_max_N": 400.0,           # [assumed]
             "rate_max_mps": 0.5,            # [assumed]
             "force_gain_per_s": 50.0,       # [assumed] joint force-loop bandwidth
+            "joint_efficiency": 0.7,        # [assumed] prismatic actuator (screw + motor), for electrical energy
         },
     },
 }

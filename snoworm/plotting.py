@@ -11,7 +11,7 @@ import numpy as np  # noqa: E402
 
 from .fileio import atomic_path  # noqa: E402
 
-__all__ = ["plot_result", "save"]
+__all__ = ["plot_result", "save", "plot_mobility_map"]
 
 
 def save(fig, path) -> Path:
@@ -84,6 +84,14 @@ def plot_positions(result, path):
         a1.plot(t, x[:, k], label=_seg_label(k))
     for ev in result.events:
         a1.axvline(ev["t_s"], color="0.85", lw=0.6, zorder=0)
+    # mode switches (supervisor mode): a marked line at the switch, the leader's position there
+    sw_style = {"switch_to_inching": ("tab:red", "v", "to inching"), "switch_to_rolling": ("tab:green", "^", "to rolling")}
+    for ev in result.events:
+        if ev.get("kind") in sw_style:
+            c, mk, lab = sw_style[ev["kind"]]
+            a1.axvline(ev["t_s"], color=c, lw=1.0, ls="--", zorder=1)
+            a1.plot([ev["t_s"]], [ev["x_m"]], mk, color=c, ms=9, zorder=3)
+            a1.annotate(lab, (ev["t_s"], ev["x_m"]), textcoords="offset points", xytext=(4, 6), fontsize=8, color=c)
     a1.set_xlabel("time [s]")
     a1.legend(fontsize=8, ncol=3, loc="best")
     a1.grid(alpha=0.3)
@@ -296,5 +304,63 @@ def plot_sweep_heatmap(x_labels, y_labels, values, xlabel, ylabel, label, path, 
     a.set_xlabel(xlabel)
     a.set_ylabel(ylabel)
     a.set_title(f"{label} over {xlabel} x {ylabel}")
+    fig.tight_layout()
+    return save(fig, path)
+
+
+# ------------------------------------------------------------------ mobility map (mobility.py)
+
+def plot_mobility_map(mmap, path):
+    """Mobility map: regions (rolling, inching only, immobile) over X_t and tow, and energy per metre.
+
+    Left: one cell per grid point coloured by region, with the steady rolling limit X_t(tow)
+    (:func:`snoworm.steady.immobilisation_limit_xt`) drawn as a line; cells where inching costs
+    less electrical energy per metre than rolling are marked with a star.  Right: electrical
+    energy per metre of each mode against X_t, one colour per tow.
+    """
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+    from .mobility import REGIONS
+    xts, tows = np.asarray(mmap["xts"]), np.asarray(mmap["tows"])
+    code = {r: j for j, r in enumerate(REGIONS)}
+    Z = np.zeros((tows.size, xts.size))
+    for r in mmap["rows"]:
+        Z[list(tows).index(r["tow_N"]), list(xts).index(r["xt"])] = code[r["region"]]
+    colours = ["#d9d9d9", "#fdae61", "#66bd63"]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.8))
+    edges = lambda v: (np.concatenate([[v[0] - 0.5], (v[:-1] + v[1:]) / 2, [v[-1] + 0.5]]) if v.size == 1 else
+                       np.concatenate([[1.5 * v[0] - 0.5 * v[1]], (v[:-1] + v[1:]) / 2, [1.5 * v[-1] - 0.5 * v[-2]]]))
+    a1.pcolormesh(edges(xts), edges(tows) if tows.size > 1 else np.array([tows[0] - 50, tows[0] + 50]), Z,
+                  cmap=ListedColormap(colours), vmin=-0.5, vmax=len(REGIONS) - 0.5, edgecolors="white", lw=0.5)
+    lim = [(f, mmap["rolling_limit_xt"][f]) for f in tows if mmap["rolling_limit_xt"][f] is not None]
+    if lim:
+        a1.plot([x for _, x in lim], [f for f, _ in lim], "k--", lw=1.2, marker="o", ms=3,
+                label="steady rolling limit")
+    for r in mmap["rows"]:
+        if r["inching_cheaper"]:
+            a1.plot(r["xt"], r["tow_N"], "*", color="tab:blue", ms=9)
+    handles = [Patch(color=c, label=lab) for c, lab in zip(colours, REGIONS)]
+    handles += a1.get_legend_handles_labels()[0]
+    if any(r["inching_cheaper"] for r in mmap["rows"]):
+        handles.append(plt.Line2D([], [], ls="", marker="*", color="tab:blue", label="inching cheaper per metre"))
+    a1.legend(handles=handles, fontsize=8, loc="upper left")
+    a1.set_xlabel("terrain coefficient X_t")
+    a1.set_ylabel("tow force [N]")
+    a1.set_title(f"{mmap['scenario']}: which modes move the vehicle", fontsize=10)
+    for j, f in enumerate(tows):
+        rs = sorted((r for r in mmap["rows"] if r["tow_N"] == f), key=lambda r: r["xt"])
+        xr = [r["xt"] for r in rs if r["rolling"]]
+        er = [r["rolling_energy_per_metre_J_per_m"] for r in rs if r["rolling"]]
+        xi = [r["xt"] for r in rs if r.get("inching")]
+        ei = [r["inching_energy_per_metre_J_per_m"] for r in rs if r.get("inching")]
+        a2.plot(xr, er, "-o", color=f"C{j}", ms=3, label=f"rolling, tow {f:g} N")
+        if xi:
+            a2.plot(xi, ei, "--s", color=f"C{j}", ms=3, label=f"inching, tow {f:g} N")
+    a2.set_yscale("log")
+    a2.set_xlabel("terrain coefficient X_t")
+    a2.set_ylabel("electrical energy per metre [J/m]")
+    a2.grid(alpha=0.3, which="both")
+    a2.legend(fontsize=7, ncol=2)
+    a2.set_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)", fontsize=10)
     fig.tight_layout()
     return save(fig, path)

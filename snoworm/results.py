@@ -43,12 +43,6 @@ LINK_COLUMNS = {
 }
 
 
-def _trapz(y, t):
-    if len(t) < 2:
-        return np.zeros(np.shape(y)[1:])
-    return np.trapezoid(y, t, axis=0)
-
-
 @dataclass
 class Result:
     """A finished simulation.
@@ -106,7 +100,8 @@ class Result:
                 "_electrical_W": (np.maximum(Tm * w, 0.0)).sum(-1) * nw / eta,
             }
             x = seg["x_m"]
-            lk = {"force_N": out["link_force_N"], "length_m": x[..., :-1] - x[..., 1:]}
+            lk = {"force_N": out["link_force_N"], "length_m": x[..., :-1] - x[..., 1:],
+                  "_spring_N": out["link_spring_N"], "_damper_W": out["link_damper_W"]}
             if model.has_joints:
                 s = Y[..., :-1, model.idx["s_m"]]
                 ds = dY[..., :-1, model.idx["s_m"]]
@@ -136,18 +131,19 @@ class Result:
 
         Electrical energy counts only motoring power (``T w > 0``) divided by the drivetrain
         efficiency; braking and holding power are not recovered.  Joint energy counts the
-        positive mechanical work of the prismatic actuators.
+        positive mechanical work of the prismatic actuators, and its electrical energy that work
+        divided by ``vehicle.links.joint_efficiency``.  ``total_J`` is the electrical total
+        (definitions in :mod:`snoworm.energy`).
         """
-        t = self.t
-        motor_el = _trapz(self.segments["_electrical_W"], t)
-        motor_mech = _trapz(self.segments["motor_power_W"], t)
-        joint = _trapz(np.maximum(self.links["joint_power_W"], 0.0), t) if self.links["force_N"].shape[1] else np.zeros(0)
-        total = float(motor_el.sum() + joint.sum())
-        return {"motor_electrical_J": motor_el.tolist(), "motor_mechanical_J": motor_mech.tolist(),
-                "joint_work_J": joint.tolist(), "total_J": total}
+        from .energy import energy_metrics
+        e = energy_metrics(self)
+        return {"motor_electrical_J": e["motor_electrical_J"], "motor_mechanical_J": e["motor_mechanical_J"],
+                "joint_work_J": e["joint_mechanical_J"], "joint_electrical_J": e["joint_electrical_J"],
+                "total_J": e["total_electrical_J"]}
 
     def summary(self) -> dict:
         """The metrics written to ``summary.json``."""
+        from .energy import energy_metrics
         x = self.segments["x_m"]
         dist = float(np.mean(x[-1] - x[0]))
         dur = float(self.t[-1] - self.t[0]) if self.t.size > 1 else 0.0
@@ -166,6 +162,7 @@ class Result:
             "max_abs_link_force_N": float(np.max(np.abs(self.links["force_N"]))) if self.links["force_N"].size else 0.0,
             "energy": e,
             "energy_per_metre_J_per_m": e["total_J"] / dist if dist > 1e-9 else None,
+            "energy_metrics": energy_metrics(self),
             "solver": dict(self.stats),
             "events": self.events,
         }

@@ -18,9 +18,10 @@ import yaml
 from . import modes
 from .params import PARAMETER_SETS, parameter_set
 from .schema import ScenarioError, build, dump, field, suggest
+from .terrain import STEP_WIDTH_M
 
 __all__ = [
-    "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "TerrainModelConfig", "TowConfig",
+    "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig", "TerrainModelConfig", "TowConfig",
     "VehicleConfig", "SimulationConfig", "load_scenario", "scenario_from_dict", "dump_scenario",
     "apply_overrides", "parse_set_option", "ScenarioError",
 ]
@@ -57,6 +58,7 @@ class LinkConfig:
     force_max_N: float = field(gt=0, unit="N", doc="prismatic joint force limit")
     rate_max_mps: float = field(gt=0, unit="m/s", doc="prismatic joint rate limit")
     force_gain_per_s: float = field(gt=0, unit="1/s", doc="bandwidth of the joint's force loop")
+    joint_efficiency: float = field(gt=0, le=1, doc="prismatic actuator efficiency, mechanical work / electrical energy")
 
     def _check(self, path):
         for j, t in enumerate(self.type):
@@ -83,17 +85,73 @@ class TerrainModelConfig:
 
 
 @dataclass(frozen=True)
-class TerrainConfig:
-    """Terrain coefficient along the track: a constant ``xt`` or a ``profile`` table."""
+class PatchConfig:
+    """A patch of other snow on the route (``terrain.patches``), X_t = ``xt`` on ``[start_m, end_m]``."""
 
-    model: TerrainModelConfig = field(doc="terrain-model coefficients")
-    xt: Optional[float] = field(None, gt=0, doc="constant terrain coefficient X_t")
-    profile: Optional[tuple[tuple[float, ...], ...]] = field(None, doc="list of [position_m, xt] pairs")
+    start_m: float = field(unit="m", doc="position where the patch's X_t is reached")
+    end_m: float = field(unit="m", doc="position where the patch's X_t ends")
+    xt: float = field(gt=0, doc="terrain coefficient X_t inside the patch")
+    ramp_m: float = field(0.0, ge=0, unit="m",
+                          doc="length of the linear transition to the base X_t outside each edge (0: a step)")
 
     def _check(self, path):
-        if (self.xt is None) == (self.profile is None):
-            raise ScenarioError(f"{path}: give exactly one of 'xt' (a constant X_t) or 'profile' "
-                                f"(a list of [position_m, xt] pairs); got {'both' if self.xt is not None else 'neither'}.")
+        if not self.end_m > self.start_m:
+            raise ScenarioError(f"{path}.end_m: must be greater than start_m ({self.start_m} m), got {self.end_m} m. "
+                                "A patch covers [start_m, end_m].")
+
+
+@dataclass(frozen=True)
+class RandomTerrainConfig:
+    """A seeded random X_t profile (``terrain.random``): Gaussian-filtered white noise, clipped."""
+
+    mean: float = field(gt=0, doc="mean X_t")
+    std: float = field(ge=0, doc="standard deviation of X_t before clipping")
+    correlation_length_m: float = field(gt=0, unit="m", doc="distance at which the correlation falls to 1/e")
+    seed: int = field(ge=0, doc="seed of the random generator (same seed, same profile)")
+    length_m: float = field(gt=0, unit="m", doc="length of the generated stretch (X_t held beyond it)")
+    start_m: float = field(0.0, unit="m", doc="position where the generated stretch starts")
+    min_xt: float = field(0.05, gt=0, doc="lower clip of X_t, keeps X_t > 0")
+
+    def _check(self, path):
+        if self.length_m / (self.correlation_length_m / 8.0) > 200000:
+            raise ScenarioError(f"{path}: length_m / correlation_length_m = "
+                                f"{self.length_m / self.correlation_length_m:.0f} needs more than 200000 grid points; "
+                                "shorten length_m or lengthen correlation_length_m.")
+
+
+@dataclass(frozen=True)
+class TerrainConfig:
+    """Terrain coefficient along the track.
+
+    Exactly one of: a constant ``xt`` (optionally with ``patches`` of other snow on it), a
+    ``profile`` table of ``[position_m, xt]`` pairs, or a seeded ``random`` profile.  All of
+    them compile to one :class:`~snoworm.terrain.TerrainProfile` (``simulate.terrain_profile``).
+    """
+
+    model: TerrainModelConfig = field(doc="terrain-model coefficients")
+    xt: Optional[float] = field(None, gt=0, doc="constant terrain coefficient X_t (the base X_t with patches)")
+    profile: Optional[tuple[tuple[float, ...], ...]] = field(None, doc="list of [position_m, xt] pairs")
+    patches: Optional[tuple[PatchConfig, ...]] = field(None, doc="patches of other snow on the base xt")
+    random: Optional[RandomTerrainConfig] = field(None, doc="seeded random X_t profile")
+
+    def _check(self, path):
+        given = [k for k in ("xt", "profile", "random") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ScenarioError(f"{path}: give exactly one of 'xt' (a constant X_t, optionally with 'patches'), "
+                                f"'profile' (a list of [position_m, xt] pairs) or 'random' (a seeded random profile); "
+                                f"got {' and '.join(repr(g) for g in given) if given else 'none of them'}.")
+        if self.patches is not None:
+            if self.xt is None:
+                raise ScenarioError(f"{path}.patches: patches lie on a base X_t; give 'xt' (the X_t outside the "
+                                    f"patches) instead of '{given[0]}'.")
+            prev_end, prev_j = -math.inf, None
+            for j, pt in enumerate(self.patches):
+                lo = pt.start_m - max(pt.ramp_m, STEP_WIDTH_M)
+                if lo < prev_end:
+                    raise ScenarioError(f"{path}.patches[{j}]: overlaps patches[{prev_j}] (with its ramps): it starts "
+                                        f"at {lo:g} m (start_m - ramp_m) before the previous one ends at {prev_end:g} m "
+                                        "(end_m + ramp_m). List patches in order along the route, without overlap.")
+                prev_end, prev_j = pt.end_m + max(pt.ramp_m, STEP_WIDTH_M), j
         if self.profile is not None:
             if len(self.profile) < 1:
                 raise ScenarioError(f"{path}.profile: needs at least one [position_m, xt] pair.")
@@ -299,9 +357,13 @@ def apply_overrides(raw: dict, overrides) -> dict:
         if isinstance(node, dict) and leaf.isdigit() and int(leaf) in node:
             leaf = int(leaf)
         node[leaf] = value
-        # a constant xt replaces a profile and vice versa
-        if parts[0] == "terrain" and len(parts) == 2 and parts[1] in ("xt", "profile"):
-            node.pop("profile" if parts[1] == "xt" else "xt", None)
+        # a constant xt replaces a profile or random profile and vice versa (patches stay on a new xt)
+        if parts[0] == "terrain" and len(parts) == 2 and parts[1] in ("xt", "profile", "random"):
+            for other in ("xt", "profile", "random"):
+                if other != parts[1]:
+                    node.pop(other, None)
+            if parts[1] != "xt":
+                node.pop("patches", None)
     return raw
 
 
@@ -351,10 +413,9 @@ def dump_scenario(sc: Scenario) -> str:
             "terrain": dump(sc.terrain), "tow": dump(sc.tow), "mode": dump(sc.mode),
             "simulation": dump(sc.simulation)}
     t = data["terrain"]
-    if t["profile"] is None:
-        t.pop("profile")
-    else:
-        t.pop("xt")
+    for key in ("xt", "profile", "patches", "random"):
+        if t[key] is None:
+            t.pop(key)
     if data["simulation"]["max_step_s"] is None:
         data["simulation"].pop("max_step_s")
     return yaml.safe_dump(data, sort_keys=False)

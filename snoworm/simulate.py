@@ -16,9 +16,9 @@ from . import modes
 from .dynamics import ChainModel, LinkArrays, SegmentArrays
 from .results import Result
 from .scenario import Scenario
-from .terrain import TerrainParams, TerrainProfile
+from .terrain import TerrainParams, TerrainProfile, patch_profile, random_profile
 
-__all__ = ["SolverError", "build_model", "simulate", "solver_options"]
+__all__ = ["SolverError", "build_model", "simulate", "solver_options", "terrain_profile"]
 
 
 class SolverError(RuntimeError):
@@ -34,9 +34,19 @@ MAX_STUCK_INTERVALS = 50
 
 
 def terrain_profile(sc: Scenario) -> TerrainProfile:
+    """Compile the scenario's terrain (``xt``, ``xt`` + ``patches``, ``profile`` or ``random``) to one table.
+
+    Every form becomes a :class:`~snoworm.terrain.TerrainProfile`, the single evaluation path of
+    X_t along the track (paper section 3: X_t is "location dependent").
+    """
     t = sc.terrain
     if t.profile is not None:
         return TerrainProfile(tuple(p[0] for p in t.profile), tuple(p[1] for p in t.profile))
+    if t.random is not None:
+        r = t.random
+        return random_profile(r.mean, r.std, r.correlation_length_m, r.seed, r.length_m, r.min_xt, r.start_m)
+    if t.patches:
+        return patch_profile(t.xt, [(p.start_m, p.end_m, p.xt, p.ramp_m) for p in t.patches])
     return TerrainProfile.constant(t.xt)
 
 

@@ -24,6 +24,9 @@ __all__ = [
     "resistance_torque",
     "wheel_reaction_torque",
     "TerrainProfile",
+    "STEP_WIDTH_M",
+    "patch_profile",
+    "random_profile",
 ]
 
 
@@ -216,3 +219,90 @@ class TerrainProfile:
 
     def minimum(self) -> float:
         return float(min(self.values))
+
+
+# ------------------------------------------------------------------ terrain along the route
+# Builders that compile route descriptions (patches, seeded random profiles) into the single
+# piecewise-linear :class:`TerrainProfile` table, so the chain model keeps ONE evaluation path.
+
+#: Width [m] of the linear transition used for a patch edge given without a ramp (``ramp_m = 0``):
+#: a true step would make the right-hand side discontinuous inside a solver step.
+STEP_WIDTH_M = 1e-3
+
+
+def patch_profile(base_xt: float, patches) -> TerrainProfile:
+    """X_t along the route: a base value with patches of other snow [paper section 3, "location dependent"].
+
+    Parameters
+    ----------
+    base_xt : float
+        X_t outside every patch (> 0).
+    patches : sequence of (start_m, end_m, xt, ramp_m)
+        Sorted, non-overlapping patches.  X_t equals ``xt`` on ``[start_m, end_m]`` and changes
+        linearly back to ``base_xt`` over ``ramp_m`` metres outside each edge (over
+        :data:`STEP_WIDTH_M` when ``ramp_m`` is 0).  Validation (order, overlap, signs) is done by
+        ``scenario.TerrainConfig``; this function assumes valid input.
+
+    Returns
+    -------
+    TerrainProfile
+        Constant when there are no patches, otherwise a table.
+    """
+    if not patches:
+        return TerrainProfile.constant(base_xt)
+    pos, val = [], []
+    for start, end, xt, ramp in patches:
+        r = max(float(ramp), STEP_WIDTH_M)
+        pos += [start - r, start, end, end + r]
+        val += [base_xt, xt, xt, base_xt]
+    # adjacent patches whose ramps touch share a breakpoint: drop exact duplicates
+    P, V = [pos[0]], [val[0]]
+    for p, v in zip(pos[1:], val[1:]):
+        if p > P[-1]:
+            P.append(p)
+            V.append(v)
+        else:
+            V[-1] = v
+    return TerrainProfile(tuple(float(p) for p in P), tuple(float(v) for v in V))
+
+
+def random_profile(mean: float, std: float, correlation_length_m: float, seed: int, length_m: float,
+                   min_xt: float, start_m: float = 0.0) -> TerrainProfile:
+    """A seeded random X_t profile: Gaussian-filtered white noise (a stationary Gaussian process).
+
+    White noise on a grid of spacing ``correlation_length_m / 8`` is convolved with a Gaussian
+    kernel of standard deviation ``correlation_length_m / 2``, which gives the squared-exponential
+    correlation ``rho(r) = exp(-r^2 / correlation_length_m^2)`` (``rho = 1/e`` at one correlation
+    length); it is scaled to standard deviation ``std``, shifted to ``mean`` and clipped below at
+    ``min_xt`` (> 0) so X_t stays physical.  The same arguments always give the same profile
+    (``numpy.random.default_rng(seed)``); beyond ``[start_m, start_m + length_m]`` X_t is held at
+    the end values.
+
+    Parameters
+    ----------
+    mean, std : float
+        Mean and standard deviation of X_t before clipping.
+    correlation_length_m : float
+        Correlation length [m] (> 0).
+    seed : int
+        Seed of the random generator.
+    length_m : float
+        Length of the generated stretch [m].
+    min_xt : float
+        Lower clip of X_t (> 0).
+    start_m : float
+        Position of the first grid point [m].
+    """
+    dx = correlation_length_m / 8.0
+    n = int(np.ceil(length_m / dx)) + 1
+    sigma_k = correlation_length_m / 2.0
+    half = int(np.ceil(4.0 * sigma_k / dx))
+    rng = np.random.default_rng(int(seed))
+    noise = rng.standard_normal(n + 2 * half)
+    r = np.arange(-half, half + 1) * dx
+    kern = np.exp(-0.5 * (r / sigma_k) ** 2)
+    kern /= np.sqrt(np.sum(kern**2))           # unit variance of the filtered noise
+    field_ = np.convolve(noise, kern, mode="valid")[:n]
+    xt = np.maximum(mean + std * field_, min_xt)
+    pos = start_m + dx * np.arange(n)
+    return TerrainProfile(tuple(pos.tolist()), tuple(xt.tolist()))

@@ -53,10 +53,10 @@ def energy_residual(res, sc):
     w = res.segments["wheel_speed_mps"] / R
     F = res.links["force_N"]
     dv = v[:, :-1] - v[:, 1:]
-    spring = F - c * dv
+    spring = F - c * dv            # fixed links: spring and damper in parallel
     E = 0.5 * m * (v**2).sum(1) + 0.5 * J * nwheels * (w**2).sum(1) + 0.5 * (spring**2).sum(1) / k
     P = (res.segments["motor_power_W"].sum(1) - res.segments["terrain_dissipation_W"].sum(1)
-         - c * (dv**2).sum(1) - sc.tow.force_N * v[:, -1] + res.links["joint_power_W"].sum(1))
+         - c * (dv**2).sum(1) - sc.tow.force_N * v[:, -1])
     work = np.trapezoid(P, t)
     motor = np.trapezoid(np.abs(res.segments["motor_power_W"]).sum(1), t)
     return work - (E[-1] - E[0]), motor

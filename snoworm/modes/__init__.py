@@ -72,11 +72,12 @@ def start_times(values, n_segments, path="mode.start_time_s"):
 
 
 def _registry():
-    from . import force_control, inchworm, uniform
+    from . import force_control, inchworm, supervisor, uniform
     return {
         "uniform": (uniform.UniformConfig, uniform.UniformMode),
         "force_control": (force_control.ForceControlConfig, force_control.ForceControlMode),
         "inchworm": (inchworm.InchwormConfig, inchworm.InchwormMode),
+        "supervisor": (supervisor.SupervisorConfig, supervisor.SupervisorMode),
     }
 
 

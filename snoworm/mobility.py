@@ -1,0 +1,277 @@
+"""Mobility map: which modes move a vehicle over terrain coefficient X_t and towed load.
+
+Beyond the paper: the paper shows rolling (section 5.2) and inching (section 5.1) on chosen
+terrain; this map sweeps X_t and the tow for one vehicle.
+
+Rolling (steady state, milliseconds per cell)
+    The chain rolls when each segment's share of the tow, ``F_tow / N``, is below its largest
+    steady drawbar on uniform terrain, :func:`snoworm.steady.max_drawbar_N` (MODEL.md
+    section 2; without tow this is X_t > 0.586 for FrostyBoy).  Speed and torque follow from
+    :func:`snoworm.steady.steady_state` at the rolling wheel-speed set-point; the electrical
+    energy per metre is ``N n_wheels max(T_m w, 0) / (eta V)`` (definitions in
+    :mod:`snoworm.energy`).
+Inching (short simulations, seconds per cell)
+    The inchworm mode (paper section 5.1) is simulated for ``inch_duration_s`` on uniform
+    terrain with the tow; it *moves* the vehicle when the chain's mean position advances at
+    ``inch_min_speed_mps`` or more.  Speed and energy per metre are those of the run (from
+    rest, so they include the start-up of the first phase).  Eqs. 4-6 alone would say whether
+    each phase can start but not how fast the gait goes nor what it costs, hence simulation.
+    A solver failure marks the cell as not inching (the message is kept in the CSV).
+
+Runtime: rolling cells are ~10 ms; each inching cell costs about 0.4 s of wall time per
+simulated second with the default solver settings (about 3 s for a 8 s run of six segments),
+run in ``jobs`` worker processes.
+"""
+from __future__ import annotations
+
+import io
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import yaml
+
+from . import steady
+from .schema import ScenarioError
+from .scenario import dump_scenario, scenario_from_dict
+
+__all__ = ["parse_grid", "parse_list", "rolling_cell", "inching_scenario", "mobility_map", "map_csv",
+           "rolling_speed_of", "REGIONS"]
+
+#: Region labels of the map, in plotting order.
+REGIONS = ("immobile", "inching only", "rolling")
+
+
+def parse_grid(text: str, name: str = "--xt") -> np.ndarray:
+    """``"start:stop:count"`` -> ``numpy.linspace(start, stop, count)`` (or a comma list)."""
+    try:
+        if ":" in text:
+            a, b, n = text.split(":")
+            n = int(n)
+            if n < 1:
+                raise ValueError
+            return np.linspace(float(a), float(b), n)
+        return parse_list(text, name)
+    except ValueError:
+        raise ScenarioError(f"{name} {text!r}: expected START:STOP:COUNT (e.g. 0.2:1.0:9) or a comma-separated "
+                            "list of numbers.") from None
+
+
+def parse_list(text: str, name: str = "--tow") -> np.ndarray:
+    """``"0,100,200"`` -> array of floats."""
+    try:
+        vals = np.array([float(v) for v in text.split(",") if v.strip()])
+    except ValueError:
+        raise ScenarioError(f"{name} {text!r}: expected a comma-separated list of numbers, e.g. 0,100,200.") from None
+    if vals.size == 0:
+        raise ScenarioError(f"{name}: give at least one value.")
+    return vals
+
+
+def rolling_speed_of(sc) -> float:
+    """The rolling wheel-speed set-point of a scenario's mode (supervisor or uniform) [m/s]."""
+    m = sc.mode
+    if m.type == "supervisor":
+        return float(m.rolling_speed_mps)
+    if m.type == "uniform":
+        return float(m.speed_mps[0])
+    raise ScenarioError(f"mode.type: the mobility map takes the rolling wheel speed from a 'supervisor' or "
+                        f"'uniform' mode; this scenario's mode is {m.type!r}. Pass --rolling-speed.")
+
+
+def _inching_mode_raw(sc) -> dict:
+    m = sc.mode
+    if m.type == "supervisor":
+        raw = dict(m.inching)
+    elif m.type == "inchworm":
+        raw = {k: v for k, v in yaml.safe_load(dump_scenario(sc))["mode"].items() if k != "type"}
+    else:
+        raise ScenarioError(f"mode.type: the mobility map takes the inching gait from a 'supervisor' or "
+                            f"'inchworm' mode; this scenario's mode is {m.type!r}. Use --no-inching for rolling only.")
+    raw.update({"type": "inchworm", "start_time_s": 0.0})
+    return raw
+
+
+def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float) -> dict:
+    """Steady rolling of the scenario's vehicle on uniform X_t with a tow (one map cell).
+
+    Returns ``rolling`` (bool), ``rolling_speed_mps``, ``rolling_slip``,
+    ``rolling_energy_per_metre_J_per_m`` (electrical) and ``rolling_max_drawbar_N`` (per segment).
+    Uses the first segment's parameters for every segment (a uniform chain).
+    """
+    from .simulate import build_model
+    seg = sc.vehicle.segment_params()[0]
+    tp = build_model(sc).tp
+    n = sc.vehicle.segments
+    share = tow_N / n
+    dmax = steady.max_drawbar_N(xt, seg, tp, wheel_speed_mps)
+    out = {"rolling": False, "rolling_speed_mps": 0.0, "rolling_slip": None,
+           "rolling_energy_per_metre_J_per_m": None, "rolling_max_drawbar_N": dmax}
+    if share >= dmax:
+        return out
+    try:
+        ss = steady.steady_state(xt, seg, tp, drawbar_N=share, wheel_speed_mps=wheel_speed_mps)
+    except steady.Immobilised:
+        return out
+    if ss.ground_speed_mps <= 0:
+        return out
+    n_w, _, R = steady.segment_geometry(seg)
+    p_el = n * n_w * max(ss.torque_Nm * wheel_speed_mps / R, 0.0) / seg.drivetrain_efficiency
+    out.update(rolling=True, rolling_speed_mps=ss.ground_speed_mps, rolling_slip=ss.slip,
+               rolling_energy_per_metre_J_per_m=p_el / ss.ground_speed_mps)
+    return out
+
+
+def inching_scenario(sc, xt: float, tow_N: float, duration_s: float) -> dict:
+    """Raw scenario mapping of a short inchworm run on uniform X_t with a tow (one map cell)."""
+    raw = yaml.safe_load(dump_scenario(sc))
+    raw["name"] = f"{sc.name}_inch_xt{xt:g}_tow{tow_N:g}"
+    raw["terrain"] = {"xt": float(xt), "model": raw["terrain"]["model"]}
+    raw["tow"] = {"force_N": float(tow_N)}
+    raw["mode"] = _inching_mode_raw(sc)
+    raw["simulation"]["duration_s"] = float(duration_s)
+    return raw
+
+
+def _inch_run(args):
+    raw, min_speed = args
+    from .energy import energy_metrics
+    from .simulate import SolverError, simulate
+    try:
+        res = simulate(scenario_from_dict(raw))
+    except SolverError as exc:
+        return {"inching": False, "inching_speed_mps": 0.0, "inching_energy_per_metre_J_per_m": None,
+                "inching_note": f"solver failure: {exc}"[:200]}
+    e = energy_metrics(res)
+    dur = float(res.t[-1] - res.t[0])
+    speed = e["distance_m"] / dur
+    ok = speed >= min_speed
+    return {"inching": bool(ok), "inching_speed_mps": speed,
+            "inching_energy_per_metre_J_per_m": e["energy_per_metre_J_per_m"] if ok else None,
+            "inching_note": ""}
+
+
+def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True, inch_duration_s: float = 8.0,
+                 inch_min_speed_mps: float = 0.02, jobs: int = 1) -> dict:
+    """Mobility map of a scenario's vehicle over ``xts`` x ``tows``.
+
+    Parameters
+    ----------
+    sc : Scenario
+        Gives the vehicle, terrain model, inching gait (supervisor ``inching`` or inchworm mode).
+    xts, tows : sequence of float
+        Terrain coefficients and tow forces [N] of the grid.
+    wheel_speed_mps : float
+        Rolling wheel-speed set-point [m/s].
+    inching : bool
+        Simulate inching (else rolling only, steady state).
+    inch_duration_s : float
+        Simulated time of each inching run [s].
+    inch_min_speed_mps : float
+        Mean chain speed above which inching counts as moving [m/s].
+    jobs : int
+        Worker processes for the inching runs.
+
+    Returns
+    -------
+    dict
+        ``rows`` (one dict per cell), ``rolling_limit_xt`` (per tow, the steady immobilisation
+        limit, None if above 1), ``wall_time_s``, and the settings.
+    """
+    wall0 = time.perf_counter()
+    xts = [float(x) for x in xts]
+    tows = [float(f) for f in tows]
+    if any(x <= 0 for x in xts):
+        raise ScenarioError("--xt: every X_t must be greater than 0.")
+    rows = []
+    for f in tows:
+        for x in xts:
+            rows.append({"xt": x, "tow_N": f, **rolling_cell(sc, x, f, wheel_speed_mps)})
+    if inching:
+        tasks = [(inching_scenario(sc, r["xt"], r["tow_N"], inch_duration_s), inch_min_speed_mps) for r in rows]
+        if jobs > 1:
+            with ProcessPoolExecutor(max_workers=jobs) as ex:
+                outs = list(ex.map(_inch_run, tasks))
+        else:
+            outs = [_inch_run(tk) for tk in tasks]
+        for r, o in zip(rows, outs):
+            r.update(o)
+    for r in rows:
+        inch_ok = bool(r.get("inching", False))
+        r["region"] = "rolling" if r["rolling"] else ("inching only" if inch_ok else "immobile")
+        er, ei = r["rolling_energy_per_metre_J_per_m"], r.get("inching_energy_per_metre_J_per_m")
+        r["inching_cheaper"] = bool(er is not None and ei is not None and ei < er)
+    seg = sc.vehicle.segment_params()[0]
+    from .simulate import build_model
+    tp = build_model(sc).tp
+    limits = {}
+    for f in tows:
+        try:
+            limits[f] = steady.immobilisation_limit_xt(seg, tp, drawbar_N=f / sc.vehicle.segments,
+                                                       wheel_speed_mps=wheel_speed_mps)
+        except ValueError:
+            limits[f] = None
+    return {"rows": rows, "xts": xts, "tows": tows, "rolling_limit_xt": limits, "inching": inching,
+            "inch_duration_s": inch_duration_s, "wheel_speed_mps": wheel_speed_mps,
+            "wall_time_s": time.perf_counter() - wall0, "scenario": sc.name}
+
+
+#: Columns of ``mobility_map.csv``.
+MAP_COLUMNS = ("xt", "tow_N", "region", "rolling", "rolling_speed_mps", "rolling_slip",
+               "rolling_energy_per_metre_J_per_m", "rolling_max_drawbar_N", "inching", "inching_speed_mps",
+               "inching_energy_per_metre_J_per_m", "inching_cheaper", "inching_note")
+
+
+def map_csv(result: dict) -> str:
+    """The map's rows as CSV text (empty fields for values that do not apply)."""
+    buf = io.StringIO()
+    buf.write(",".join(MAP_COLUMNS) + "\n")
+    for r in result["rows"]:
+        vals = []
+        for c in MAP_COLUMNS:
+            v = r.get(c)
+            if v is None:
+                vals.append("")
+            elif isinstance(v, bool):
+                vals.append("1" if v else "0")
+            elif isinstance(v, float):
+                vals.append(f"{v:.6g}")
+            else:
+                vals.append(str(v).replace(",", ";"))
+        buf.write(",".join(vals) + "\n")
+    return buf.getvalue()
+
+
+def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, rolling_speed_mps=None,
+                     inching=True, inch_duration_s=8.0, jobs=1, plot=True):
+    """Load a scenario, compute its map, write ``mobility_map.csv`` (and ``.png``); return (map, text, paths)."""
+    from pathlib import Path
+
+    from .fileio import atomic_write_text
+    from .scenario import load_scenario
+    sc = load_scenario(scenario_path, sets)
+    v = rolling_speed_of(sc) if rolling_speed_mps is None else float(rolling_speed_mps)
+    res = mobility_map(sc, parse_grid(xt_spec, "--xt"), parse_list(tow_spec, "--tow"), wheel_speed_mps=v,
+                       inching=inching, inch_duration_s=inch_duration_s, jobs=jobs)
+    out = Path(out_dir)
+    paths = [atomic_write_text(out / "mobility_map.csv", map_csv(res))]
+    if plot:
+        from .plotting import plot_mobility_map
+        paths.append(plot_mobility_map(res, out / "mobility_map.png"))
+    lines = [f"{sc.name}: mobility map, {len(res['xts'])} X_t x {len(res['tows'])} tow values, "
+             f"{res['wall_time_s']:.1f} s"]
+    for f in res["tows"]:
+        lim = res["rolling_limit_xt"][f]
+        roll = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r["rolling"]]
+        inch = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r["region"] == "inching only"]
+        cheap = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r["inching_cheaper"]]
+        lines.append(f"tow {f:g} N: steady rolling limit X_t = {lim:.3f}" if lim is not None
+                     else f"tow {f:g} N: no rolling for X_t <= 1")
+        lines.append(f"  rolling from X_t = {min(roll):g}" if roll else "  rolling nowhere on the grid")
+        lines.append(f"  inching only at X_t = {', '.join(f'{x:g}' for x in inch)}" if inch else "  no inching-only cells")
+        failed = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r.get("inching_note")]
+        if failed:
+            lines.append(f"  inching run failed (solver) at X_t = {', '.join(f'{x:g}' for x in failed)}; see inching_note")
+        if cheap:
+            lines.append(f"  inching cheaper per metre than rolling at X_t = {', '.join(f'{x:g}' for x in cheap)}")
+    return res, "\n".join(lines), paths
