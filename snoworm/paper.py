@@ -214,7 +214,9 @@ def _fmt(v):
         return f"{v:.4g}"
     if isinstance(v, list):
         return "[" + ", ".join(_fmt(x) for x in v) + "]"
-    return str(v)
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{k}: {_fmt(x)}" for k, x in v.items()) + "}"
+    return "n/a" if v is None else str(v)
 
 
 # ------------------------------------------------------------------------------- Figure 3
@@ -494,8 +496,9 @@ def item_fig5(ctx: Context) -> Section:
     s.notes.append("Overlap measure: RMS of v_a(t) - v_b(t) from the gait start, without any time shift, divided "
                    "by the peak ground speed of the run. The thresholds (pairs <= 0.3, others >= 0.5) were chosen "
                    "by this report, not given by the paper. Within a pair the two segments start and stop "
-                   "together but their joints ramp at slightly different rates (one is pushed by one joint, the "
-                   "other pulled), so the pairs 0 & 3 and 2 & 5 overlap less closely than 1 & 4.")
+                   "together, but they are moved by different joints (e.g. segment 0 pushed by joint 0 extending, "
+                   "segment 3 pulled by joint 2 contracting), so their speed ramps differ and the pairs 0 & 3 "
+                   "and 2 & 5 overlap less closely than 1 & 4.")
     if ctx.out_dir is not None:
         from . import plotting
         s.figures.append(plotting.plot_inchworm_pairs(inch, ctx.figure("fig5_speeds.png"), FIG5_PAIRS))
@@ -793,6 +796,9 @@ def item_readings(ctx: Context) -> Section:
          "table2_torques_traction_Nm": [b["torque_Nm"] for b in sim_t]},
         "steady slips of the five Table 2 runs and of Fig 6 differ by <= 0.01 percentage points",
         max(ds) <= 0.01 and 100 * float(np.max(np.abs(s6c - s6t))) <= 0.01, source="model"))
+    s.notes.append("The traction convention moves the steady torques by up to 0.35 N m (e.g. case 1: R_w b_trF F_n = "
+                   "9.65 N m instead of F_n R_w tau0 = 10.0 N m, since its T_rrB vanishes at X_t = 1), within the "
+                   "Table 2 tolerance; the slips and the chassis motion are unchanged.")
     s.notes.append("Variants re-evaluate the Fig 3 and Table 2 claims under each alternative; they are shown for "
                    "information and do not count for --strict (they are expected to differ).")
     return s
