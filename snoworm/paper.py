@@ -407,6 +407,42 @@ def pair_overlap(res, pairs=FIG5_PAIRS):
     return out
 
 
+#: Fig 5 timing: the held segments' peak backward speed falls within this fraction of a phase ...
+FIG5_PEAK_EARLY_FRACTION = 0.25
+#: ... and in the phase's second half their backward speed stays below this fraction of that peak.
+FIG5_LATE_FRACTION_MAX = 0.5
+
+
+def backward_sliding_timing(res):
+    """When the held segments slide backwards in each gait phase of an inchworm run.
+
+    For every completed phase (from the mode summary; the phase cut off by the end of the run is
+    left out) in which a held segment moves backwards: the time
+    of the held segments' most negative speed as a fraction of the phase duration, and the
+    largest backward speed in the second half of the phase relative to that peak.
+
+    Returns
+    -------
+    (peak_fraction, late_ratio) : list of float, list of float
+    """
+    t, v = res.t, res.segments["v_mps"]
+    n = v.shape[1]
+    peak_fraction, late_ratio = [], []
+    for ph in res.mode_summary.get("phases", []):
+        t0, t1 = ph["t_start_s"], ph["t_end_s"]
+        sel = (t >= t0) & (t <= t1)
+        held = [k for k in range(n) if k not in ph["moving"]]
+        if sel.sum() < 3 or not held or t1 >= t[-1] - 1e-9:   # too short, or cut off by the end of the run
+            continue
+        vh, tt = v[sel][:, held].min(1), t[sel]
+        if vh.min() >= 0:
+            continue
+        i = int(np.argmin(vh))
+        peak_fraction.append(float((tt[i] - t0) / (t1 - t0)))
+        late_ratio.append(float(max(-vh[tt >= t0 + 0.5 * (t1 - t0)].min(), 0.0) / -vh[i]))
+    return peak_fraction, late_ratio
+
+
 def _advance(res):
     x = res.segments["x_m"]
     return x[-1] - x[0]
@@ -425,6 +461,7 @@ def check_fig5(inch, roll, inch_hi) -> list:
     xt_lo, xt_hi = float(inch.scenario.terrain.xt), float(inch_hi.scenario.terrain.xt)
     m_lo, m_hi = inch.mode_summary, inch_hi.mode_summary
     v_lo, v_hi = _mean_speed(inch), _mean_speed(inch_hi)
+    timing = backward_sliding_timing(inch)
     return [
         _claim("fig5.inchworm_advances", "Fig 5",
                f"inchworm movement gives forward motion on X_t = {xt_lo:g}, 'through terrain that would "
@@ -448,6 +485,15 @@ def check_fig5(inch, roll, inch_hi) -> list:
                f"{FIG5_PAIR_RMS_MAX:g} x peak speed, and >= {FIG5_NONPAIR_RMS_MIN:g} x peak speed for every "
                "two segments of different pairs",
                max(ov["pairs"].values()) <= FIG5_PAIR_RMS_MAX and min(ov["others"].values()) >= FIG5_NONPAIR_RMS_MIN),
+        _claim("fig5.backward_peak_early", "Fig 5",
+               "'negative speeds peak shortly after motion starts, then drop off as the prismatic force is "
+               "decreased' (section 5.1)",
+               {"peak_time_fraction_of_phase": timing[0], "late_over_peak_backward_speed": timing[1]},
+               f"in every gait phase with backward sliding, the held segments' most negative speed falls within "
+               f"the first {FIG5_PEAK_EARLY_FRACTION:g} of the phase, and in its second half their backward "
+               f"speed stays below {FIG5_LATE_FRACTION_MAX:g} x that peak (the joint force itself is not checked)",
+               bool(timing[0]) and max(timing[0]) <= FIG5_PEAK_EARLY_FRACTION
+               and max(timing[1]) < FIG5_LATE_FRACTION_MAX),
         _claim("fig5.higher_xt_faster", "Fig 5",
                "'Simulations with higher terrain coefficients had similar results, but with ... higher forward "
                "speeds' (section 5.1)",
@@ -498,7 +544,8 @@ def item_fig5(ctx: Context) -> Section:
                    "by this report, not given by the paper. Within a pair the two segments start and stop "
                    "together, but they are moved by different joints (e.g. segment 0 pushed by joint 0 extending, "
                    "segment 3 pulled by joint 2 contracting), so their speed ramps differ and the pairs 0 & 3 "
-                   "and 2 & 5 overlap less closely than 1 & 4.")
+                   "and 2 & 5 overlap less closely than 1 & 4. The timing thresholds of fig5.backward_peak_early "
+                   "(first quarter of the phase, below half the peak in its second half) are also this report's.")
     if ctx.out_dir is not None:
         from . import plotting
         s.figures.append(plotting.plot_inchworm_pairs(inch, ctx.figure("fig5_speeds.png"), FIG5_PAIRS))
