@@ -282,5 +282,38 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
+# ---------------------------------------------------------------- paper reproduction (snoworm/paper.py)
+
+@main.command()
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for the figures, report.md, report.html (self-contained) and claims.json.")
+@click.option("--quick", is_flag=True,
+              help="Shorter inchworm runs (10 s simulated instead of 30 s) for CI; every figure's claims are "
+                   "still checked.")
+@click.option("--strict", is_flag=True,
+              help="Exit with status 1 if any claim fails (default: exit 0 and record failures in the report).")
+@handle_errors
+def paper(out_dir, quick, strict):
+    """Reproduce the paper: Figure 3, Table 2, Figures 5 to 11, in one command.
+
+    Runs every scenario behind the paper's quantitative content, checks each of the paper's
+    statements against the computed numbers with a stated tolerance, re-checks Figure 3 and
+    Table 2 under the alternative readings of the paper (d = 1 in Eq. 2, an X_t-independent
+    resistance torque, the traction torque-balance convention), and writes the figures,
+    --out/report.md, --out/report.html and --out/claims.json.  One progress line per item goes
+    to stderr.  A failing claim is reported, not fatal: the exit status is 0 unless --strict.
+    """
+    from .paper import run_paper
+    rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True))
+    n_ok = sum(c.holds for c in rep.claims)
+    click.echo(f"{n_ok} of {len(rep.claims)} claims hold ({'quick' if quick else 'full'} mode, "
+               f"{rep.wall_time_s:.1f} s); report: {os.path.join(out_dir, 'report.html')}")
+    for c in rep.claims:
+        if not c.holds:
+            click.echo(f"FAILS: {c.id}: {c.statement}", err=True)
+    if strict and n_ok < len(rep.claims):
+        sys.exit(1)
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()

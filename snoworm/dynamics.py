@@ -112,6 +112,9 @@ class Controls:
     joint_ff_N, joint_kv, joint_vtarget_mps, joint_limit_N : (N-1,) force command
         ``|F| = clip(ff + kv (v_target - v_mover), 0, limit)``.
     joint_mover : (N-1,) int, index of the segment whose speed the joint regulates.
+    joint_anchor, joint_ka : (N-1,) int and [N s/m]: the held segment the joint bears on, and the
+        gain by which the force command drops while that anchor slides backward,
+        ``|F| -= ka max(0, -v_anchor)`` (limits backward sliding, paper section 5.1).
     """
 
     motor_on: np.ndarray
@@ -133,6 +136,8 @@ class Controls:
     joint_vtarget_mps: np.ndarray
     joint_limit_N: np.ndarray
     joint_mover: np.ndarray
+    joint_anchor: np.ndarray
+    joint_ka: np.ndarray
 
     @classmethod
     def rolling(cls, n: int, motor_on, speed_sp_mps) -> "Controls":
@@ -149,6 +154,7 @@ class Controls:
             joint_dir=np.ones_like(zl), joint_ff_N=zl.copy(),
             joint_kv=zl.copy(), joint_vtarget_mps=zl.copy(), joint_limit_N=zl.copy(),
             joint_mover=np.arange(max(n - 1, 0), dtype=int),
+            joint_anchor=np.arange(1, max(n, 1), dtype=int), joint_ka=zl.copy(),
         )
 
     def with_(self, **kw) -> "Controls":
@@ -422,8 +428,9 @@ class ChainModel:
         """
         L = self.links
         vm = v[..., ctl.joint_mover]
-        mag = np.minimum(np.maximum(ctl.joint_ff_N + ctl.joint_kv * (ctl.joint_vtarget_mps - vm), 0.0),
-                         ctl.joint_limit_N)
+        slide = np.maximum(-v[..., ctl.joint_anchor], 0.0)
+        mag = np.minimum(np.maximum(ctl.joint_ff_N + ctl.joint_kv * (ctl.joint_vtarget_mps - vm)
+                                    - ctl.joint_ka * slide, 0.0), ctl.joint_limit_N)
         T_ref = -ctl.joint_dir * mag
         # with the damper in series, T = T_spring + c (rel - rate); solving the loop
         # rate = rel + (T - T_ref) g/k for T gives the effective gain below: T approaches T_ref

@@ -364,3 +364,31 @@ def plot_mobility_map(mmap, path):
     a2.set_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)", fontsize=10)
     fig.tight_layout()
     return save(fig, path)
+
+
+# ------------------------------------------------------------------ paper reproduction (paper.py)
+
+def plot_inchworm_pairs(result, path, pairs=((0, 3), (1, 4), (2, 5))):
+    """Ground speed of the segments that move together, one panel per pair (paper Fig 5).
+
+    Each panel overlays the speed traces of a pair of segments that share their place in the
+    gait; gait phase changes are drawn as faint vertical lines.
+    """
+    t = result.t
+    v = result.segments["v_mps"]
+    fig, axes = plt.subplots(len(pairs), 1, figsize=(8, 2.2 * len(pairs) + 0.8), sharex=True, squeeze=False)
+    for ax, (a, b) in zip(axes[:, 0], pairs):
+        ax.plot(t, v[:, a], lw=1.6, label=_seg_label(a))
+        ax.plot(t, v[:, b], lw=1.2, ls="--", label=_seg_label(b))
+        for ev in result.events:
+            if ev.get("kind") == "phase_change":
+                ax.axvline(ev["t_s"], color="0.85", lw=0.6, zorder=0)
+        ax.axhline(0.0, color="0.5", lw=0.6)
+        ax.set_ylabel("speed [m/s]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper right")
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[0, 0].set_title(f"{result.scenario.name}: ground speed of segments moving together "
+                         f"(X_t = {result.segments['xt'][0].mean():.2f})")
+    fig.tight_layout()
+    return save(fig, path)

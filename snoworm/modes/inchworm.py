@@ -24,7 +24,9 @@ extended, hold the front and pull the rear forward, then hold the rear and push 
 Joint force control (Eqs. 4-5)
 ------------------------------
 Each active joint regulates its moving group's speed to ``target_speed_mps`` with a
-proportional force loop, ``|F| = clip(F_ff + K_v (v_target - v), 0, F_lim)``, where the
+proportional force loop that backs off while its anchor slides backward (the paper's "simple
+force controller ... to limit backwards sliding"),
+``|F| = clip(F_ff + K_v (v_target - v) - K_a max(0, -v_anchor), 0, F_lim)``, where the
 feed-forward ``F_ff`` is the group's terrain resistance shared over its joints, and the limit
 keeps the load on every anchor cluster below ``hold_margin`` times what its locked wheels can
 hold (Eq. 5: ``F_tr,rear - F_c >= 0``) and no higher than the mover needs:
@@ -75,6 +77,8 @@ class InchwormConfig:
                                    "force: constant joint_force_N")
     speed_gain_Ns_per_m: float = field(2000.0, ge=0, unit="N s/m", doc="joint force loop gain K_v on the mover's speed error")
     joint_force_N: Optional[float] = field(None, gt=0, unit="N", doc="joint force of joint_control: force")
+    anchor_gain_Ns_per_m: float = field(0.0, ge=0, unit="N s/m",
+                                        doc="joint force reduction per m/s of backward sliding of its anchor")
     force_headroom: float = field(0.2, ge=0, doc="joint force allowed above the feed-forward, as a fraction of it, "
                                                  "to accelerate the mover (speed and length control)")
     start_time_s: float = field(0.0, ge=0, unit="s", doc="time the gait starts (motors off before)")
@@ -329,7 +333,9 @@ class InchwormMode(Mode):
             joint_length_mode=np.full(n - 1, 1.0 if cfg.joint_control == "length" else 0.0),
             joint_sref_m=np.where(plan.role > 0, L.stroke_max_m, L.stroke_min_m),
             joint_kv=kv, joint_vtarget_mps=np.full(n - 1, cfg.target_speed_mps),
-            joint_limit_N=limit, joint_mover=plan.mover_of_joint.astype(int))
+            joint_limit_N=limit, joint_mover=plan.mover_of_joint.astype(int),
+            joint_anchor=np.where(plan.role < 0, np.arange(n - 1), np.arange(n - 1) + 1),
+            joint_ka=np.full(n - 1, cfg.anchor_gain_Ns_per_m if cfg.joint_control != "force" else 0.0))
         events, self._event_joints = [], []
         si = m.idx["s_m"]
         ns = m.n_s
