@@ -14,7 +14,13 @@ $(VENV)/.installed: pyproject.toml
 	touch $@
 
 demo: $(VENV)/.installed
-	$(VENV)/bin/snoworm run scenarios/tow6_uniform.yaml --out $(OUT)/tow6_uniform
+	$(VENV)/bin/snoworm run scenarios/inchworm6.yaml --out $(OUT)/inchworm6
+
+paper: $(VENV)/.installed
+	$(VENV)/bin/snoworm paper --out $(OUT)/paper
+
+bench: $(VENV)/.installed
+	$(PY) benchmarks/run.py --out $(OUT)/benchmarks.json
 
 test: $(VENV)/.installed
 	$(PY) -m pytest -q
