@@ -79,3 +79,16 @@ def test_round_trip_property(xt, tow, n, speed):
     sc = scenario_from_dict(apply_overrides(base(), [("terrain.xt", xt), ("tow.force_N", tow),
                                                      ("vehicle.segments", n), ("mode.speed_mps", speed)]))
     assert scenario_from_dict(yaml.safe_load(dump_scenario(sc))) == sc
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
+def test_shipped_scenarios_run(path):
+    """Every shipped scenario runs (first 3 s) and produces finite results of the right shape."""
+    import numpy as np
+    from snoworm import simulate
+    sc = load_scenario(path, ["simulation.duration_s=3"])
+    res = simulate(sc)
+    n = sc.vehicle.segments
+    assert res.segments["x_m"].shape[1] == n and res.links["force_N"].shape[1] == n - 1
+    assert res.t[-1] == pytest.approx(3.0)
+    assert all(np.all(np.isfinite(a)) for a in res.segments.values())
