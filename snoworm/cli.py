@@ -208,8 +208,11 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
               help="Pair the --set values element by element (equal lengths) instead of a full grid.")
 @click.option("--save-cases", is_flag=True, help="Also write each case's time series to DIR/cases/<case_id>/.")
 @click.option("--no-plot", is_flag=True, help="Skip sweep.png / heatmap.png.")
+@click.option("--batch", default=0, show_default=True, type=click.IntRange(min=0), metavar="B",
+              help="Integrate up to B cases of the same structure (uniform mode) as one stacked system "
+                   "(several times the cases/s; 100-500 is a good B); other cases run one by one.")
 @handle_errors
-def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot):
+def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, batch):
     """Run SCENARIO over a grid of values and tabulate the results in --out.
 
     \b
@@ -231,7 +234,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot):
     from .sweep import SweepExecutionError, run_sweep
     try:
         table = run_sweep(scenario, sets, out_dir=out_dir, jobs=jobs, scheduler=scheduler, zip_=zip_,
-                          save_cases=save_cases, plot=not no_plot)
+                          save_cases=save_cases, plot=not no_plot, batch=batch)
     except SweepExecutionError as exc:
         _fail(str(exc), EXIT_SOLVER)
     except KeyboardInterrupt:

@@ -33,7 +33,7 @@ import numpy as np
 from . import drivetrain, terrain
 from .terrain import TerrainParams, TerrainProfile
 
-__all__ = ["Controls", "ChainModel", "SegmentArrays"]
+__all__ = ["Controls", "ChainModel", "SegmentArrays", "StackedConstantProfile"]
 
 
 @dataclass(frozen=True)
@@ -157,9 +157,40 @@ class Controls:
             joint_anchor=np.arange(1, max(n, 1), dtype=int), joint_ka=zl.copy(),
         )
 
+    @classmethod
+    def stack(cls, controls) -> "Controls":
+        """The controls of B stacked chains (:meth:`ChainModel.stack`): arrays equal in every member
+        stay as they are, the others get a leading batch axis; index arrays must be equal."""
+        kw = {}
+        for name in cls.__dataclass_fields__:
+            arrs = [np.asarray(getattr(c, name)) for c in controls]
+            if all(np.array_equal(a, arrs[0]) for a in arrs[1:]):
+                kw[name] = arrs[0]
+            elif arrs[0].dtype.kind in "iu":
+                raise ValueError(f"stacked controls need the same {name}")
+            else:
+                kw[name] = np.stack(arrs)
+        return cls(**kw)
+
     def with_(self, **kw) -> "Controls":
         """A copy with some arrays replaced (converted to float arrays)."""
         return replace(self, **{k: np.asarray(v) for k, v in kw.items()})
+
+
+@dataclass(frozen=True)
+class StackedConstantProfile:
+    """Constant X_t per member of stacked chains (:meth:`ChainModel.stack`): ``values[b]``."""
+
+    values: tuple
+    is_constant = True
+
+    def __call__(self, x_m):
+        v = np.asarray(self.values, float)
+        x = np.asarray(x_m)
+        return np.zeros(x.shape) + v.reshape(-1, 1, 1)
+
+    def minimum(self) -> float:
+        return float(min(self.values))
 
 
 class ChainModel:
@@ -187,8 +218,11 @@ class ChainModel:
         self.links = links
         self.tp = terrain_params
         self.profile = profile
-        self.tow_force_N = float(tow_force_N)
-        self.n = len(seg.mass_kg)
+        #: leading batch shape of the parameter arrays: () for one chain, (B,) for B stacked
+        #: chains (see :meth:`stack`); every per-segment array then has shape (B, N)
+        self.batch_shape = tuple(np.shape(seg.mass_kg)[:-1])
+        self.tow_force_N = float(tow_force_N) if np.ndim(tow_force_N) == 0 else np.asarray(tow_force_N, float)
+        self.n = int(np.shape(seg.mass_kg)[-1])
         self.force_loop = bool(force_loop)
         self.has_joints = bool(np.any(links.prismatic > 0))
         fields = ["x_m", "v_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm"]
@@ -199,9 +233,11 @@ class ChainModel:
         self.fields = tuple(fields)
         self.idx = {f: j for j, f in enumerate(fields)}
         self.n_s = len(fields)
-        self.n_states = self.n * self.n_s
+        self.n_batch = int(np.prod(self.batch_shape, dtype=int))
+        self.n_states = self.n_batch * self.n * self.n_s
+        self._shape = self.batch_shape + (self.n, self.n_s)
         # constants prepared once (shapes broadcast against (..., N, 2) axle arrays)
-        col = lambda a: np.asarray(a, float)[:, None]
+        col = lambda a: np.asarray(a, float)[..., None]
         self._R = col(seg.wheel_radius_m)
         self._J = col(seg.wheel_inertia_kgm2)
         self._Fn = col(seg.normal_force_N)
@@ -213,12 +249,92 @@ class ChainModel:
         self._Tmax = col(seg.torque_limit_Nm)
         self._nw = seg.wheels_per_axle.astype(float)
         self._m = seg.mass_kg.astype(float)
+        self._prepare_kernel()
+
+    def _prepare_kernel(self):
+        """Derived constants of the kernel, computed once (micro-optimisations, same arithmetic).
+
+        Scalars become 0-d arrays (NumPy multiplies by them ~2x faster than by Python floats);
+        with X_t constant along the track, the position-independent factors of the terrain laws
+        are evaluated once here (:func:`terrain.traction_coefficients` and friends).
+        """
+        tp, L = self.tp, self.links
+        z = lambda v: np.array(v, float)
+        self._tpk = replace(tp, **{k: z(getattr(tp, k)) for k in ("b_tF", "b_trF", "A", "peak_exponent_d", "tau0",
+                                                                 "tau1", "slip_eps_mps", "sign_eps_mps")})
+        self._zero = z(0.0)
+        if getattr(self.profile, "is_constant", False):
+            X = self.profile(self._axle_offset)
+            self._Xc = X
+            self._coef = (terrain.traction_coefficients(self._Fn, X, self._tpk),
+                          terrain.resistance_coefficients(self._Fn, X, self._tpk),
+                          terrain.torque_coefficient(self._Fn, X, self._R, self._tpk))
+        else:
+            self._Xc = self._coef = None
+        # links: spring-damper constants and the joint servo's effective gain
+        self._k_link = np.asarray(L.stiffness_N_per_m, float)
+        self._c_link = np.asarray(L.damping_Ns_per_m, float)
+        self._L0 = np.asarray(L.rest_spacing_m, float)
+        gk0 = L.force_gain_per_s / L.stiffness_N_per_m if self.n > 1 else np.zeros(0)
+        self._gk = gk0 / (1.0 + L.damping_Ns_per_m * gk0)
+        self._rate_max = np.asarray(L.rate_max_mps, float)
+        self._neg_rate_max = -self._rate_max
+        self._k_stop, self._k_length = z(K_STOP), z(K_LENGTH)
+        self._stroke_max = np.asarray(L.stroke_max_m, float)
+        self._stroke_min = np.asarray(L.stroke_min_m, float)
+        self._tow_col = np.asarray(self.tow_force_N, float)[..., None]
+        self._ctl_cache = (None, None)
+
+    def _controls(self, ctl: Controls):
+        """Arrays derived from the controls of an interval, computed once per Controls object."""
+        cached, d = self._ctl_cache
+        if cached is ctl:
+            return d
+        d = {"on": np.asarray(ctl.motor_on, float)[..., None],
+             "w_ref": (ctl.speed_sp_mps / self.seg.wheel_radius_m)[..., None]}
+        if self.has_joints and self.n > 1:
+            L = self.links
+            d["neg_dir"] = -ctl.joint_dir
+            d["neg_vt"] = -ctl.joint_vtarget_mps
+            d["neg_limit"] = -ctl.joint_limit_N
+            d["length_mode"] = ctl.joint_length_mode > 0
+            d["active"] = ctl.joint_active * L.prismatic
+        self._ctl_cache = (ctl, d)
+        return d
+
+    @classmethod
+    def stack(cls, models) -> "ChainModel":
+        """B chains of the same structure as ONE model with a leading batch axis (for batched sweeps).
+
+        Every model must have the same N, state layout, terrain coefficients and either the same
+        X_t profile or constant profiles (X_t may differ per chain).  Per-segment and per-link
+        parameters and the tow force become arrays of shape (B, N), (B, N-1) and (B,); the state
+        of the stacked model is the member-major concatenation of the B states, and its
+        Jacobian is block-banded with each member's band.  The physics is :meth:`evaluate`,
+        unchanged: the parameters simply carry one more leading axis.
+        """
+        m0 = models[0]
+        for m in models[1:]:
+            if (m.n, m.fields, m.force_loop, m.has_joints) != (m0.n, m0.fields, m0.force_loop, m0.has_joints):
+                raise ValueError("stacked chains need the same number of segments and state layout")
+            if m.tp != m0.tp:
+                raise ValueError("stacked chains need the same terrain coefficients")
+            if m.profile != m0.profile and not (m.profile.is_constant and m0.profile.is_constant):
+                raise ValueError("stacked chains need the same X_t profile, or constant profiles")
+        st = lambda objs, name: np.stack([np.asarray(getattr(o, name), float) for o in objs])
+        seg = SegmentArrays(**{k: st([m.seg for m in models], k) for k in SegmentArrays.__dataclass_fields__})
+        links = LinkArrays(**{k: st([m.links for m in models], k) for k in LinkArrays.__dataclass_fields__})
+        if all(m.profile == m0.profile for m in models):
+            profile = m0.profile
+        else:
+            profile = StackedConstantProfile(tuple(float(m.profile.values[0]) for m in models))
+        return cls(seg, links, m0.tp, profile, np.array([m.tow_force_N for m in models]), force_loop=m0.force_loop)
 
     # ------------------------------------------------------------------ layout
     def unpack(self, y):
         """View a flat state (or stack of states, leading dims) as ``(..., N, n_s)``."""
         y = np.asarray(y)
-        return y.reshape(y.shape[:-1] + (self.n, self.n_s))
+        return y.reshape(y.shape[:-1] + self._shape)
 
     def field(self, Y, name):
         """One named field of an unpacked state, shape ``(..., N)``."""
@@ -235,8 +351,11 @@ class ChainModel:
         Y[1:, 0] = -np.cumsum(spacing)
         return Y.reshape(-1)
 
-    def jac_sparsity(self) -> np.ndarray:
+    def jac_sparsity(self, member: bool = False):
         """Structural non-zero pattern of the Jacobian ``d(dy/dt)/dy`` (dense bool array).
+
+        For stacked chains (:meth:`stack`) the pattern is block diagonal, one block per member,
+        returned as a sparse matrix (``member=True``: one member's dense block).
 
         Within a segment every field may depend on every other (except ``x``, which is the
         integral of ``v``).  Across segments only the link forces couple: the force of link
@@ -274,12 +393,15 @@ class ChainModel:
                 P[k * ns:(k + 1) * ns, (k - 1) * ns:k * ns] = prev
             if k < n - 1:
                 P[k * ns:(k + 1) * ns, (k + 1) * ns:(k + 2) * ns] = nxt
-        return P
+        if member or not self.batch_shape:
+            return P
+        from scipy.sparse import block_diag
+        return block_diag([P] * self.n_batch, format="csr").astype(bool)   # stacked chains
 
     def bandwidths(self):
         """``(lband, uband)`` of :meth:`jac_sparsity`, for LSODA's banded Jacobian."""
         if getattr(self, "_bands", None) is None:
-            r, c = np.nonzero(self.jac_sparsity())
+            r, c = np.nonzero(self.jac_sparsity(member=True))
             self._bands = int(max(0, np.max(r - c))), int(max(0, np.max(c - r)))
         return self._bands
 
@@ -312,7 +434,7 @@ class ChainModel:
         Yp = np.tile(y, (w + 1, 1))
         Yp[1 + group, np.arange(n)] += h
         h = Yp[1 + group, np.arange(n)] - y           # the step actually taken (rounding)
-        dY, _ = self.evaluate(Yp.reshape(w + 1, self.n, self.n_s), ctl)
+        dY, _ = self.evaluate(Yp.reshape((w + 1,) + self._shape), ctl)
         F = dY.reshape(w + 1, n)
         dF = F[1:] - F[0]
         g = np.broadcast_to(group, rows.shape)
@@ -338,39 +460,45 @@ class ChainModel:
             With ``outputs=True``: named intermediate quantities (per axle arrays have a
             trailing axis of 2: front, rear), used for results after the solve.
         """
-        tp = self.tp
+        tp = self._tpk
         I = self.idx
-        x = Y[..., I["x_m"]]
-        v = Y[..., I["v_mps"]]
+        x = Y[..., 0]
+        v = Y[..., 1]
         w = Y[..., 2:4]
         integ = Y[..., 4:6]
         R = self._R
+        cd = self._controls(ctl)
         # terrain, per axle (Eqs. 1-3, resistance torque), X_t evaluated at each axle
-        xa = x[..., None] + self._axle_offset
-        X = self.profile(xa)
         wm = w * R
         V = v[..., None]
         i = terrain.slip(wm, V, tp.slip_eps_mps)
-        Ft = terrain.traction_force(i, self._Fn, X, tp)
-        Ftr = terrain.resistance_force(V, self._Fn, X, tp)
-        Trr = terrain.resistance_torque(wm, self._Fn, X, R, tp)
+        if self._coef is not None:          # X_t constant: position-independent factors precomputed
+            c_t, c_r, c_q = self._coef
+            X = self._Xc
+        else:
+            X = self.profile(x[..., None] + self._axle_offset)
+            c_t = terrain.traction_coefficients(self._Fn, X, tp)
+            c_r = terrain.resistance_coefficients(self._Fn, X, tp)
+            c_q = terrain.torque_coefficient(self._Fn, X, R, tp)
+        Ft = terrain.traction_from_coefficients(i, c_t)
+        Ftr = terrain.resistance_from_coefficients(V, c_r, tp)
+        Trr = terrain.torque_from_coefficient(wm, c_q, tp)
         # links (tension positive): a spring-damper in series with the prismatic actuator
-        L = self.links
         dY = np.empty_like(Y)
         if self.n > 1:
             rel = v[..., :-1] - v[..., 1:]
-            stretch = x[..., :-1] - x[..., 1:] - L.rest_spacing_m
+            stretch = x[..., :-1] - x[..., 1:] - self._L0
             if self.has_joints:
                 s = Y[..., :-1, I["s_m"]]
-                T_spring = L.stiffness_N_per_m * (stretch - s)
-                ds = self._joint_rate(s, v, rel, T_spring, ctl)
+                T_spring = self._k_link * (stretch - s)
+                ds = self._joint_rate(s, v, rel, T_spring, ctl, cd)
                 dY[..., :-1, I["s_m"]] = ds
                 dY[..., -1, I["s_m"]] = 0.0
                 damper_v = rel - ds
             else:
-                T_spring = L.stiffness_N_per_m * stretch
+                T_spring = self._k_link * stretch
                 damper_v = rel
-            T = T_spring + L.damping_Ns_per_m * damper_v
+            T = T_spring + self._c_link * damper_v
         else:
             T = T_spring = damper_v = np.zeros(x.shape[:-1] + (0,))
             if self.has_joints:
@@ -378,7 +506,7 @@ class ChainModel:
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
         sp = ctl.speed_sp_mps
         if self.force_loop:
-            tow = np.broadcast_to(self.tow_force_N, T.shape[:-1] + (1,))
+            tow = np.broadcast_to(self._tow_col, T.shape[:-1] + (1,))
             Fsel = np.concatenate([T, tow], axis=-1)[..., ctl.fc_link]
             e = ctl.fc_sigma * (ctl.fc_ref_N - Fsel)
             q = Y[..., I["q_mps"]]
@@ -386,38 +514,41 @@ class ChainModel:
             vsp = np.minimum(np.maximum(raw, 0.0), ctl.fc_vmax_mps)
             dY[..., I["q_mps"]] = (ctl.fc_ki * e + (ctl.fc_ki / ctl.fc_kp) * (vsp - raw)) * ctl.fc_active * ctl.motor_on
             sp = np.where(ctl.fc_active > 0, vsp, sp)
-        on = ctl.motor_on[:, None]
-        w_ref = (sp / self.seg.wheel_radius_m)[..., None]
+            w_ref = (sp / self.seg.wheel_radius_m)[..., None]
+        else:
+            w_ref = cd["w_ref"]
         T_lo, T_hi = drivetrain.motor_envelope(w, self._slope, self._wnl, self._Tmax)
-        Tm, dI = drivetrain.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, on)
+        Tm, dI = drivetrain.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on"])
         reaction = terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)
         dY[..., 2:4] = (Tm - reaction) / self._J
         dY[..., 4:6] = dI
-        # chassis
-        wheel_net = self._nw * np.sum(Ft - Ftr, axis=-1)
-        Fl = np.zeros_like(wheel_net)
-        if self.n > 1:
-            Fl[..., :-1] -= T
-            Fl[..., 1:] += T
-        Fl[..., -1] -= self.tow_force_N
-        dY[..., I["x_m"]] = v
-        dY[..., I["v_mps"]] = (wheel_net + Fl) / self._m
+        # chassis: the net link force on segment k is T_{k-1} - T_k (T_{-1} = 0, T_{N-1} = tow)
+        net = Ft - Ftr
+        wheel_net = self._nw * (net[..., 0] + net[..., 1])
+        Tpad = np.empty(T.shape[:-1] + (self.n + 1,))
+        Tpad[..., 0] = 0.0
+        Tpad[..., 1:-1] = T
+        Tpad[..., -1] = self.tow_force_N
+        Fl = Tpad[..., :-1] - Tpad[..., 1:]
+        dY[..., 0] = v
+        dY[..., 1] = (wheel_net + Fl) / self._m
         if not outputs:
             return dY, None
-        nw = self._nw
+        nw = self._nw[..., None]
+        X = np.broadcast_to(X, Ft.shape)
         out = {
-            "X": X, "slip": i, "traction_axle_N": Ft * nw[:, None], "resistance_axle_N": Ftr * nw[:, None],
+            "X": X, "slip": i, "traction_axle_N": Ft * nw, "resistance_axle_N": Ftr * nw,
             "resistance_torque_Nm": Trr, "motor_torque_Nm": Tm, "link_force_N": T,
             "wheel_net_N": wheel_net, "link_net_N": Fl, "speed_sp_mps": np.broadcast_to(sp, x.shape),
             "omega": w, "reaction_torque_Nm": reaction,
-            "link_spring_N": T_spring, "link_damper_W": L.damping_Ns_per_m * damper_v**2 if self.n > 1 else T,
+            "link_spring_N": T_spring, "link_damper_W": self._c_link * damper_v**2 if self.n > 1 else T,
             # power dissipated at the wheel-terrain contact: what the wheels take from the
             # motors minus what reaches the chassis, per segment [W]
-            "terrain_dissipation_W": nw * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),
+            "terrain_dissipation_W": self._nw * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),
         }
         return dY, out
 
-    def _joint_rate(self, s, v, rel, T_spring, ctl: Controls):
+    def _joint_rate(self, s, v, rel, T_spring, ctl: Controls, cd=None):
         """Extension rate of the prismatic actuators: force-limited, rate-limited servos.
 
         Force command: velocity feed-forward (follow the segments' relative motion) plus a
@@ -426,29 +557,28 @@ class ChainModel:
         where the spring force would exceed the limit.  Both respect the actuator's rate limit
         and soft end stops; locked (inactive) joints and fixed links do not move.
         """
-        L = self.links
+        cd = self._controls(ctl) if cd is None else cd
         vm = v[..., ctl.joint_mover]
-        slide = np.maximum(-v[..., ctl.joint_anchor], 0.0)
+        slide = np.maximum(-v[..., ctl.joint_anchor], self._zero)
         mag = np.minimum(np.maximum(ctl.joint_ff_N + ctl.joint_kv * (ctl.joint_vtarget_mps - vm)
-                                    - ctl.joint_ka * slide, 0.0), ctl.joint_limit_N)
-        T_ref = -ctl.joint_dir * mag
+                                    - ctl.joint_ka * slide, self._zero), ctl.joint_limit_N)
+        T_ref = cd["neg_dir"] * mag
         # with the damper in series, T = T_spring + c (rel - rate); solving the loop
-        # rate = rel + (T - T_ref) g/k for T gives the effective gain below: T approaches T_ref
-        # monotonically (never beyond it), at the rate g / (1 + c g / k)
-        gk0 = L.force_gain_per_s / L.stiffness_N_per_m
-        gk = gk0 / (1.0 + L.damping_Ns_per_m * gk0)
+        # rate = rel + (T - T_ref) g/k for T gives the effective gain below (``_gk``, prepared
+        # once): T approaches T_ref monotonically (never beyond it), at the rate g / (1 + c g / k)
+        gk = self._gk
         rate_f = rel + (T_spring - T_ref) * gk
         vt = ctl.joint_vtarget_mps
-        rate_l = np.minimum(np.maximum(K_LENGTH * (ctl.joint_sref_m - s), -vt), vt)
+        rate_l = np.minimum(np.maximum(self._k_length * (ctl.joint_sref_m - s), cd["neg_vt"]), vt)
         rate_l = np.minimum(rate_l, rel + (T_spring + ctl.joint_limit_N) * gk)
         rate_l = np.maximum(rate_l, rel + (T_spring - ctl.joint_limit_N) * gk)
-        rate = np.where(ctl.joint_length_mode > 0, rate_l, rate_f)
-        rate = np.minimum(np.maximum(rate, -L.rate_max_mps), L.rate_max_mps)
-        rate = np.minimum(rate, K_STOP * (L.stroke_max_m - s))
-        rate = np.maximum(rate, K_STOP * (L.stroke_min_m - s))
-        return rate * ctl.joint_active * L.prismatic
+        rate = np.where(cd["length_mode"], rate_l, rate_f)
+        rate = np.minimum(np.maximum(rate, self._neg_rate_max), self._rate_max)
+        rate = np.minimum(rate, self._k_stop * (self._stroke_max - s))
+        rate = np.maximum(rate, self._k_stop * (self._stroke_min - s))
+        return rate * cd["active"]
 
     def rhs(self, t, y, ctl: Controls):
         """``dy/dt`` for :func:`scipy.integrate.solve_ivp` (pure: records nothing)."""
-        dY, _ = self.evaluate(y.reshape(self.n, self.n_s), ctl)
+        dY, _ = self.evaluate(y.reshape(self._shape), ctl)
         return dY.reshape(-1)

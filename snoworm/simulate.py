@@ -81,7 +81,7 @@ def _fallbacks(method):
 def solver_options(model: ChainModel, sim, method=None) -> dict:
     """``solve_ivp`` keyword arguments for the model: method, tolerances, Jacobian structure."""
     method = method or sim.method
-    atol = np.tile([ATOL[f] for f in model.fields], model.n) * sim.atol_scale
+    atol = np.tile([ATOL[f] for f in model.fields], model.n_states // model.n_s) * sim.atol_scale
     opts = {"method": method, "rtol": sim.rtol, "atol": atol}
     if sim.max_step_s is not None:
         opts["max_step"] = sim.max_step_s

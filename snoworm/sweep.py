@@ -728,7 +728,8 @@ def _definition(raw, axes, zip_):
 
 
 def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
-              save_cases: bool = False, progress=None, plot: bool = True, executor=None) -> SweepTable:
+              save_cases: bool = False, progress=None, plot: bool = True, executor=None,
+              batch: int = 0) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
     Parameters
@@ -755,6 +756,10 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         Write ``sweep.png`` (one varying axis, or zipped axes) or ``heatmap.png`` (two).
     executor : object, optional
         Anything with ``map_unordered(fn, tasks)`` and ``close()``; overrides jobs/scheduler.
+    batch : int
+        With ``batch > 1`` (and no scheduler or executor): integrate up to ``batch`` cases of the
+        same structure as one stacked system (:class:`snoworm.batch.BatchExecutor`, ``jobs``
+        processes); other cases run one by one.  Same metrics within the solver tolerance.
 
     Returns
     -------
@@ -834,6 +839,9 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
     if own:
         if scheduler is not None:
             executor = DaskExecutor(scheduler)
+        elif int(batch) > 1:
+            from .batch import BatchExecutor
+            executor = BatchExecutor(int(batch), int(jobs))
         elif int(jobs) > 1:
             executor = ProcessExecutor(int(jobs))
         else:

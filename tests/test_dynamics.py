@@ -85,3 +85,48 @@ def test_state_layout_named(scenario_path):
     assert m.fields[:2] == ("x_m", "v_mps")
     Y = m.unpack(m.initial_state())
     assert np.allclose(np.diff(Y[:, m.idx["x_m"]]), -1.5)   # rest spacing, leader in front
+
+
+@pytest.mark.parametrize("links,force_loop,n", [("fixed", False, 6), ("prismatic", False, 6),
+                                                 ("prismatic", True, 5), ("fixed", False, 1)])
+def test_jacobian_banded_matches_column_by_column_differences(scenario_path, links, force_loop, n):
+    """The one-call grouped finite difference equals perturbing one column at a time (same steps)."""
+    rng = np.random.default_rng(10 + n)
+    m = model_for(scenario_path("tow6_uniform"), [("vehicle.links.type", links), ("vehicle.segments", n),
+                                                  ("terrain.profile", [[-5, 0.4], [5, 1.0]])],
+                  force_loop=force_loop)
+    lb, ub = m.bandwidths()
+    for _ in range(3):
+        y = random_state(m, rng)
+        ctl = busy_controls(m, rng) if n > 1 else Controls.rolling(1, [1.0], [1.0])
+        packed = m.jacobian_banded(0.0, y, ctl)
+        f0 = m.rhs(0.0, y, ctl)
+        for j in range(m.n_states):
+            yp = y.copy()
+            yp[j] += 1.2e-4 * max(1e-3, abs(y[j]))
+            col = (m.rhs(0.0, yp, ctl) - f0) / (yp[j] - y[j])
+            rows = np.arange(max(0, j - ub), min(m.n_states, j + lb + 1))
+            np.testing.assert_allclose(packed[ub + rows - j, j], col[rows], rtol=1e-9,
+                                       atol=1e-9 * (1 + np.abs(col).max()))
+            outside = np.setdiff1d(np.arange(m.n_states), rows)
+            assert np.all(col[outside] == 0.0), "a non-zero outside the band"
+
+
+def test_stacked_model_is_the_members_side_by_side(scenario_path):
+    """ChainModel.stack: same derivatives and block-banded Jacobian as each member alone."""
+    from snoworm.dynamics import ChainModel
+    rng = np.random.default_rng(3)
+    ms = [model_for(scenario_path("tow6_uniform"), [("terrain.xt", xt), ("tow.force_N", f)])
+          for xt, f in [(0.7, 0.0), (0.9, 200.0), (1.0, 50.0)]]
+    big = ChainModel.stack(ms)
+    ys = [random_state(m, rng) for m in ms]
+    ctls = [Controls.rolling(6, np.ones(6), rng.uniform(0, 2, 6)) for _ in ms]
+    ctl = Controls.stack(ctls)
+    f = big.rhs(0.0, np.concatenate(ys), ctl).reshape(3, -1)
+    J = big.jacobian_banded(0.0, np.concatenate(ys), ctl)
+    n = ms[0].n_states
+    for b, m in enumerate(ms):
+        np.testing.assert_array_equal(f[b], m.rhs(0.0, ys[b], ctls[b]))
+        np.testing.assert_allclose(J[:, b * n:(b + 1) * n], m.jacobian_banded(0.0, ys[b], ctls[b]),
+                                   rtol=1e-7, atol=1e-6)
+    assert big.bandwidths() == ms[0].bandwidths()

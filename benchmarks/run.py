@@ -1,0 +1,240 @@
+"""snoworm benchmark suite (issue 7): speed, scaling, sweep throughput, memory and accuracy.
+
+Usage (from the repository root)::
+
+    python benchmarks/run.py                 # full run, ~3-5 minutes on 2 cores
+    python benchmarks/run.py --quick         # smaller sweeps and fewer repeats, ~1 minute
+    python benchmarks/run.py --out benchmarks/results.json
+
+Prints a table with every measurement and PASS/MISS against the targets, and writes the same
+numbers as JSON.  Wall-clock numbers depend on the machine and its load (the core count is
+recorded); ratios measured within one run are the meaningful part.  Timings are the best of a
+few repeats.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+from snoworm import modes  # noqa: E402
+from snoworm.scenario import load_scenario  # noqa: E402
+from snoworm.simulate import build_model, simulate  # noqa: E402
+from snoworm.sweep import run_sweep  # noqa: E402
+
+SC = ROOT / "scenarios"
+TARGETS = {
+    "tow6_uniform_rtf": (">=", 200.0, "tow6_uniform real-time factor"),
+    "inchworm6_rtf": (">=", 50.0, "inchworm6 real-time factor"),
+    "steady_rel_err": ("<=", 1e-3, "steady states vs tight reference (max rel. error)"),
+    "rhs_n48_over_n6": ("<=", 2.0, "RHS cost N=48 / N=6"),
+    "sweep_2proc_speedup": (">=", 1.8, "2 processes / serial cases/s"),
+    "sweep_batched_speedup": (">=", 10.0, "batched / serial cases/s"),
+    "batched_rel_err": ("<=", 1e-3, "batched vs one-by-one metrics (max rel. error)"),
+    "sweep10k_peak_MB": ("<", 500.0, "10,000-case sweep peak memory [MB]"),
+}
+
+
+def rhs_cost_us(sc, repeats=5, calls=1000):
+    """Best-of-``repeats`` cost of one bare ``model.rhs`` call [us], at the state of t = 2 s controls."""
+    m = build_model(sc)
+    mode = modes.mode_class(sc.mode)(sc.mode, sc, m)
+    y = mode.initial_state()
+    ctl = mode.interval(max(2.0, 0.0), y).controls
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(calls):
+            m.rhs(0.0, y, ctl)
+        best = min(best, (time.perf_counter() - t0) / calls * 1e6)
+    return best
+
+
+def run_timed(sc, repeats):
+    best, res = np.inf, None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        res = simulate(sc)
+        best = min(best, time.perf_counter() - t0)
+    return res, best
+
+
+def rel_err(a, b):
+    """Max |a - b| / max |reference| over a vector (relative to the vector's scale)."""
+    a, b = np.atleast_1d(np.asarray(a, float)), np.atleast_1d(np.asarray(b, float))
+    if a.size == 0:
+        return 0.0
+    return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-12))
+
+
+def steady_quantities(res):
+    s = res.summary()
+    return {"final_link_forces_N": s["final_link_forces_N"], "final_speed_mps": s["final_speed_mps"],
+            "mean_speed_mps": s["mean_speed_mps"]}
+
+
+def bench_scenarios(repeats, report):
+    rows = {}
+    for name in ("tow6_uniform", "inchworm6", "frostyboy_case3"):
+        sc = load_scenario(SC / f"{name}.yaml")
+        res, wall = run_timed(sc, repeats if name != "inchworm6" else max(1, repeats - 1))
+        ref = simulate(load_scenario(SC / f"{name}.yaml", [("simulation.rtol", 1e-9), ("simulation.atol_scale", 1e-3)]))
+        q, qr = steady_quantities(res), steady_quantities(ref)
+        errs = {k: rel_err(q[k], qr[k]) for k in q}
+        rows[name] = {"duration_s": sc.simulation.duration_s, "wall_s": wall, "rtf": sc.simulation.duration_s / wall,
+                      "nfev": res.stats["nfev"], "njev": res.stats["njev"], "rhs_us": rhs_cost_us(sc),
+                      "rel_err_vs_tight": errs, "reference_nfev": ref.stats["nfev"]}
+        report(f"  {name:16s} RTF {rows[name]['rtf']:7.1f}x  wall {wall:6.3f} s  nfev {res.stats['nfev']:6d}  "
+               f"njev {res.stats['njev']:5d}  RHS {rows[name]['rhs_us']:6.1f} us  "
+               f"max rel. err vs rtol 1e-9: {max(errs.values()):.2e} ({', '.join(f'{k} {v:.1e}' for k, v in errs.items())})")
+    return rows
+
+
+def bench_scaling(report, repeats):
+    rows = {}
+    for n in (2, 6, 12, 24, 48):
+        sc = load_scenario(SC / "tow6_uniform.yaml", [("vehicle.segments", n), ("tow.force_N", 200.0 * n / 6)])
+        res, wall = run_timed(sc, repeats)
+        rows[n] = {"rhs_us": rhs_cost_us(sc), "rtf": sc.simulation.duration_s / wall, "nfev": res.stats["nfev"],
+                   "njev": res.stats["njev"]}
+        report(f"  N = {n:3d}: RHS {rows[n]['rhs_us']:7.1f} us  ({rows[n]['rhs_us'] / n:6.2f} us/segment)  "
+               f"RTF {rows[n]['rtf']:7.1f}x  nfev {res.stats['nfev']}  njev {res.stats['njev']}")
+    return rows
+
+
+def _metric_err(rows_a, rows_b):
+    """Max relative difference of the summary metrics of two sweep tables (floors near zero)."""
+    floors = {"distance_m": 1e-4, "mean_speed_mps": 1e-4, "late_speed_mps": 1e-4, "mean_slip": 1e-4,
+              "max_slip": 1e-4, "max_link_force_N": 1e-2, "energy_per_m_J": 1e-2}
+    worst = 0.0
+    for a, b in zip(rows_a, rows_b):
+        keys = dict(floors, **{k: 1e-2 for k in a if k.startswith("final_link_force_")})
+        for k, floor in keys.items():
+            if a[k] is None or b[k] is None:
+                worst = max(worst, 0.0 if a[k] is b[k] else 1.0)
+                continue
+            worst = max(worst, abs(a[k] - b[k]) / max(abs(a[k]), floor / 1e-3))
+    return worst
+
+
+def bench_sweep(n_xt, n_tow, duration, report):
+    sets = [f"terrain.xt=0.6:1.0:{n_xt}", f"tow.force_N=0:450:{n_tow}", f"simulation.duration_s={duration}"]
+    n = n_xt * n_tow
+    out = {"cases": n, "duration_s": duration, "sets": sets}
+    tables = {}
+    for label, kw in (("serial", {}), ("2 processes", {"jobs": 2}), ("batched", {"batch": min(n, 100)}),
+                      ("batched, 2 processes", {"batch": min((n + 1) // 2, 100), "jobs": 2})):
+        t0 = time.perf_counter()
+        tables[label] = run_sweep(SC / "tow6_uniform.yaml", sets, plot=False, progress=False, **kw)
+        wall = time.perf_counter() - t0
+        ok = sum(r["status"] == "ok" for r in tables[label].rows)
+        out[label] = {"wall_s": wall, "cases_per_s": n / wall, "ok": ok}
+        report(f"  {label:22s} {n / wall:7.1f} cases/s  ({wall:6.2f} s for {n} cases, {ok} ok)")
+    base = out["serial"]["cases_per_s"]
+    for label in ("2 processes", "batched", "batched, 2 processes"):
+        out[label]["speedup"] = out[label]["cases_per_s"] / base
+    out["batched_rel_err"] = _metric_err(tables["serial"].rows, tables["batched"].rows)
+    report(f"  speed-up over serial: 2 processes {out['2 processes']['speedup']:.2f}x, batched "
+           f"{out['batched']['speedup']:.2f}x, batched in 2 processes {out['batched, 2 processes']['speedup']:.2f}x; "
+           f"batched vs serial metrics: max rel. err {out['batched_rel_err']:.2e}")
+    return out
+
+
+_MEMORY_CHILD = r"""
+import json, resource, sys, time
+sys.path.insert(0, {root!r})
+from snoworm.sweep import run_sweep
+t0 = time.perf_counter()
+tab = run_sweep({scenario!r}, {sets!r}, plot=False, progress=False, batch={batch})
+wall = time.perf_counter() - t0
+print(json.dumps({{"cases": len(tab), "ok": sum(r["status"] == "ok" for r in tab.rows), "wall_s": wall,
+                  "maxrss_kB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}}))
+"""
+
+
+def bench_memory(n_a, n_b, report):
+    """Peak RSS of a sweep of n_a x n_b cases (frostyboy_case3, 3 s runs, batched) in a child process."""
+    sets = [f"terrain.xt=0.6:1.0:{n_a}", f"mode.speed_mps=1.0:2.5:{n_b}", "simulation.duration_s=3"]
+    code = _MEMORY_CHILD.format(root=str(ROOT), scenario=str(SC / "frostyboy_case3.yaml"), sets=sets, batch=500)
+    import resource
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    child = json.loads(p.stdout.strip().splitlines()[-1])
+    out = {"cases": child["cases"], "ok": child["ok"], "wall_s": child["wall_s"], "peak_MB": child["maxrss_kB"] / 1024,
+           "ru_maxrss_children_MB": max(after, before) / 1024, "sets": sets, "batch": 500}
+    report(f"  {child['cases']} cases ({child['ok']} ok) in {child['wall_s']:.1f} s "
+           f"({child['cases'] / child['wall_s']:.0f} cases/s): peak RSS {out['peak_MB']:.0f} MB")
+    return out
+
+
+def verdict(key, value):
+    op, target, _ = TARGETS[key]
+    ok = {">=": value >= target, "<=": value <= target, "<": value < target}[op]
+    return ("PASS" if ok else "MISS"), f"{op} {target:g}"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="smaller sweeps (40 cases, 1,000 for memory), fewer repeats")
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results.json"), help="JSON output file")
+    args = ap.parse_args(argv)
+    lines = []
+
+    def report(s):
+        print(s, flush=True)
+        lines.append(s)
+
+    cores = os.cpu_count()
+    report(f"snoworm benchmarks: {platform.python_version()}, numpy {np.__version__}, {cores} cores, "
+           f"{'quick' if args.quick else 'full'} run")
+    repeats = 2 if args.quick else 3
+    res = {"cores": cores, "python": platform.python_version(), "numpy": np.__version__, "quick": args.quick}
+    report("Scenarios (default tolerances; reference: rtol 1e-9, atol_scale 1e-3):")
+    res["scenarios"] = bench_scenarios(repeats, report)
+    report("Cost growth with N (tow6_uniform with N segments, 33.3 N tow per segment, 20 s):")
+    res["scaling"] = bench_scaling(report, repeats)
+    report("Sweep throughput (tow6_uniform over terrain.xt x tow.force_N):")
+    res["sweep"] = bench_sweep(*((8, 5, 5) if args.quick else (20, 10, 5)), report)
+    report("Sweep memory (frostyboy_case3 over terrain.xt x mode.speed_mps, batched 500, child process):")
+    res["memory"] = bench_memory(*((40, 25) if args.quick else (100, 100)), report)
+
+    sc = res["scenarios"]
+    values = {
+        "tow6_uniform_rtf": sc["tow6_uniform"]["rtf"],
+        "inchworm6_rtf": sc["inchworm6"]["rtf"],
+        "steady_rel_err": max(max(r["rel_err_vs_tight"].values()) for r in sc.values()),
+        "rhs_n48_over_n6": res["scaling"][48]["rhs_us"] / res["scaling"][6]["rhs_us"],
+        "sweep_2proc_speedup": res["sweep"]["2 processes"]["speedup"],
+        "sweep_batched_speedup": res["sweep"]["batched"]["speedup"],
+        "batched_rel_err": res["sweep"]["batched_rel_err"],
+        "sweep10k_peak_MB": res["memory"]["peak_MB"],
+    }
+    if res["memory"]["cases"] < 10_000:
+        report(f"  (memory measured on {res['memory']['cases']} cases; rows are ~1 kB each, so 10,000 cases add "
+               f"~{(10_000 - res['memory']['cases']) * 1e-3:.0f} MB at most to the figure below)")
+    report("")
+    report(f"Targets ({cores} cores):")
+    res["targets"] = {}
+    for key, val in values.items():
+        v, t = verdict(key, val)
+        res["targets"][key] = {"value": val, "target": t, "verdict": v}
+        report(f"  {v}  {TARGETS[key][2]:52s} {val:10.4g}  (target {t})")
+    res["report"] = lines
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.out).write_text(json.dumps(res, indent=2, default=float) + "\n")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
