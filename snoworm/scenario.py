@@ -197,6 +197,8 @@ class VehicleConfig:
 
     def segment_params(self):
         """Per-segment :class:`SegmentConfig` list with overrides applied."""
+        if not self.segment_overrides:
+            return [self.segment] * self.segments      # frozen: safe to share
         base = dump(self.segment)
         return [build(SegmentConfig, {**base, **(self.segment_overrides.get(k) or {})})
                 for k in range(self.segments)]
