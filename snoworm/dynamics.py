@@ -299,6 +299,14 @@ class ChainModel:
             d["neg_limit"] = -ctl.joint_limit_N
             d["length_mode"] = ctl.joint_length_mode > 0
             d["active"] = ctl.joint_active * L.prismatic
+            # which parts of the joint law this interval needs (constant within the interval,
+            # so skipping the others changes no result; see _joint_rate)
+            moving = d["active"] != 0
+            d["any_active"] = bool(np.any(moving))
+            d["any_length"] = bool(np.any(d["length_mode"] & moving))
+            d["any_force"] = bool(np.any(~d["length_mode"] & moving))
+            d["any_kv"] = bool(np.any(np.asarray(ctl.joint_kv) != 0))
+            d["any_ka"] = bool(np.any(np.asarray(ctl.joint_ka) != 0))
         self._ctl_cache = (ctl, d)
         return d
 
@@ -558,21 +566,26 @@ class ChainModel:
         and soft end stops; locked (inactive) joints and fixed links do not move.
         """
         cd = self._controls(ctl) if cd is None else cd
-        vm = v[..., ctl.joint_mover]
-        slide = np.maximum(-v[..., ctl.joint_anchor], self._zero)
-        mag = np.minimum(np.maximum(ctl.joint_ff_N + ctl.joint_kv * (ctl.joint_vtarget_mps - vm)
-                                    - ctl.joint_ka * slide, self._zero), ctl.joint_limit_N)
-        T_ref = cd["neg_dir"] * mag
+        if not cd["any_active"]:               # every joint locked in this interval
+            return s * self._zero
         # with the damper in series, T = T_spring + c (rel - rate); solving the loop
         # rate = rel + (T - T_ref) g/k for T gives the effective gain below (``_gk``, prepared
         # once): T approaches T_ref monotonically (never beyond it), at the rate g / (1 + c g / k)
         gk = self._gk
-        rate_f = rel + (T_spring - T_ref) * gk
-        vt = ctl.joint_vtarget_mps
-        rate_l = np.minimum(np.maximum(self._k_length * (ctl.joint_sref_m - s), cd["neg_vt"]), vt)
-        rate_l = np.minimum(rate_l, rel + (T_spring + ctl.joint_limit_N) * gk)
-        rate_l = np.maximum(rate_l, rel + (T_spring - ctl.joint_limit_N) * gk)
-        rate = np.where(cd["length_mode"], rate_l, rate_f)
+        if cd["any_force"]:
+            cmd = ctl.joint_ff_N
+            if cd["any_kv"]:
+                cmd = cmd + ctl.joint_kv * (ctl.joint_vtarget_mps - v[..., ctl.joint_mover])
+            if cd["any_ka"]:
+                cmd = cmd - ctl.joint_ka * np.maximum(-v[..., ctl.joint_anchor], self._zero)
+            mag = np.minimum(np.maximum(cmd, self._zero), ctl.joint_limit_N)
+            rate = rel + (T_spring - cd["neg_dir"] * mag) * gk
+        if cd["any_length"]:
+            vt = ctl.joint_vtarget_mps
+            rate_l = np.minimum(np.maximum(self._k_length * (ctl.joint_sref_m - s), cd["neg_vt"]), vt)
+            rate_l = np.minimum(rate_l, rel + (T_spring + ctl.joint_limit_N) * gk)
+            rate_l = np.maximum(rate_l, rel + (T_spring - ctl.joint_limit_N) * gk)
+            rate = np.where(cd["length_mode"], rate_l, rate) if cd["any_force"] else rate_l
         rate = np.minimum(np.maximum(rate, self._neg_rate_max), self._rate_max)
         rate = np.minimum(rate, self._k_stop * (self._stroke_max - s))
         rate = np.maximum(rate, self._k_stop * (self._stroke_min - s))
