@@ -40,8 +40,7 @@ from .fileio import atomic_write_text
 __all__ = ["Claim", "Variant", "Section", "Context", "PaperReport", "ITEMS", "QUICK_INCHWORM_DURATION_S",
            "evaluate", "run_paper", "render_markdown", "render_html", "find_claim"]
 
-ROOT = Path(__file__).resolve().parents[1]
-SCENARIO_DIR = ROOT / "scenarios"
+SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"   # shipped as package data
 
 #: Simulated duration of the inchworm runs in ``--quick`` mode [s] (about three gait cycles).
 QUICK_INCHWORM_DURATION_S = 10.0
