@@ -606,8 +606,9 @@ class ProcessExecutor:
 
     At most ``2 * jobs`` cases are in flight, so memory stays flat for any number of cases.
     Workers run with one BLAS/OpenMP thread each (``OMP_NUM_THREADS`` etc. default to 1 while
-    the pool lives, unless already set).  A script calling :func:`run_sweep` with ``jobs > 1``
-    needs the usual ``if __name__ == "__main__":`` guard of spawned processes.
+    the pool lives, unless already set; forked workers also limit the inherited pool).  A script
+    calling :func:`run_sweep` with ``jobs > 1`` where workers are spawned needs the usual
+    ``if __name__ == "__main__":`` guard.
     """
 
     def __init__(self, jobs: int):
