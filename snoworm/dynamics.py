@@ -296,7 +296,6 @@ class ChainModel:
             L = self.links
             d["neg_dir"] = -ctl.joint_dir
             d["neg_vt"] = -ctl.joint_vtarget_mps
-            d["neg_limit"] = -ctl.joint_limit_N
             d["length_mode"] = ctl.joint_length_mode > 0
             d["active"] = ctl.joint_active * L.prismatic
             # which parts of the joint law this interval needs (constant within the interval,

@@ -126,17 +126,18 @@ class Result:
     def n_segments(self) -> int:
         return self.segments["x_m"].shape[1]
 
-    def energy(self) -> dict:
+    def energy(self, metrics: dict | None = None) -> dict:
         """Energy used [J]: motors (mechanical and electrical, with the drivetrain loss) and joints.
 
         Electrical energy counts only motoring power (``T w > 0``) divided by the drivetrain
         efficiency; braking and holding power are not recovered.  Joint energy counts the
         positive mechanical work of the prismatic actuators, and its electrical energy that work
         divided by ``vehicle.links.joint_efficiency``.  ``total_J`` is the electrical total
-        (definitions in :mod:`snoworm.energy`).
+        (definitions in :mod:`snoworm.energy`).  ``metrics``: an already computed
+        :func:`snoworm.energy.energy_metrics` of this result, to select from.
         """
         from .energy import energy_metrics
-        e = energy_metrics(self)
+        e = energy_metrics(self) if metrics is None else metrics
         return {"motor_electrical_J": e["motor_electrical_J"], "motor_mechanical_J": e["motor_mechanical_J"],
                 "joint_work_J": e["joint_mechanical_J"], "joint_electrical_J": e["joint_electrical_J"],
                 "total_J": e["total_electrical_J"]}
@@ -147,7 +148,8 @@ class Result:
         x = self.segments["x_m"]
         dist = float(np.mean(x[-1] - x[0]))
         dur = float(self.t[-1] - self.t[0]) if self.t.size > 1 else 0.0
-        e = self.energy()
+        metrics = energy_metrics(self)
+        e = self.energy(metrics)
         s = {
             "scenario": self.scenario.name,
             "snoworm_version": __version__,
@@ -162,7 +164,7 @@ class Result:
             "max_abs_link_force_N": float(np.max(np.abs(self.links["force_N"]))) if self.links["force_N"].size else 0.0,
             "energy": e,
             "energy_per_metre_J_per_m": e["total_J"] / dist if dist > 1e-9 else None,
-            "energy_metrics": energy_metrics(self),
+            "energy_metrics": metrics,
             "solver": dict(self.stats),
             "events": self.events,
         }
