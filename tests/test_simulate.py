@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from snoworm import load_scenario, simulate
+from snoworm.energy import energy_balance
 from snoworm.simulate import SolverError
 
 
@@ -41,35 +42,15 @@ def test_steady_state_agrees_with_root_finder(fig6):
     assert fig6.segments["motor_torque_Nm"][-1, 0] == pytest.approx(ss.torque_Nm, abs=0.05)
 
 
-def energy_residual(res, sc):
-    """Return (energy in - out - stored change, motor work) over the run [J]."""
-    t = res.t
-    m = sc.vehicle.segment.mass_kg
-    J = sc.vehicle.segment.wheel_inertia_kgm2
-    nwheels = 2 * sc.vehicle.segment.wheels_per_axle
-    R = sc.vehicle.segment.wheel_radius_m
-    k, c = sc.vehicle.links.stiffness_N_per_m, sc.vehicle.links.damping_Ns_per_m
-    v = res.segments["v_mps"]
-    w = res.segments["wheel_speed_mps"] / R
-    F = res.links["force_N"]
-    dv = v[:, :-1] - v[:, 1:]
-    spring = F - c * dv            # fixed links: spring and damper in parallel
-    E = 0.5 * m * (v**2).sum(1) + 0.5 * J * nwheels * (w**2).sum(1) + 0.5 * (spring**2).sum(1) / k
-    P = (res.segments["motor_power_W"].sum(1) - res.segments["terrain_dissipation_W"].sum(1)
-         - c * (dv**2).sum(1) - sc.tow.force_N * v[:, -1])
-    work = np.trapezoid(P, t)
-    motor = np.trapezoid(np.abs(res.segments["motor_power_W"]).sum(1), t)
-    return work - (E[-1] - E[0]), motor
-
-
 def test_energy_balance(scenario_path):
     """Motor work - dissipation - tow work = change of kinetic + spring energy (within 0.5 % of motor work)."""
     sc = load_scenario(scenario_path("tow6_staggered"),
                        ["simulation.output_dt_s=0.002", "simulation.rtol=1e-7", "simulation.duration_s=10"])
     res = simulate(sc)
-    resid, motor = energy_residual(res, sc)
-    assert motor > 1e4
-    assert abs(resid) < 5e-3 * motor
+    b = energy_balance(res)       # fixed links: throughput = |motor work| (no joint power)
+    assert b["joint_J"] == 0.0
+    assert b["throughput_J"] > 1e4
+    assert abs(b["residual_J"]) < 5e-3 * b["throughput_J"]
 
 
 def test_solver_failure_raises(monkeypatch, scenario_path):
