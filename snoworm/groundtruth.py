@@ -27,7 +27,7 @@ from scipy.optimize import brentq
 from . import steady, terrain
 from .fileio import atomic_write_text
 from .params import PARAMETER_SETS, parameter_set
-from .scenario import SegmentConfig, TerrainModelConfig, _read_model_file
+from .scenario import SegmentConfig, TerrainModelConfig, read_model_file
 from .schema import ScenarioError, build, dump, suggest
 from .terrain import TerrainParams
 
@@ -190,7 +190,7 @@ def vehicle_model(parameter_set_name: str = "frostyboy", model_file=None):
     seg = build(SegmentConfig, ps["segment"], "segment")
     model = dict(ps["terrain_model"])
     if model_file is not None:
-        model.update(_read_model_file(str(model_file), None))
+        model.update(read_model_file(str(model_file), None))
     cfg = build(TerrainModelConfig, model, "terrain_model")
     return seg, TerrainParams(**dump(cfg))
 

@@ -23,7 +23,7 @@ from .terrain import STEP_WIDTH_M
 __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig", "TerrainModelConfig", "TowConfig",
     "VehicleConfig", "SimulationConfig", "load_scenario", "scenario_from_dict", "dump_scenario",
-    "apply_overrides", "parse_set_option", "ScenarioError",
+    "apply_overrides", "parse_set_option", "read_model_file", "ScenarioError",
 ]
 
 
@@ -245,7 +245,7 @@ def _merge(defaults: dict, given):
     return out
 
 
-def _read_model_file(mfile, base_dir):
+def read_model_file(mfile, base_dir):
     """Terrain-model coefficients from a YAML file (e.g. written by ``snoworm calibrate``).
 
     The file is a mapping of ``terrain.model`` keys, optionally under a ``terrain_model:`` key;
@@ -304,7 +304,7 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
         model_defaults = ps["terrain_model"]
         mfile = raw["terrain"].pop("model_file", None)
         if mfile is not None:
-            model_defaults = _merge(model_defaults, _read_model_file(mfile, base_dir))
+            model_defaults = _merge(model_defaults, read_model_file(mfile, base_dir))
         raw["terrain"]["model"] = _merge(model_defaults, raw["terrain"].get("model", {}))
     vehicle = build(VehicleConfig, veh, "vehicle")
     terrain_cfg = build(TerrainConfig, raw["terrain"], "terrain")

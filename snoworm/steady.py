@@ -19,7 +19,7 @@ from . import terrain
 from .terrain import TerrainParams
 
 __all__ = ["SteadyState", "Immobilised", "steady_state", "max_drawbar_N", "net_force_per_segment_N",
-           "immobilisation_limit_xt", "segment_geometry", "state_at_slip"]
+           "immobilisation_limit_xt", "segment_geometry", "state_at_slip", "peak_slip"]
 
 
 class Immobilised(ValueError):
@@ -95,7 +95,8 @@ def state_at_slip(i, X, wheel_speed_mps, seg, tp: TerrainParams) -> SteadyState:
     return _state(float(i), X, float(wheel_speed_mps), seg, tp)
 
 
-def _peak_slip(X, wheel_speed_mps, seg, tp):
+def peak_slip(X, wheel_speed_mps, seg, tp):
+    """Slip at which a segment's drawbar in forward motion peaks (the stable branch lies below it)."""
     res = minimize_scalar(lambda i: -net_force_per_segment_N(i, X, wheel_speed_mps, seg, tp, moving=True),
                           bounds=(0.0, 1.0), method="bounded", options={"xatol": 1e-10})
     return float(res.x)
@@ -103,7 +104,7 @@ def _peak_slip(X, wheel_speed_mps, seg, tp):
 
 def max_drawbar_N(X, seg, tp: TerrainParams, wheel_speed_mps: float = 1.8) -> float:
     """Largest steady drawbar of one segment on terrain ``X`` [N] (negative: immobilised)."""
-    i_pk = _peak_slip(X, wheel_speed_mps, seg, tp)
+    i_pk = peak_slip(X, wheel_speed_mps, seg, tp)
     return float(net_force_per_segment_N(i_pk, X, wheel_speed_mps, seg, tp, moving=True))
 
 
@@ -127,13 +128,13 @@ def steady_state(X, seg, tp: TerrainParams, *, drawbar_N: float = 0.0, wheel_spe
 
         def g(i):
             return net_force_per_segment_N(i, X, V / (1.0 - i), seg, tp) - drawbar_N
-        i_hi = min(_peak_slip(X, V, seg, tp), 1.0 - 1e-9)
+        i_hi = min(peak_slip(X, V, seg, tp), 1.0 - 1e-9)
         if net_force_per_segment_N(i_hi, X, V, seg, tp, moving=True) < drawbar_N:
             raise Immobilised(f"drawbar {drawbar_N:.1f} N exceeds the maximum on X_t = {X:g}")
         i = brentq(g, 0.0, i_hi, xtol=1e-13) if g(0.0) < 0 else 0.0
         return _state(i, X, V / (1.0 - i), seg, tp)
     w = float(wheel_speed_mps)
-    i_hi = _peak_slip(X, w, seg, tp)
+    i_hi = peak_slip(X, w, seg, tp)
 
     def f(i):
         return net_force_per_segment_N(i, X, w, seg, tp) - drawbar_N

@@ -221,7 +221,7 @@ def _slip_for(W, X, seg, tp, *, wheel_speed_mps=None, ground_speed_mps=None):
     Returns ``None`` if no slip in ``[-i_peak, i_peak]`` gives ``W``.
     """
     ref = wheel_speed_mps if wheel_speed_mps is not None else ground_speed_mps
-    i_pk = min(steady._peak_slip(X, ref, seg, tp), 0.999)
+    i_pk = min(steady.peak_slip(X, ref, seg, tp), 0.999)
 
     def f(i):
         ws = wheel_speed_mps if wheel_speed_mps is not None else ground_speed_mps / (1.0 - i)
