@@ -127,7 +127,7 @@ def simulate(sc: Scenario) -> Result:
         if t1 <= t:
             raise SolverError(f"mode {sc.mode.type!r} asked for an empty interval at t = {t:.6g} s ({iv.label}).")
         t_eval = _grid(t, t1, sim.output_dt_s, include_start=not pieces)
-        events = [_wrap_event(ev, iv.controls) for ev in iv.events]
+        events = [_wrap_event(ev) for ev in iv.events]
         sol, failures = None, []
         for method in _fallbacks(sim.method):
             o = opts if method == sim.method else solver_options(model, sim, method)
@@ -146,11 +146,11 @@ def simulate(sc: Scenario) -> Result:
             reached = sol.t[-1] if np.size(sol.t) else t
             failures.append(f"{method}: {sol.message} (near t = {reached:.6g} s)")
             sol = None
-        if failures:
-            stats["retries"] = stats.get("retries", 0) + len(failures) - (sol is None)
         if sol is None:
             raise SolverError(f"every method failed at t = {t:.6g} s in interval '{iv.label}': "
                               + "; ".join(failures) + ". Try a smaller simulation.rtol or max_step_s.")
+        if failures:                    # the interval succeeded after this many failed methods
+            stats["retries"] = stats.get("retries", 0) + len(failures)
         stats["intervals"] += 1
         ts = np.asarray(sol.t, float)
         ys = np.asarray(sol.y, float).T if ts.size else np.empty((0, y.size))
@@ -178,7 +178,8 @@ def simulate(sc: Scenario) -> Result:
     return Result.from_pieces(sc, model, mode, pieces, phases, stats)
 
 
-def _wrap_event(ev, ctl):
+def _wrap_event(ev):
+    """A mode's event ``ev(t, y)`` as a terminal solve_ivp event (which also receives ``args``)."""
     def f(t, y, _ctl):
         return ev(t, y)
     f.terminal = True
