@@ -26,7 +26,7 @@ State layout (one block of ``n_s`` fields per segment, interleaved so the Jacobi
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 

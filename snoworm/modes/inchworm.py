@@ -235,7 +235,6 @@ class InchwormMode(Mode):
         self.cycles_done = 0
         self.group_done = None
         self.phase_log = []
-        self._phase_start = None
         L = model.links
         # initial extension: the opposite end of each joint's first stroke
         s0 = np.full(n - 1, 0.5) * (L.stroke_min_m + L.stroke_max_m)
