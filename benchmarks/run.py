@@ -27,9 +27,8 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from snoworm import modes  # noqa: E402
-from snoworm.scenario import load_scenario  # noqa: E402
-from snoworm.simulate import build_model, simulate  # noqa: E402
+from snoworm import load_scenario, simulate  # noqa: E402
+from snoworm.driver import assemble  # noqa: E402
 from snoworm.sweep import run_sweep  # noqa: E402
 
 SC = ROOT / "scenarios"
@@ -47,8 +46,8 @@ TARGETS = {
 
 def rhs_cost_us(sc, repeats=5, calls=1000):
     """Best-of-``repeats`` cost of one bare ``model.rhs`` call [us], at the state of t = 2 s controls."""
-    m = build_model(sc)
-    mode = modes.mode_class(sc.mode)(sc.mode, sc, m)
+    case = assemble(sc)
+    m, mode = case.model, case.mode
     y = mode.initial_state()
     ctl = mode.interval(max(2.0, 0.0), y).controls
     best = np.inf

@@ -2,14 +2,22 @@
 
 Public API
 ----------
-load_scenario(path, overrides=())   -> Scenario
+load_scenario(path, overrides=())   -> Scenario (validated, frozen; ``Scenario.with_`` edits it)
 simulate(scenario)                  -> Result
+simulate_batch(scenarios)           -> list of BatchMember (one stacked solve)
 Result.write(out_dir)               -> files (CSV, JSON, YAML, PNG)
+Mode, ModeConfig, register_mode     -> add a mobility mode of your own
+
+The layers and their modules are described in docs/architecture.md.
 """
 __version__ = "0.1.0"
 
+from . import modes as modes  # noqa: E402  (registers the built-in modes)
+from .driver import BatchMember, SolverError, simulate, simulate_batch  # noqa: E402
+from .modes import Mode, register_mode  # noqa: E402
+from .results import Result  # noqa: E402
 from .scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict  # noqa: E402
-from .simulate import SolverError, simulate  # noqa: E402
+from .sections import ModeConfig  # noqa: E402
 
-__all__ = ["__version__", "Scenario", "ScenarioError", "SolverError", "load_scenario",
-           "scenario_from_dict", "simulate"]
+__all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Result", "Scenario", "ScenarioError",
+           "SolverError", "load_scenario", "register_mode", "scenario_from_dict", "simulate", "simulate_batch"]

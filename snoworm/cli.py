@@ -27,7 +27,7 @@ def handle_errors(fn):
     @functools.wraps(fn)
     def wrapper(*a, **kw):
         from .schema import ScenarioError
-        from .simulate import SolverError
+        from .driver import SolverError
         try:
             return fn(*a, **kw)
         except ScenarioError as exc:
@@ -75,8 +75,8 @@ def run(scenario, out_dir, sets, no_plot):
     Nothing is written if the scenario is invalid (exit 2) or the solver fails (exit 1);
     each file is written atomically.
     """
+    from .driver import simulate
     from .scenario import load_scenario
-    from .simulate import simulate
     sc = load_scenario(scenario, sets)
     res = simulate(sc)
     paths = res.write(out_dir, plot=not no_plot)

@@ -1,4 +1,4 @@
-r"""Longitudinal dynamics of a chain of wheeled segments (MODEL.md section 4).
+r"""Longitudinal dynamics of a chain of wheeled segments (docs/model.md section 4).
 
 ::
 
@@ -14,15 +14,22 @@ r"""Longitudinal dynamics of a chain of wheeled segments (MODEL.md section 4).
     T_k = k_c (x_k - x_{k+1} - L_0 - s_k) + c_c (v_k - v_{k+1} - ds_k/dt)
           (spring-damper in series with the prismatic actuator of extension s_k; s_k = 0 fixed)
 
-One kernel, :meth:`ChainModel.evaluate`, computes every force of the model from the state for
-any leading batch shape: the right-hand side calls it on one state (or a stack of batch
-members), the results module calls it on all output samples at once after the solve.
+The model composes the law kernels -- terrain (:mod:`snoworm.terrain`, Eqs. 1-3), motor
+(:mod:`snoworm.drivetrain`), links (:mod:`snoworm.links`) and control laws
+(:mod:`snoworm.control`) -- into one kernel, :meth:`ChainModel.evaluate`, which computes every
+force from the state for any leading batch shape: the right-hand side calls it on one state
+(or a stack of batch members), the results call it on all output samples at once after the
+solve, and the finite-difference Jacobian (:mod:`snoworm.jacobian`) on a stack of perturbed
+states.
 
-State layout (one block of ``n_s`` fields per segment, interleaved so the Jacobian is banded)::
+The state layout is named by :class:`StateLayout`: one block of ``n_s`` fields per segment,
+interleaved so the Jacobian is banded::
 
     x_m, v_mps, omega_front, omega_rear, integral_front_Nm, integral_rear_Nm
     [, q_mps (outer force-loop integral, force-control mode)]
     [, s_m (extension of the prismatic joint in the link *behind* the segment)]
+
+No code outside this module addresses a state by a number.
 """
 from __future__ import annotations
 
@@ -30,10 +37,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import drivetrain, terrain
+from . import control, drivetrain, jacobian, links as link_law, terrain
+from .controls import Controls
 from .terrain import TerrainParams, TerrainProfile
 
-__all__ = ["Controls", "ChainModel", "SegmentArrays", "StackedConstantProfile"]
+__all__ = ["ChainModel", "LinkArrays", "SegmentArrays", "StackedConstantProfile", "StateLayout"]
 
 
 @dataclass(frozen=True)
@@ -80,101 +88,69 @@ class LinkArrays:
     force_gain_per_s: np.ndarray
 
 
-#: Gain of the length servo of a length-commanded prismatic joint [1/s].
-K_LENGTH = 20.0
+class StateLayout:
+    """Names of the chain state: which field of which segment sits where.
 
-#: Gain of the soft end stops of a prismatic joint [1/s]: the extension rate is limited to
-#: ``K_STOP * (distance to the stop)``, so the stroke is never exceeded.
-K_STOP = 50.0
-
-
-@dataclass(frozen=True)
-class Controls:
-    """Piecewise-constant inputs of the chain during one integration interval.
-
-    Modes (``snoworm.modes``) produce these; the physics stays the same for every mode.
-    Arrays have length N (segments) or N-1 (links).
+    Parameters
+    ----------
+    n : int
+        Number of segments.
+    force_loop : bool
+        Whether each segment carries the outer force-loop integral ``q_mps``.
+    joints : bool
+        Whether each segment carries the extension ``s_m`` of the joint behind it.
+    batch_shape : tuple of int
+        Leading shape of stacked chains (``()`` for one chain).
 
     Attributes
     ----------
-    motor_on : (N,) 1 where the segment's motors run (after its start time), else 0.
-    speed_sp_mps : (N,) wheel-speed set-point ``R_w w_ref`` [m/s]; 0 locks the wheels.
-    fc_active : (N,) 1 where an outer force loop sets the wheel-speed set-point.
-    fc_link : (N,) int, index of the controlled force: link ``j`` (0..N-2) or ``N-1`` = the tow.
-    fc_sigma : (N,) +1 if the controlled link is behind the segment, -1 if ahead.
-    fc_ref_N, fc_nominal_mps, fc_kp, fc_ki, fc_vmax_mps : (N,) outer PI loop settings:
-        ``v_sp = clip(v_nom + kp e + q, 0, v_max)``, ``e = sigma (F_ref - F)``.
-    joint_active : (N-1,) 1 where a prismatic joint is driven, 0 where it is locked at its length.
-    joint_length_mode : (N-1,) 1: commanded in length (to ``joint_sref_m`` at rate
-        ``joint_vtarget_mps``, force limited to ``joint_limit_N``); 0: commanded in force.
-    joint_sref_m : (N-1,) length command (extension) of length-commanded joints [m].
-    joint_dir : (N-1,) +1 to push (extend, compression), -1 to pull (contract, tension).
-    joint_ff_N, joint_kv, joint_vtarget_mps, joint_limit_N : (N-1,) force command
-        ``|F| = clip(ff + kv (v_target - v_mover), 0, limit)``.
-    joint_mover : (N-1,) int, index of the segment whose speed the joint regulates.
-    joint_anchor, joint_ka : (N-1,) int and [N s/m]: the held segment the joint bears on, and the
-        gain by which the force command drops while that anchor slides backward,
-        ``|F| -= ka max(0, -v_anchor)`` (limits backward sliding, paper section 5.1).
+    fields : tuple of str
+        Field names of one segment's block, in order.
+    index : dict of str -> int
+        Position of each field within a block.
+    x, v : int
+        Positions of ``x_m`` and ``v_mps``.
+    omega, integral : slice
+        The wheel speeds (front, rear axle) and the wheel-speed PI integrals.
+    q, s : int or None
+        Positions of ``q_mps`` and ``s_m`` when present.
     """
 
-    motor_on: np.ndarray
-    speed_sp_mps: np.ndarray
-    fc_active: np.ndarray
-    fc_link: np.ndarray
-    fc_sigma: np.ndarray
-    fc_ref_N: np.ndarray
-    fc_nominal_mps: np.ndarray
-    fc_kp: np.ndarray
-    fc_ki: np.ndarray
-    fc_vmax_mps: np.ndarray
-    joint_active: np.ndarray
-    joint_length_mode: np.ndarray
-    joint_sref_m: np.ndarray
-    joint_dir: np.ndarray
-    joint_ff_N: np.ndarray
-    joint_kv: np.ndarray
-    joint_vtarget_mps: np.ndarray
-    joint_limit_N: np.ndarray
-    joint_mover: np.ndarray
-    joint_anchor: np.ndarray
-    joint_ka: np.ndarray
+    def __init__(self, n: int, force_loop: bool, joints: bool, batch_shape=()):
+        fields = ["x_m", "v_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm"]
+        if force_loop:
+            fields.append("q_mps")
+        if joints:
+            fields.append("s_m")
+        self.fields = tuple(fields)
+        self.index = {f: j for j, f in enumerate(fields)}
+        self.n = int(n)
+        self.n_s = len(fields)
+        self.batch_shape = tuple(batch_shape)
+        self.n_batch = int(np.prod(self.batch_shape, dtype=int))
+        self.size = self.n_batch * self.n * self.n_s
+        self.shape = self.batch_shape + (self.n, self.n_s)
+        self.x, self.v = 0, 1
+        self.omega, self.integral = slice(2, 4), slice(4, 6)
+        self.q = self.index.get("q_mps")
+        self.s = self.index.get("s_m")
 
-    @classmethod
-    def rolling(cls, n: int, motor_on, speed_sp_mps) -> "Controls":
-        """Plain wheel-speed control: no force loop, every joint holding its length."""
-        z = np.zeros(n)
-        zl = np.zeros(max(n - 1, 0))
-        return cls(
-            motor_on=np.asarray(motor_on, float) * np.ones(n),
-            speed_sp_mps=np.asarray(speed_sp_mps, float) * np.ones(n),
-            fc_active=z.copy(), fc_link=np.full(n, n - 1, dtype=int), fc_sigma=np.ones(n),
-            fc_ref_N=z.copy(), fc_nominal_mps=z.copy(), fc_kp=np.ones(n), fc_ki=z.copy(),
-            fc_vmax_mps=z.copy(),
-            joint_active=zl.copy(), joint_length_mode=zl.copy(), joint_sref_m=zl.copy(),
-            joint_dir=np.ones_like(zl), joint_ff_N=zl.copy(),
-            joint_kv=zl.copy(), joint_vtarget_mps=zl.copy(), joint_limit_N=zl.copy(),
-            joint_mover=np.arange(max(n - 1, 0), dtype=int),
-            joint_anchor=np.arange(1, max(n, 1), dtype=int), joint_ka=zl.copy(),
-        )
+    def unpack(self, y):
+        """View a flat state (or a stack of states, leading dims) as ``(..., N, n_s)``."""
+        y = np.asarray(y)
+        return y.reshape(y.shape[:-1] + self.shape)
 
-    @classmethod
-    def stack(cls, controls) -> "Controls":
-        """The controls of B stacked chains (:meth:`ChainModel.stack`): arrays equal in every member
-        stay as they are, the others get a leading batch axis; index arrays must be equal."""
-        kw = {}
-        for name in cls.__dataclass_fields__:
-            arrs = [np.asarray(getattr(c, name)) for c in controls]
-            if all(np.array_equal(a, arrs[0]) for a in arrs[1:]):
-                kw[name] = arrs[0]
-            elif arrs[0].dtype.kind in "iu":
-                raise ValueError(f"stacked controls need the same {name}")
-            else:
-                kw[name] = np.stack(arrs)
-        return cls(**kw)
+    def get(self, Y, name):
+        """One named field of an unpacked state, shape ``(..., N)``."""
+        return Y[..., self.index[name]]
 
-    def with_(self, **kw) -> "Controls":
-        """A copy with some arrays replaced (converted to float arrays)."""
-        return replace(self, **{k: np.asarray(v) for k, v in kw.items()})
+    def flat_index(self, segment: int, name: str) -> int:
+        """Index of field ``name`` of ``segment`` in the flat state of one chain."""
+        return int(segment) * self.n_s + self.index[name]
+
+    def per_state(self, per_field: dict) -> np.ndarray:
+        """A flat array over the whole state from one value per field name (e.g. tolerances)."""
+        return np.tile([per_field[f] for f in self.fields], self.n_batch * self.n)
 
 
 @dataclass(frozen=True)
@@ -225,30 +201,25 @@ class ChainModel:
         self.n = int(np.shape(seg.mass_kg)[-1])
         self.force_loop = bool(force_loop)
         self.has_joints = bool(np.any(links.prismatic > 0))
-        fields = ["x_m", "v_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm"]
-        if self.force_loop:
-            fields.append("q_mps")
-        if self.has_joints:
-            fields.append("s_m")
-        self.fields = tuple(fields)
-        self.idx = {f: j for j, f in enumerate(fields)}
-        self.n_s = len(fields)
-        self.n_batch = int(np.prod(self.batch_shape, dtype=int))
-        self.n_states = self.n_batch * self.n * self.n_s
-        self._shape = self.batch_shape + (self.n, self.n_s)
-        # constants prepared once (shapes broadcast against (..., N, 2) axle arrays)
+        self.layout = StateLayout(self.n, self.force_loop, self.has_joints, self.batch_shape)
+        self.n_batch = self.layout.n_batch
+        self.n_states = self.layout.size
         col = lambda a: np.asarray(a, float)[..., None]
+        #: per-wheel static normal load, shape (..., N, 1) (broadcasts against axle arrays)
+        self.normal_force_N = col(seg.normal_force_N)
+        #: axle positions relative to the segment's reference point, shape (..., N, 2): front, rear
+        self.axle_offset_m = np.stack([seg.wheelbase_m / 2.0, -seg.wheelbase_m / 2.0], axis=-1)
+        #: wheels on each axle, shape (..., N)
+        self.wheels_per_axle = seg.wheels_per_axle.astype(float)
         self._R = col(seg.wheel_radius_m)
         self._J = col(seg.wheel_inertia_kgm2)
-        self._Fn = col(seg.normal_force_N)
-        self._axle_offset = np.stack([seg.wheelbase_m / 2.0, -seg.wheelbase_m / 2.0], axis=-1)
         self._kp = col(seg.speed_kp_Nms_per_rad)
         self._ki = col(seg.speed_ki_Nm_per_rad)
         self._slope = col(seg.motor_slope_Nms_per_rad)
         self._wnl = col(seg.no_load_speed_radps)
         self._Tmax = col(seg.torque_limit_Nm)
-        self._nw = seg.wheels_per_axle.astype(float)
         self._m = seg.mass_kg.astype(float)
+        self._bands = self._fd = None
         self._prepare_kernel()
 
     def _prepare_kernel(self):
@@ -260,26 +231,25 @@ class ChainModel:
         """
         tp, L = self.tp, self.links
         z = lambda v: np.array(v, float)
-        self._tpk = replace(tp, **{k: z(getattr(tp, k)) for k in ("b_tF", "b_trF", "A", "peak_exponent_d", "tau0",
-                                                                 "tau1", "slip_eps_mps", "sign_eps_mps")})
+        self._tpk = replace(tp, **{k: z(getattr(tp, k)) for k in tp.__dataclass_fields__ if k != "torque_balance"})
         self._zero = z(0.0)
+        Fn = self.normal_force_N
         if getattr(self.profile, "is_constant", False):
-            X = self.profile(self._axle_offset)
+            X = self.profile(self.axle_offset_m)
             self._Xc = X
-            self._coef = (terrain.traction_coefficients(self._Fn, X, self._tpk),
-                          terrain.resistance_coefficients(self._Fn, X, self._tpk),
-                          terrain.torque_coefficient(self._Fn, X, self._R, self._tpk))
+            self._coef = (terrain.traction_coefficients(Fn, X, self._tpk),
+                          terrain.resistance_coefficients(Fn, X, self._tpk),
+                          terrain.torque_coefficient(Fn, X, self._R, self._tpk))
         else:
             self._Xc = self._coef = None
-        # links: spring-damper constants and the joint servo's effective gain
         self._k_link = np.asarray(L.stiffness_N_per_m, float)
         self._c_link = np.asarray(L.damping_Ns_per_m, float)
         self._L0 = np.asarray(L.rest_spacing_m, float)
-        gk0 = L.force_gain_per_s / L.stiffness_N_per_m if self.n > 1 else np.zeros(0)
-        self._gk = gk0 / (1.0 + L.damping_Ns_per_m * gk0)
+        self._gk = (control.servo_gain(L.force_gain_per_s, L.stiffness_N_per_m, L.damping_Ns_per_m)
+                    if self.n > 1 else np.zeros(0))
         self._rate_max = np.asarray(L.rate_max_mps, float)
         self._neg_rate_max = -self._rate_max
-        self._k_stop, self._k_length = z(K_STOP), z(K_LENGTH)
+        self._k_stop, self._k_length = z(link_law.K_STOP), z(control.K_LENGTH)
         self._stroke_max = np.asarray(L.stroke_max_m, float)
         self._stroke_min = np.asarray(L.stroke_min_m, float)
         self._tow_col = np.asarray(self.tow_force_N, float)[..., None]
@@ -293,11 +263,10 @@ class ChainModel:
         d = {"on": np.asarray(ctl.motor_on, float)[..., None],
              "w_ref": (ctl.speed_sp_mps / self.seg.wheel_radius_m)[..., None]}
         if self.has_joints and self.n > 1:
-            L = self.links
             d["neg_dir"] = -ctl.joint_dir
             d["neg_vt"] = -ctl.joint_vtarget_mps
             d["length_mode"] = ctl.joint_length_mode > 0
-            d["active"] = ctl.joint_active * L.prismatic
+            d["active"] = ctl.joint_active * self.links.prismatic
             # which parts of the joint law this interval needs (constant within the interval,
             # so skipping the others changes no result; see _joint_rate)
             moving = d["active"] != 0
@@ -311,7 +280,7 @@ class ChainModel:
 
     @classmethod
     def stack(cls, models) -> "ChainModel":
-        """B chains of the same structure as ONE model with a leading batch axis (for batched sweeps).
+        """B chains of the same structure as ONE model with a leading batch axis (for batched runs).
 
         Every model must have the same N, state layout, terrain coefficients and either the same
         X_t profile or constant profiles (X_t may differ per chain).  Per-segment and per-link
@@ -322,7 +291,7 @@ class ChainModel:
         """
         m0 = models[0]
         for m in models[1:]:
-            if (m.n, m.fields, m.force_loop, m.has_joints) != (m0.n, m0.fields, m0.force_loop, m0.has_joints):
+            if (m.n, m.layout.fields) != (m0.n, m0.layout.fields):
                 raise ValueError("stacked chains need the same number of segments and state layout")
             if m.tp != m0.tp:
                 raise ValueError("stacked chains need the same terrain coefficients")
@@ -337,123 +306,51 @@ class ChainModel:
             profile = StackedConstantProfile(tuple(float(m.profile.values[0]) for m in models))
         return cls(seg, links, m0.tp, profile, np.array([m.tow_force_N for m in models]), force_loop=m0.force_loop)
 
-    # ------------------------------------------------------------------ layout
+    # ------------------------------------------------------------------ layout and terrain
     def unpack(self, y):
         """View a flat state (or stack of states, leading dims) as ``(..., N, n_s)``."""
-        y = np.asarray(y)
-        return y.reshape(y.shape[:-1] + self._shape)
+        return self.layout.unpack(y)
 
     def field(self, Y, name):
         """One named field of an unpacked state, shape ``(..., N)``."""
-        return Y[..., self.idx[name]]
+        return self.layout.get(Y, name)
+
+    def xt_at_axles(self, x_m):
+        """Terrain coefficient under each axle for segment positions ``x_m`` (..., N) -> (..., N, 2)."""
+        return self.profile(np.asarray(x_m, float)[..., None] + self.axle_offset_m)
 
     def initial_state(self, joint_extension_m=None) -> np.ndarray:
         """Chain at rest: leader at x = 0, links at their rest spacing (zero force)."""
-        Y = np.zeros((self.n, self.n_s))
+        L = self.layout
+        Y = np.zeros((self.n, L.n_s))
         spacing = self.links.rest_spacing_m.copy()
         if self.has_joints:
             s0 = np.zeros(self.n) if joint_extension_m is None else np.append(joint_extension_m, 0.0)
-            Y[:, self.idx["s_m"]] = s0
+            Y[:, L.s] = s0
             spacing = spacing + s0[:-1]
-        Y[1:, 0] = -np.cumsum(spacing)
+        Y[1:, L.x] = -np.cumsum(spacing)
         return Y.reshape(-1)
 
+    # ------------------------------------------------------------------ Jacobian
     def jac_sparsity(self, member: bool = False):
-        """Structural non-zero pattern of the Jacobian ``d(dy/dt)/dy`` (dense bool array).
-
-        For stacked chains (:meth:`stack`) the pattern is block diagonal, one block per member,
-        returned as a sparse matrix (``member=True``: one member's dense block).
-
-        Within a segment every field may depend on every other (except ``x``, which is the
-        integral of ``v``).  Across segments only the link forces couple: the force of link
-        ``k-1`` (ahead) depends on ``x, v`` of segments ``k-1, k`` and on ``s_{k-1}``; link ``k``
-        (behind) on ``x, v`` of ``k, k+1`` and on ``s_k``.  Rows that see a link force: ``v``;
-        ``s`` (its own link, and the mover speed of the link's other segment); with a force
-        loop also ``q`` and the wheel states that follow its set-point.
-        """
-        ns, n, I = self.n_s, self.n, self.idx
-        own = np.ones((ns, ns), bool)
-        own[I["x_m"], :] = False
-        own[I["x_m"], I["v_mps"]] = True
-        prev = np.zeros((ns, ns), bool)    # rows of segment k, columns of segment k-1
-        nxt = np.zeros((ns, ns), bool)     # rows of segment k, columns of segment k+1
-        ahead_rows = ["v_mps"]             # rows that see link k-1
-        behind_rows = ["v_mps"]            # rows that see link k
-        if self.has_joints:
-            behind_rows.append("s_m")
-        if self.force_loop:
-            loop_rows = ["q_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm"]
-            ahead_rows += loop_rows
-            behind_rows += loop_rows
-        for r in ahead_rows:
-            for c in ("x_m", "v_mps"):
-                prev[I[r], I[c]] = True
-            if self.has_joints:
-                prev[I[r], I["s_m"]] = True
-        for r in behind_rows:
-            for c in ("x_m", "v_mps"):
-                nxt[I[r], I[c]] = True
-        P = np.zeros((n * ns, n * ns), bool)
-        for k in range(n):
-            P[k * ns:(k + 1) * ns, k * ns:(k + 1) * ns] = own
-            if k > 0:
-                P[k * ns:(k + 1) * ns, (k - 1) * ns:k * ns] = prev
-            if k < n - 1:
-                P[k * ns:(k + 1) * ns, (k + 1) * ns:(k + 2) * ns] = nxt
-        if member or not self.batch_shape:
-            return P
-        from scipy.sparse import block_diag
-        return block_diag([P] * self.n_batch, format="csr").astype(bool)   # stacked chains
+        """Structural non-zero pattern of ``d(dy/dt)/dy`` (:func:`snoworm.jacobian.sparsity`)."""
+        return jacobian.sparsity(self, member)
 
     def bandwidths(self):
         """``(lband, uband)`` of :meth:`jac_sparsity`, for LSODA's banded Jacobian."""
-        if getattr(self, "_bands", None) is None:
-            r, c = np.nonzero(self.jac_sparsity(member=True))
-            self._bands = int(max(0, np.max(r - c))), int(max(0, np.max(c - r)))
+        if self._bands is None:
+            self._bands = jacobian.bandwidths(self.jac_sparsity(member=True))
         return self._bands
 
-    def _fd_plan(self):
-        """Column groups and gather indices of the banded finite-difference Jacobian (built once)."""
-        if getattr(self, "_plan", None) is None:
-            lb, ub = self.bandwidths()
-            n = self.n_states
-            w = min(lb + ub + 1, n)
-            cols = np.arange(n)
-            group = cols % w
-            r = np.arange(lb + ub + 1)[:, None]
-            rows = cols[None, :] + r - ub                 # row i of packed entry (r, j)
-            valid = (rows >= 0) & (rows < n)
-            self._plan = (w, group, rows, valid)
-        return self._plan
+    def jacobian_banded(self, t, y, ctl: Controls):
+        """Finite-difference Jacobian in LAPACK packed band format (:func:`snoworm.jacobian.banded`)."""
+        if self._fd is None:
+            self._fd = jacobian.BandedDifferences(self.n_states, *self.bandwidths())
+        return self._fd(lambda Yp: self.evaluate(self.unpack(Yp), ctl)[0].reshape(Yp.shape), y)
 
-    def jacobian_banded(self, t, y, ctl: "Controls", rel_step: float = 1.2e-4):
-        """Finite-difference Jacobian in LAPACK packed band format, from ONE vectorised kernel call.
-
-        All ``lband + uband + 1`` column groups of the band are perturbed at once and
-        evaluated as a stack through :meth:`evaluate` (its leading batch axis), so a Jacobian
-        costs about as much as one or two right-hand-side calls instead of one per group.
-        Returns ``J_packed`` with ``J_packed[uband + i - j, j] = dF_i/dy_j``, the layout
-        ``solve_ivp(method="LSODA", lband=..., uband=...)`` expects.
-        """
-        w, group, rows, valid = self._fd_plan()
-        n = y.size
-        h = rel_step * np.maximum(1e-3, np.abs(y))
-        Yp = np.tile(y, (w + 1, 1))
-        Yp[1 + group, np.arange(n)] += h
-        h = Yp[1 + group, np.arange(n)] - y           # the step actually taken (rounding)
-        dY, _ = self.evaluate(Yp.reshape((w + 1,) + self._shape), ctl)
-        F = dY.reshape(w + 1, n)
-        dF = F[1:] - F[0]
-        g = np.broadcast_to(group, rows.shape)
-        packed = np.where(valid, dF[g, np.where(valid, rows, 0)], 0.0) / h[None, :]
-        return packed
-
-    def jacobian_sparse(self, t, y, ctl: "Controls"):
+    def jacobian_sparse(self, t, y, ctl: Controls):
         """The same finite-difference Jacobian as a sparse CSC matrix (for BDF and Radau)."""
-        from scipy.sparse import dia_matrix
-        lb, ub = self.bandwidths()
-        packed = self.jacobian_banded(t, y, ctl)
-        return dia_matrix((packed, np.arange(ub, -lb - 1, -1)), shape=(y.size, y.size)).tocsc()
+        return jacobian.to_sparse(self.jacobian_banded(t, y, ctl), *self.bandwidths())
 
     # ------------------------------------------------------------------ kernel
     def evaluate(self, Y, ctl: Controls, outputs: bool = False):
@@ -467,12 +364,9 @@ class ChainModel:
             With ``outputs=True``: named intermediate quantities (per axle arrays have a
             trailing axis of 2: front, rear), used for results after the solve.
         """
-        tp = self._tpk
-        I = self.idx
-        x = Y[..., 0]
-        v = Y[..., 1]
-        w = Y[..., 2:4]
-        integ = Y[..., 4:6]
+        tp, L = self._tpk, self.layout
+        x, v = Y[..., L.x], Y[..., L.v]
+        w, integ = Y[..., L.omega], Y[..., L.integral]
         R = self._R
         cd = self._controls(ctl)
         # terrain, per axle (Eqs. 1-3, resistance torque), X_t evaluated at each axle
@@ -483,10 +377,11 @@ class ChainModel:
             c_t, c_r, c_q = self._coef
             X = self._Xc
         else:
-            X = self.profile(x[..., None] + self._axle_offset)
-            c_t = terrain.traction_coefficients(self._Fn, X, tp)
-            c_r = terrain.resistance_coefficients(self._Fn, X, tp)
-            c_q = terrain.torque_coefficient(self._Fn, X, R, tp)
+            Fn = self.normal_force_N
+            X = self.profile(x[..., None] + self.axle_offset_m)
+            c_t = terrain.traction_coefficients(Fn, X, tp)
+            c_r = terrain.resistance_coefficients(Fn, X, tp)
+            c_q = terrain.torque_coefficient(Fn, X, R, tp)
         Ft = terrain.traction_from_coefficients(i, c_t)
         Ftr = terrain.resistance_from_coefficients(V, c_r, tp)
         Trr = terrain.torque_from_coefficient(wm, c_q, tp)
@@ -496,101 +391,91 @@ class ChainModel:
             rel = v[..., :-1] - v[..., 1:]
             stretch = x[..., :-1] - x[..., 1:] - self._L0
             if self.has_joints:
-                s = Y[..., :-1, I["s_m"]]
-                T_spring = self._k_link * (stretch - s)
+                s = Y[..., :-1, L.s]
+                T_spring = link_law.spring_force_N(stretch, s, self._k_link)
                 ds = self._joint_rate(s, v, rel, T_spring, ctl, cd)
-                dY[..., :-1, I["s_m"]] = ds
-                dY[..., -1, I["s_m"]] = 0.0
+                dY[..., :-1, L.s] = ds
+                dY[..., -1, L.s] = 0.0
                 damper_v = rel - ds
             else:
-                T_spring = self._k_link * stretch
+                T_spring = link_law.spring_force_N(stretch, None, self._k_link)
                 damper_v = rel
-            T = T_spring + self._c_link * damper_v
+            T = link_law.link_force_N(T_spring, damper_v, self._c_link)
         else:
             T = T_spring = damper_v = np.zeros(x.shape[:-1] + (0,))
             if self.has_joints:
-                dY[..., I["s_m"]] = 0.0
+                dY[..., L.s] = 0.0
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
         sp = ctl.speed_sp_mps
         if self.force_loop:
             tow = np.broadcast_to(self._tow_col, T.shape[:-1] + (1,))
             Fsel = np.concatenate([T, tow], axis=-1)[..., ctl.fc_link]
-            e = ctl.fc_sigma * (ctl.fc_ref_N - Fsel)
-            q = Y[..., I["q_mps"]]
-            raw = ctl.fc_nominal_mps + ctl.fc_kp * e + q
-            vsp = np.minimum(np.maximum(raw, 0.0), ctl.fc_vmax_mps)
-            dY[..., I["q_mps"]] = (ctl.fc_ki * e + (ctl.fc_ki / ctl.fc_kp) * (vsp - raw)) * ctl.fc_active * ctl.motor_on
+            vsp, dq = control.link_force_pi(Fsel, ctl.fc_ref_N, ctl.fc_sigma, Y[..., L.q], ctl.fc_nominal_mps,
+                                            ctl.fc_kp, ctl.fc_ki, ctl.fc_vmax_mps)
+            dY[..., L.q] = dq * ctl.fc_active * ctl.motor_on
             sp = np.where(ctl.fc_active > 0, vsp, sp)
             w_ref = (sp / self.seg.wheel_radius_m)[..., None]
         else:
             w_ref = cd["w_ref"]
         T_lo, T_hi = drivetrain.motor_envelope(w, self._slope, self._wnl, self._Tmax)
-        Tm, dI = drivetrain.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on"])
+        Tm, dI = control.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on"])
         reaction = terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)
-        dY[..., 2:4] = (Tm - reaction) / self._J
-        dY[..., 4:6] = dI
+        dY[..., L.omega] = (Tm - reaction) / self._J
+        dY[..., L.integral] = dI
         # chassis: the net link force on segment k is T_{k-1} - T_k (T_{-1} = 0, T_{N-1} = tow)
         net = Ft - Ftr
-        wheel_net = self._nw * (net[..., 0] + net[..., 1])
+        wheel_net = self.wheels_per_axle * (net[..., 0] + net[..., 1])
         Tpad = np.empty(T.shape[:-1] + (self.n + 1,))
         Tpad[..., 0] = 0.0
         Tpad[..., 1:-1] = T
         Tpad[..., -1] = self.tow_force_N
         Fl = Tpad[..., :-1] - Tpad[..., 1:]
-        dY[..., 0] = v
-        dY[..., 1] = (wheel_net + Fl) / self._m
+        dY[..., L.x] = v
+        dY[..., L.v] = (wheel_net + Fl) / self._m
         if not outputs:
             return dY, None
-        nw = self._nw[..., None]
-        X = np.broadcast_to(X, Ft.shape)
+        nw = self.wheels_per_axle[..., None]
         out = {
-            "X": X, "slip": i, "traction_axle_N": Ft * nw, "resistance_axle_N": Ftr * nw,
-            "resistance_torque_Nm": Trr, "motor_torque_Nm": Tm, "link_force_N": T,
-            "wheel_net_N": wheel_net, "link_net_N": Fl, "speed_sp_mps": np.broadcast_to(sp, x.shape),
-            "omega": w, "reaction_torque_Nm": reaction,
-            "link_spring_N": T_spring, "link_damper_W": self._c_link * damper_v**2 if self.n > 1 else T,
+            "X": np.broadcast_to(X, Ft.shape), "slip": i, "traction_axle_N": Ft * nw,
+            "resistance_axle_N": Ftr * nw, "resistance_torque_Nm": Trr, "motor_torque_Nm": Tm,
+            "link_force_N": T, "wheel_net_N": wheel_net, "link_net_N": Fl,
+            "speed_sp_mps": np.broadcast_to(sp, x.shape), "omega": w, "reaction_torque_Nm": reaction,
+            "link_spring_N": T_spring,
+            "link_damper_W": link_law.damper_power_W(damper_v, self._c_link) if self.n > 1 else T,
             # power dissipated at the wheel-terrain contact: what the wheels take from the
             # motors minus what reaches the chassis, per segment [W]
-            "terrain_dissipation_W": self._nw * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),
+            "terrain_dissipation_W": self.wheels_per_axle * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),
         }
         return dY, out
 
-    def _joint_rate(self, s, v, rel, T_spring, ctl: Controls, cd=None):
-        """Extension rate of the prismatic actuators: force-limited, rate-limited servos.
+    def _joint_rate(self, s, v, rel, T_spring, ctl: Controls, cd):
+        """Extension rate of the prismatic actuators: the commanded servo within the actuator's limits.
 
-        Force command: velocity feed-forward (follow the segments' relative motion) plus a
-        proportional loop on the spring force, ``d(T_spring)/dt = -g (T_spring - T_ref)``, so the
-        force tracks without lag from the segments' accelerations.  Length command: a rate-limited servo to ``s_ref`` that backs off
-        where the spring force would exceed the limit.  Both respect the actuator's rate limit
-        and soft end stops; locked (inactive) joints and fixed links do not move.
+        Force command (:func:`snoworm.control.joint_force_rate_mps`) or length command
+        (:func:`snoworm.control.joint_length_rate_mps`), then the actuator's rate limit and soft
+        end stops (:func:`snoworm.links.actuator_rate_mps`); locked (inactive) joints and fixed
+        links do not move.
         """
-        cd = self._controls(ctl) if cd is None else cd
         if not cd["any_active"]:               # every joint locked in this interval
             return s * self._zero
-        # with the damper in series, T = T_spring + c (rel - rate); solving the loop
-        # rate = rel + (T - T_ref) g/k for T gives the effective gain below (``_gk``, prepared
-        # once): T approaches T_ref monotonically (never beyond it), at the rate g / (1 + c g / k)
         gk = self._gk
         if cd["any_force"]:
-            cmd = ctl.joint_ff_N
-            if cd["any_kv"]:
-                cmd = cmd + ctl.joint_kv * (ctl.joint_vtarget_mps - v[..., ctl.joint_mover])
-            if cd["any_ka"]:
-                cmd = cmd - ctl.joint_ka * np.maximum(-v[..., ctl.joint_anchor], self._zero)
-            mag = np.minimum(np.maximum(cmd, self._zero), ctl.joint_limit_N)
-            rate = rel + (T_spring - cd["neg_dir"] * mag) * gk
+            mag = control.joint_force_command_N(
+                ctl.joint_ff_N, ctl.joint_limit_N, self._zero,
+                kv=ctl.joint_kv if cd["any_kv"] else None, v_target_mps=ctl.joint_vtarget_mps,
+                v_mover_mps=v[..., ctl.joint_mover] if cd["any_kv"] else None,
+                ka=ctl.joint_ka if cd["any_ka"] else None,
+                v_anchor_mps=v[..., ctl.joint_anchor] if cd["any_ka"] else None)
+            rate = control.joint_force_rate_mps(rel, T_spring, cd["neg_dir"], mag, gk)
         if cd["any_length"]:
-            vt = ctl.joint_vtarget_mps
-            rate_l = np.minimum(np.maximum(self._k_length * (ctl.joint_sref_m - s), cd["neg_vt"]), vt)
-            rate_l = np.minimum(rate_l, rel + (T_spring + ctl.joint_limit_N) * gk)
-            rate_l = np.maximum(rate_l, rel + (T_spring - ctl.joint_limit_N) * gk)
+            rate_l = control.joint_length_rate_mps(s, ctl.joint_sref_m, ctl.joint_vtarget_mps, cd["neg_vt"], rel,
+                                                   T_spring, ctl.joint_limit_N, gk, self._k_length)
             rate = np.where(cd["length_mode"], rate_l, rate) if cd["any_force"] else rate_l
-        rate = np.minimum(np.maximum(rate, self._neg_rate_max), self._rate_max)
-        rate = np.minimum(rate, self._k_stop * (self._stroke_max - s))
-        rate = np.maximum(rate, self._k_stop * (self._stroke_min - s))
+        rate = link_law.actuator_rate_mps(rate, s, self._rate_max, self._neg_rate_max, self._stroke_min,
+                                          self._stroke_max, self._k_stop)
         return rate * cd["active"]
 
     def rhs(self, t, y, ctl: Controls):
         """``dy/dt`` for :func:`scipy.integrate.solve_ivp` (pure: records nothing)."""
-        dY, _ = self.evaluate(y.reshape(self._shape), ctl)
+        dY, _ = self.evaluate(y.reshape(self.layout.shape), ctl)
         return dY.reshape(-1)

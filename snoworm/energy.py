@@ -55,7 +55,7 @@ def energy_metrics(result) -> dict:
     sc = result.scenario
     t = result.t
     P = result.segments["motor_power_W"]
-    motor_el = _trapz(result.segments["_electrical_W"], t)
+    motor_el = _trapz(result.segments["motor_electrical_power_W"], t)
     motor_mech = _trapz(P, t)
     braking = _trapz(np.minimum(P, 0.0), t)
     Pj = result.links["joint_power_W"]
@@ -99,14 +99,14 @@ def energy_balance(result) -> dict:
     k = sc.vehicle.links.stiffness_N_per_m
     v = result.segments["v_mps"]
     w = result.segments["wheel_speed_mps"] / R
-    spring = result.links["_spring_N"]          # the link spring (in series with damper and actuator)
+    spring = result.links["spring_force_N"]     # the link spring (in series with damper and actuator)
     kinetic = 0.5 * (m * v**2).sum(1) + 0.5 * (J * w**2).sum(1)
     spring_E = 0.5 * (spring**2).sum(1) / k
     terms = {
         "motor_J": float(np.trapezoid(result.segments["motor_power_W"].sum(1), t)),
         "joint_J": float(np.trapezoid(result.links["joint_power_W"].sum(1), t)),
         "terrain_J": float(np.trapezoid(result.segments["terrain_dissipation_W"].sum(1), t)),
-        "damper_J": float(np.trapezoid(result.links["_damper_W"].sum(1), t)),
+        "damper_J": float(np.trapezoid(result.links["damper_power_W"].sum(1), t)),
         "tow_J": float(np.trapezoid(sc.tow.force_N * v[:, -1], t)),
         "kinetic_change_J": float(kinetic[-1] - kinetic[0]),
         "spring_change_J": float(spring_E[-1] - spring_E[0]),

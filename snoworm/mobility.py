@@ -29,11 +29,12 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
-import yaml
 
 from . import steady
 from .schema import ScenarioError
-from .scenario import dump_scenario, scenario_from_dict
+from .driver import SolverError, simulate
+from .energy import energy_metrics
+from .scenario import load_scenario, scenario_from_dict
 
 __all__ = ["parse_grid", "parse_list", "rolling_cell", "inching_scenario", "mobility_map", "map_csv",
            "rolling_speed_of", "REGIONS"]
@@ -84,7 +85,7 @@ def _inching_mode_raw(sc) -> dict:
     if m.type == "supervisor":
         raw = dict(m.inching)
     elif m.type == "inchworm":
-        raw = {k: v for k, v in yaml.safe_load(dump_scenario(sc))["mode"].items() if k != "type"}
+        raw = {k: v for k, v in sc.to_dict()["mode"].items() if k != "type"}
     else:
         raise ScenarioError(f"mode.type: the mobility map takes the inching gait from a 'supervisor' or "
                             f"'inchworm' mode; this scenario's mode is {m.type!r}. Use --no-inching for rolling only.")
@@ -99,9 +100,8 @@ def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float) -> dict:
     ``rolling_energy_per_metre_J_per_m`` (electrical) and ``rolling_max_drawbar_N`` (per segment).
     Uses the first segment's parameters for every segment (a uniform chain).
     """
-    from .simulate import build_model
     seg = sc.vehicle.segment_params()[0]
-    tp = build_model(sc).tp
+    tp = sc.terrain.model.params()
     n = sc.vehicle.segments
     share = tow_N / n
     dmax = steady.max_drawbar_N(xt, seg, tp, wheel_speed_mps)
@@ -124,7 +124,7 @@ def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float) -> dict:
 
 def inching_scenario(sc, xt: float, tow_N: float, duration_s: float) -> dict:
     """Raw scenario mapping of a short inchworm run on uniform X_t with a tow (one map cell)."""
-    raw = yaml.safe_load(dump_scenario(sc))
+    raw = sc.to_dict()
     raw["name"] = f"{sc.name}_inch_xt{xt:g}_tow{tow_N:g}"
     raw["terrain"] = {"xt": float(xt), "model": raw["terrain"]["model"]}
     raw["tow"] = {"force_N": float(tow_N)}
@@ -135,8 +135,6 @@ def inching_scenario(sc, xt: float, tow_N: float, duration_s: float) -> dict:
 
 def _inch_run(args):
     raw, min_speed = args
-    from .energy import energy_metrics
-    from .simulate import SolverError, simulate
     try:
         res = simulate(scenario_from_dict(raw))
     except SolverError as exc:
@@ -202,8 +200,7 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
         er, ei = r["rolling_energy_per_metre_J_per_m"], r.get("inching_energy_per_metre_J_per_m")
         r["inching_cheaper"] = bool(er is not None and ei is not None and ei < er)
     seg = sc.vehicle.segment_params()[0]
-    from .simulate import build_model
-    tp = build_model(sc).tp
+    tp = sc.terrain.model.params()
     limits = {}
     for f in tows:
         try:
@@ -248,7 +245,6 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
     from pathlib import Path
 
     from .fileio import atomic_write_text
-    from .scenario import load_scenario
     sc = load_scenario(scenario_path, sets)
     v = rolling_speed_of(sc) if rolling_speed_mps is None else float(rolling_speed_mps)
     res = mobility_map(sc, parse_grid(xt_spec, "--xt"), parse_list(tow_spec, "--tow"), wheel_speed_mps=v,

@@ -176,8 +176,8 @@ class Context:
 
     def run(self, name, extra=()):
         """Simulate the shipped scenario ``name`` with the context's overrides (memoised)."""
+        from .driver import simulate
         from .scenario import load_scenario
-        from .simulate import simulate
         ov = tuple(self.overrides(name, extra))
         key = (name, ov)
         if key not in self._runs:
@@ -912,7 +912,7 @@ def evaluate(items=None, quick=False, model=None, scenario_overrides=None, out_d
     carrying the error message; the other items still run.
     """
     from .schema import ScenarioError
-    from .simulate import SolverError
+    from .driver import SolverError
     ctx = Context(quick, model, scenario_overrides, out_dir)
     keys = list(ITEMS) if items is None else list(items)
     unknown = [k for k in keys if k not in ITEMS]

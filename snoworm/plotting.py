@@ -75,8 +75,7 @@ def plot_positions(result, path):
     x = result.segments["x_m"]
     fig, (a0, a1) = plt.subplots(1, 2, figsize=(10, 5), gridspec_kw={"width_ratios": [1, 4]}, sharey=True)
     xs = np.linspace(x.min() - 1.0, x.max() + 1.0, 400)
-    from .simulate import terrain_profile
-    a0.plot(terrain_profile(result.scenario)(xs), xs, color="tab:brown")
+    a0.plot(result.scenario.terrain.compile()(xs), xs, color="tab:brown")
     a0.set_xlabel("X_t")
     a0.set_ylabel("position [m]")
     a0.grid(alpha=0.3)

@@ -13,7 +13,9 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from .energy import energy_metrics
 from .fileio import atomic_write_text
+from .scenario import dump_scenario
 
 __all__ = ["Result", "SEGMENT_COLUMNS", "LINK_COLUMNS"]
 
@@ -32,6 +34,8 @@ SEGMENT_COLUMNS = {
     "xt": "terrain coefficient X_t under the segment, mean of the axles",
     "motor_power_W": "mechanical motor power at the wheels, summed over the wheels [W]",
     "terrain_dissipation_W": "power dissipated at the wheel-terrain contacts of the segment [W]",
+    "motor_electrical_power_W": "electrical power drawn by the segment's motors: motoring power / drivetrain "
+                                "efficiency, braking not recovered [W]",
 }
 
 #: Columns of ``links.csv`` (after ``t_s, link``).
@@ -40,6 +44,8 @@ LINK_COLUMNS = {
     "length_m": "centre-to-centre distance of the two segments [m]",
     "extension_m": "prismatic joint extension (0 for a fixed link) [m]",
     "joint_power_W": "mechanical power delivered by the prismatic joint actuator [W]",
+    "spring_force_N": "force of the link spring (in series with the damper and the actuator), tension positive [N]",
+    "damper_power_W": "power dissipated in the link damper [W]",
 }
 
 
@@ -54,9 +60,9 @@ class Result:
     t : ndarray (n_t,)
         Output times [s].
     segments : dict of str -> ndarray (n_t, N)
-        Per-segment series, keys of :data:`SEGMENT_COLUMNS`.
+        Per-segment series, exactly the keys of :data:`SEGMENT_COLUMNS`.
     links : dict of str -> ndarray (n_t, N-1)
-        Per-link series, keys of :data:`LINK_COLUMNS`.
+        Per-link series, exactly the keys of :data:`LINK_COLUMNS`.
     phases : list of dict
         Integration intervals (start, end, label).
     events : list of dict
@@ -80,6 +86,7 @@ class Result:
     def from_pieces(cls, sc, model, mode, pieces, phases, stats):
         seg_parts, link_parts, ts = [], [], []
         eta = model.seg.drivetrain_efficiency
+        L = model.layout
         for t, ys, ctl in pieces:
             Y = model.unpack(ys)
             dY, out = model.evaluate(Y, ctl, outputs=True)
@@ -90,21 +97,21 @@ class Result:
             Ft = out["traction_axle_N"].sum(-1)
             Ftr = out["resistance_axle_N"].sum(-1)
             seg = {
-                "x_m": Y[..., model.idx["x_m"]], "v_mps": Y[..., model.idx["v_mps"]],
+                "x_m": Y[..., L.x], "v_mps": Y[..., L.v],
                 "wheel_speed_mps": (w * R[:, None]).mean(-1), "slip": out["slip"].mean(-1),
                 "traction_N": Ft, "resistance_N": Ftr, "net_force_N": Ft - Ftr,
                 "motor_torque_Nm": Tm.mean(-1), "speed_setpoint_mps": np.array(out["speed_sp_mps"], float),
                 "connector_net_N": out["link_net_N"], "xt": out["X"].mean(-1),
                 "motor_power_W": (Tm * w).sum(-1) * nw,
                 "terrain_dissipation_W": out["terrain_dissipation_W"],
-                "_electrical_W": (np.maximum(Tm * w, 0.0)).sum(-1) * nw / eta,
+                "motor_electrical_power_W": (np.maximum(Tm * w, 0.0)).sum(-1) * nw / eta,
             }
             x = seg["x_m"]
             lk = {"force_N": out["link_force_N"], "length_m": x[..., :-1] - x[..., 1:],
-                  "_spring_N": out["link_spring_N"], "_damper_W": out["link_damper_W"]}
+                  "spring_force_N": out["link_spring_N"], "damper_power_W": out["link_damper_W"]}
             if model.has_joints:
-                s = Y[..., :-1, model.idx["s_m"]]
-                ds = dY[..., :-1, model.idx["s_m"]]
+                s = Y[..., :-1, L.s]
+                ds = dY[..., :-1, L.s]
                 lk["extension_m"] = s
                 # the actuator is in series with the link's spring-damper: it carries the link force
                 lk["joint_power_W"] = -out["link_force_N"] * ds
@@ -117,6 +124,8 @@ class Result:
         t = np.concatenate(ts)
         segments = {k: np.concatenate([p[k] for p in seg_parts]) for k in seg_parts[0]}
         links = {k: np.concatenate([p[k] for p in link_parts]) for k in link_parts[0]}
+        segments = {k: segments[k] for k in SEGMENT_COLUMNS}     # the documented columns, in order
+        links = {k: links[k] for k in LINK_COLUMNS}
         res = cls(sc, t, segments, links, phases, list(mode.log), stats)
         res.mode_summary = mode.summary(res)
         return res
@@ -136,7 +145,6 @@ class Result:
         (definitions in :mod:`snoworm.energy`).  ``metrics``: an already computed
         :func:`snoworm.energy.energy_metrics` of this result, to select from.
         """
-        from .energy import energy_metrics
         e = energy_metrics(self) if metrics is None else metrics
         return {"motor_electrical_J": e["motor_electrical_J"], "motor_mechanical_J": e["motor_mechanical_J"],
                 "joint_work_J": e["joint_mechanical_J"], "joint_electrical_J": e["joint_electrical_J"],
@@ -144,7 +152,6 @@ class Result:
 
     def summary(self) -> dict:
         """The metrics written to ``summary.json``."""
-        from .energy import energy_metrics
         x = self.segments["x_m"]
         dist = float(np.mean(x[-1] - x[0]))
         dur = float(self.t[-1] - self.t[0]) if self.t.size > 1 else 0.0
@@ -191,7 +198,6 @@ class Result:
 
         Each file is written atomically (temporary file, then rename).  Returns the paths.
         """
-        from .scenario import dump_scenario
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         paths = [
@@ -201,7 +207,7 @@ class Result:
             atomic_write_text(out / "scenario.yaml", dump_scenario(self.scenario)),
         ]
         if plot:
-            from . import plotting
+            from . import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
             paths += plotting.plot_result(self, out)
         return paths
 

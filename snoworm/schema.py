@@ -1,21 +1,28 @@
 """Declarative validation of nested mappings into frozen dataclasses.
 
-A config dataclass declares each field with :func:`field`, giving its bounds, allowed choices,
-unit and help text.  :func:`build` turns a mapping (parsed YAML) into the dataclass, rejecting
-unknown keys (with "did you mean" suggestions), wrong types, missing required values and values
-out of bounds, each with a one-paragraph :class:`ScenarioError` that names the dotted field and
-says how to fix it.  :func:`dump` turns the dataclass back into plain YAML-able data.
+A config dataclass subclasses :class:`Config` and declares each field with :func:`field`, giving
+its bounds, allowed choices, unit and help text.  Validation runs when the object is
+constructed (``Config.__post_init__``), however it is constructed: from a mapping by
+:func:`build` (parsed YAML, which also rejects unknown keys with "did you mean" suggestions and
+missing required values), directly from Python, or by :func:`dataclasses.replace`.  Wrong types
+and values out of bounds raise a one-paragraph :class:`ScenarioError` that names the dotted
+field and says how to fix it.  NumPy scalars and arrays are accepted where numbers and lists
+are.  :func:`dump` turns the dataclass back into plain YAML-able data.
 """
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import difflib
 import functools
 import math
+import numbers
 import typing
 from typing import Any
 
-__all__ = ["ScenarioError", "field", "build", "dump", "suggest"]
+import numpy as np
+
+__all__ = ["Config", "ScenarioError", "field", "build", "dump", "suggest"]
 
 _MISSING = dataclasses.MISSING
 
@@ -72,7 +79,9 @@ def _describe(md):
 
 
 def _check_number(path, value, md, kind):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         if isinstance(value, str):
             try:
                 value = float(value)
@@ -112,11 +121,15 @@ def _convert(path, value, tp, md):
                 errors.append(str(exc))
         raise ScenarioError(errors[-1])
     if dataclasses.is_dataclass(tp):
+        if isinstance(value, tp):       # constructed (and so validated) already
+            return value
         if not isinstance(value, dict):
             _fail(path, f"expected a mapping of keys for {tp.__name__}, got {type(value).__name__} {value!r}.")
         return build(tp, value, path)
     if origin in (tuple, list):
-        if isinstance(value, (int, float, str)) and not isinstance(value, bool):
+        if isinstance(value, np.ndarray):
+            value = value.tolist()
+        if isinstance(value, (numbers.Real, str)) and not isinstance(value, (bool, np.bool_)):
             value = [value]
         if not isinstance(value, (list, tuple)):
             _fail(path, f"expected a list{_describe(md)}, got {type(value).__name__} {value!r}.")
@@ -137,6 +150,8 @@ def _convert(path, value, tp, md):
         if not isinstance(value, bool):
             _fail(path, f"expected true or false{_describe(md)}, got {value!r}.")
     elif tp is str:
+        if isinstance(value, np.str_):
+            value = str(value)
         if not isinstance(value, str):
             _fail(path, f"expected text{_describe(md)}, got {type(value).__name__} {value!r}.")
     choices = md.get("choices")
@@ -152,6 +167,38 @@ def _type_hints(cls):
     return typing.get_type_hints(cls)
 
 
+#: dotted path of the config section being built by :func:`build` (for messages)
+_PATH = contextvars.ContextVar("snoworm_config_path", default=None)
+
+
+class Config:
+    """Base of the frozen config dataclasses: every field is validated on construction.
+
+    Subclasses are ``@dataclass(frozen=True)`` with fields declared by :func:`field`; they may
+    define ``_check(path)`` for rules across fields, and set ``_section`` (the dotted path used in
+    messages when the object is constructed directly rather than by :func:`build`).
+    """
+
+    _section = ""
+
+    def __post_init__(self):
+        path = _PATH.get()
+        path = self._section if path is None else path
+        prefix = f"{path}." if path else ""
+        hints = _type_hints(type(self))
+        for f in dataclasses.fields(self):
+            if not f.init:
+                continue
+            value = getattr(self, f.name)
+            new = _convert(f"{prefix}{f.name}", value, hints[f.name], f.metadata)
+            if new is not value:
+                object.__setattr__(self, f.name, new)
+        self._check(path)
+
+    def _check(self, path):
+        """Rules across fields (override); raise :class:`ScenarioError` naming ``path``."""
+
+
 def build(cls, data: dict, path: str = ""):
     """Validate ``data`` against dataclass ``cls`` and construct it.
 
@@ -164,24 +211,22 @@ def build(cls, data: dict, path: str = ""):
         data = {}
     if not isinstance(data, dict):
         _fail(path or "scenario", f"expected a mapping of keys, got {type(data).__name__} {data!r}.")
-    hints = _type_hints(cls)
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     prefix = f"{path}." if path else ""
     for key in data:
         if key not in fields:
             _fail(f"{prefix}{key}", f"unknown key.{suggest(key, fields)} Known keys here: {', '.join(fields)}.")
-    kwargs = {}
     for name, f in fields.items():
-        p = f"{prefix}{name}"
-        if name in data:
-            kwargs[name] = _convert(p, data[name], hints[name], f.metadata)
-        elif f.default is _MISSING and f.default_factory is _MISSING:
-            _fail(p, f"is required but missing{_describe(f.metadata)}. Add it to the scenario.")
-    obj = cls(**kwargs)
-    check = getattr(obj, "_check", None)
-    if check is not None:
-        check(path)
-    return obj
+        if name not in data and f.default is _MISSING and f.default_factory is _MISSING:
+            _fail(f"{prefix}{name}", f"is required but missing{_describe(f.metadata)}. Add it to the scenario.")
+    token = _PATH.set(path)
+    try:
+        if issubclass(cls, Config):
+            return cls(**data)
+        hints = _type_hints(cls)    # a plain dataclass: convert here
+        return cls(**{k: _convert(f"{prefix}{k}", v, hints[k], fields[k].metadata) for k, v in data.items()})
+    finally:
+        _PATH.reset(token)
 
 
 def dump(obj):

@@ -2,7 +2,7 @@
 
 At steady driving on uniform terrain a segment's wheels all run at the same slip ``i`` and
 
-    n_wheels (F_t(i) - F_tr(V)) = D                 (chassis force balance, MODEL.md section 4)
+    n_wheels (F_t(i) - F_tr(V)) = D                 (chassis force balance, docs/model.md section 4)
     T_m = R_w (F_t - F_tr) + T_rr                   (wheel torque balance, per wheel)
 
 with ``V = R_w w (1 - i)`` and drawbar ``D`` (tow force).  These are the same terrain kernels
@@ -102,8 +102,12 @@ def peak_slip(X, wheel_speed_mps, seg, tp):
     return float(res.x)
 
 
-def max_drawbar_N(X, seg, tp: TerrainParams, wheel_speed_mps: float = 1.8) -> float:
-    """Largest steady drawbar of one segment on terrain ``X`` [N] (negative: immobilised)."""
+def max_drawbar_N(X, seg, tp: TerrainParams, wheel_speed_mps: float) -> float:
+    """Largest steady drawbar of one segment on terrain ``X`` [N] (negative: immobilised).
+
+    ``wheel_speed_mps`` is the wheel speed ``R_w w`` at which the slip and the resistance torque
+    are evaluated [m/s].
+    """
     i_pk = peak_slip(X, wheel_speed_mps, seg, tp)
     return float(net_force_per_segment_N(i_pk, X, wheel_speed_mps, seg, tp, moving=True))
 
@@ -145,6 +149,6 @@ def steady_state(X, seg, tp: TerrainParams, *, drawbar_N: float = 0.0, wheel_spe
     return _state(i, X, w, seg, tp)
 
 
-def immobilisation_limit_xt(seg, tp: TerrainParams, drawbar_N: float = 0.0, wheel_speed_mps: float = 1.8) -> float:
+def immobilisation_limit_xt(seg, tp: TerrainParams, *, wheel_speed_mps: float, drawbar_N: float = 0.0) -> float:
     """Terrain coefficient below which a segment cannot pull ``drawbar_N`` (0.586 for FrostyBoy, no tow)."""
     return float(brentq(lambda X: max_drawbar_N(X, seg, tp, wheel_speed_mps) - drawbar_N, 0.05, 1.0, xtol=1e-10))

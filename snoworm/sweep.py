@@ -63,7 +63,9 @@ import numpy as np
 import yaml
 
 from . import __version__
+from .driver import SolverError, simulate
 from .fileio import atomic_write_text
+from .scenario import Scenario, apply_overrides, read_yaml, scenario_from_dict
 from .schema import ScenarioError
 
 __all__ = ["Axis", "Case", "SweepTable", "SweepExecutionError", "parse_spec", "parse_sweep_option", "build_cases",
@@ -399,8 +401,6 @@ def run_case(task: dict) -> dict:
         ``index``, ``status``, ``error`` and, for ``ok``, the :func:`case_metrics` and
         ``wall_time_s``.  Never raises for a failing case; the time series stay in the worker.
     """
-    from .scenario import scenario_from_dict
-    from .simulate import SolverError, simulate
     wall0 = time.perf_counter()
     out = {"index": task["index"], "status": "ok", "error": ""}
     try:
@@ -736,9 +736,8 @@ def _hms(s):
 # ---------------------------------------------------------------------------------- driver
 def _base(scenario):
     """(raw mapping, source name, base_dir) of a path or a Scenario object."""
-    from .scenario import Scenario, dump_scenario, read_yaml
     if isinstance(scenario, Scenario):
-        return yaml.safe_load(dump_scenario(scenario)), scenario.name, None
+        return scenario.to_dict(), scenario.name, None
     if isinstance(scenario, dict):
         return scenario, "scenario", None
     path = Path(scenario)
@@ -799,7 +798,6 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         A malformed SPEC, unequal zip lengths, every case invalid, or an output directory
         holding another sweep.
     """
-    from .scenario import apply_overrides, scenario_from_dict
     axes = _as_axes(sets)
     raw, source, base_dir = _base(scenario)
     if not isinstance(raw, dict):
@@ -867,8 +865,9 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         if scheduler is not None:
             executor = DaskExecutor(scheduler)
         elif int(batch) > 1:
-            from .batch import BatchExecutor
-            executor = BatchExecutor(int(batch), int(jobs))
+            from .sweep_batch import BatchExecutor
+            executor = BatchExecutor(int(batch), int(jobs), ProcessExecutor(int(jobs)) if int(jobs) > 1 else None,
+                                     metrics=case_metrics)
         elif int(jobs) > 1:
             executor = ProcessExecutor(int(jobs))
         else:

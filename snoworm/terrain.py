@@ -2,7 +2,8 @@
 
 Every function here is a pure NumPy kernel, vectorised over any array shape (wheels, axles,
 segments, batch members).  They are the single implementation of each law: the chain dynamics,
-the steady-state solver, the terrain-curve plots and the calibration all call them.
+the steady-state solver, the terrain-curve plots and the calibration all call them.  Parameter
+values live in :mod:`snoworm.params` (named parameter sets); this module holds no defaults.
 
 Sign conventions: forward is positive.  ``V`` is the wheel's longitudinal ground speed [m/s],
 ``omega`` its spin rate [rad/s] (positive rolling forward), ``F_n`` its normal load [N].
@@ -16,7 +17,6 @@ import numpy as np
 
 __all__ = [
     "TerrainParams",
-    "FROSTYBOY_TERRAIN",
     "smooth_sign",
     "slip",
     "traction_force",
@@ -77,19 +77,6 @@ class TerrainParams:
     sign_eps_mps: float
     torque_balance: str = "contact"
 
-
-#: FrostyBoy terrain coefficients: paper Table 3 plus the fitted resistance-torque law.
-FROSTYBOY_TERRAIN = TerrainParams(
-    b_tF=0.7,
-    b_trF=0.165,
-    A=0.6,
-    peak_exponent_d=2.0,
-    tau0=0.1710,
-    tau1=1.7096,
-    slip_eps_mps=0.05,
-    sign_eps_mps=0.01,
-    torque_balance="contact",
-)
 
 #: Coefficient of the "traction" torque-balance convention (MODEL.md section 2).
 TRACTION_BALANCE_TAU = 1.601

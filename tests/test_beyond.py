@@ -11,7 +11,7 @@ from snoworm.cli import main
 from snoworm.energy import energy_balance, energy_metrics
 from snoworm.mobility import mobility_map
 from snoworm.scenario import ScenarioError, load_scenario, scenario_from_dict
-from snoworm.simulate import build_model, simulate, terrain_profile
+from snoworm import simulate
 
 PATCH_START_M, PATCH_END_M, PATCH_RAMP_M = 8.0, 18.0, 0.5
 UNIFORM = 'mode={type: uniform, speed_mps: 1.8, start_time_s: 0.5}'
@@ -46,18 +46,18 @@ def _base(**terrain):
 def test_patches_compile_to_one_profile():
     sc = scenario_from_dict(_base(xt=0.9, patches=[{"start_m": 8, "end_m": 18, "xt": 0.3, "ramp_m": 0.5},
                                                    {"start_m": 30, "end_m": 31, "xt": 0.5}]))
-    p = terrain_profile(sc)
+    p = sc.terrain.compile()
     X = p(np.array([0.0, 7.5, 7.75, 8.0, 13.0, 18.0, 18.25, 18.5, 25.0, 30.5, 29.998, 40.0]))
     np.testing.assert_allclose(X, [0.9, 0.9, 0.6, 0.3, 0.3, 0.3, 0.6, 0.9, 0.9, 0.5, 0.9, 0.9], atol=1e-3)
     # the chain model evaluates the same table (one evaluation path)
-    assert build_model(sc).profile == p
+    assert sc.chain_model.profile == p
 
 
 def test_random_profile_reproducible_and_seeded():
     spec = {"mean": 0.6, "std": 0.15, "correlation_length_m": 5.0, "seed": 7, "length_m": 2000.0, "min_xt": 0.1}
-    a = terrain_profile(scenario_from_dict(_base(random=spec)))
-    b = terrain_profile(scenario_from_dict(_base(random=dict(spec))))
-    c = terrain_profile(scenario_from_dict(_base(random={**spec, "seed": 8})))
+    a = scenario_from_dict(_base(random=spec)).terrain.compile()
+    b = scenario_from_dict(_base(random=dict(spec))).terrain.compile()
+    c = scenario_from_dict(_base(random={**spec, "seed": 8})).terrain.compile()
     assert a == b                                     # same seed: identical table
     va, vc = np.array(a.values), np.array(c.values)
     assert va.shape == vc.shape and np.max(np.abs(va - vc)) > 0.1    # another seed: another profile
@@ -190,7 +190,7 @@ def test_map_rolling_boundary_matches_steady_limit(scenario_path):
     assert m["rolling_limit_xt"][0.0] == pytest.approx(0.586, abs=5e-4)
     seg = sc.vehicle.segment_params()[0]
     assert m["rolling_limit_xt"][200.0] == pytest.approx(
-        steady.immobilisation_limit_xt(seg, build_model(sc).tp, drawbar_N=200.0 / 6), abs=1e-9)
+        steady.immobilisation_limit_xt(seg, sc.chain_model.tp, drawbar_N=200.0 / 6, wheel_speed_mps=1.8), abs=1e-9)
     assert m["rolling_limit_xt"][200.0] > m["rolling_limit_xt"][0.0] + 0.01
 
 

@@ -5,13 +5,12 @@ from hypothesis import given, settings, strategies as st
 
 from snoworm.dynamics import Controls
 from snoworm.scenario import apply_overrides, read_yaml, scenario_from_dict
-from snoworm.simulate import build_model
 from tests.conftest import SCENARIOS
 
 
 def model_for(path, overrides=(), force_loop=None):
     sc = scenario_from_dict(apply_overrides(read_yaml(path), overrides))
-    m = build_model(sc)
+    m = sc.chain_model
     if force_loop is not None and force_loop != m.force_loop:
         from snoworm.dynamics import ChainModel
         m = ChainModel(m.seg, m.links, m.tp, m.profile, m.tow_force_N, force_loop=force_loop)
@@ -21,14 +20,14 @@ def model_for(path, overrides=(), force_loop=None):
 def random_state(m, rng):
     y = m.initial_state()
     Y = m.unpack(y).copy()
-    Y[:, m.idx["x_m"]] += rng.normal(0, 0.05, m.n)
-    Y[:, m.idx["v_mps"]] = rng.uniform(-0.5, 2.0, m.n)
+    Y[:, m.layout.index["x_m"]] += rng.normal(0, 0.05, m.n)
+    Y[:, m.layout.index["v_mps"]] = rng.uniform(-0.5, 2.0, m.n)
     Y[:, 2:4] = rng.uniform(-2, 9, (m.n, 2))
     Y[:, 4:6] = rng.uniform(-50, 50, (m.n, 2))
     if m.force_loop:
-        Y[:, m.idx["q_mps"]] = rng.uniform(-0.5, 0.5, m.n)
+        Y[:, m.layout.index["q_mps"]] = rng.uniform(-0.5, 0.5, m.n)
     if m.has_joints:
-        Y[:, m.idx["s_m"]] = rng.uniform(0.0, 0.3, m.n)
+        Y[:, m.layout.index["s_m"]] = rng.uniform(0.0, 0.3, m.n)
     return Y.reshape(-1)
 
 
@@ -77,14 +76,14 @@ def test_jac_sparsity_covers_finite_difference_jacobian(scenario_path, links, fo
             missing = np.nonzero((np.abs(col) > 1e-8) & ~P[:, j])[0]
             assert missing.size == 0, f"d f[{missing}] / d y[{j}] non-zero but not in the pattern"
     lb, ub = m.bandwidths()
-    assert lb < m.n_s * 2 + 2 and ub < m.n_s * 2 + 2
+    assert lb < m.layout.n_s * 2 + 2 and ub < m.layout.n_s * 2 + 2
 
 
 def test_state_layout_named(scenario_path):
     m = model_for(scenario_path("tow6_uniform"))
-    assert m.fields[:2] == ("x_m", "v_mps")
+    assert m.layout.fields[:2] == ("x_m", "v_mps")
     Y = m.unpack(m.initial_state())
-    assert np.allclose(np.diff(Y[:, m.idx["x_m"]]), -1.5)   # rest spacing, leader in front
+    assert np.allclose(np.diff(Y[:, m.layout.index["x_m"]]), -1.5)   # rest spacing, leader in front
 
 
 @pytest.mark.parametrize("links,force_loop,n", [("fixed", False, 6), ("prismatic", False, 6),

@@ -22,7 +22,7 @@ from snoworm import steady
 from snoworm.cli import main
 from snoworm.scenario import load_scenario
 from snoworm.schema import ScenarioError
-from snoworm.simulate import simulate
+from snoworm import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("1", "2", "3", "4", "5")

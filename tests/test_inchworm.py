@@ -7,7 +7,9 @@ from snoworm import load_scenario, simulate
 from snoworm.modes.inchworm import gait_plan, progress_conditions
 from snoworm.scenario import ScenarioError, apply_overrides, read_yaml, scenario_from_dict
 from snoworm import terrain
-from snoworm.terrain import FROSTYBOY_TERRAIN
+from snoworm.params import terrain_params
+
+FROSTYBOY_TERRAIN = terrain_params("frostyboy")
 from tests.conftest import SCENARIOS
 
 FN = 90 * 9.81 / 4

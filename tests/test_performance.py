@@ -7,9 +7,10 @@ here; one that makes it cheaper should lower the budget.
 import numpy as np
 import pytest
 
-from snoworm.batch import BatchExecutor, batch_key, run_chunk, simulate_batch
+from snoworm.driver import batch_key, simulate_batch
+from snoworm.sweep_batch import BatchExecutor, run_chunk
 from snoworm.scenario import apply_overrides, load_scenario, read_yaml
-from snoworm.simulate import simulate
+from snoworm import simulate
 from snoworm.sweep import case_metrics, run_sweep
 
 #: scenario -> (nfev budget, njev budget); measured 596 / 20 and 21 089 / 1 285 (LSODA, rtol 1e-5)
@@ -47,9 +48,10 @@ def test_batched_runs_match_one_by_one(scenario_path):
            for xt, f, v in CASES]
     assert len({batch_key(sc) for sc in scs}) == 1
     batched = simulate_batch(scs)
-    for sc, rb in zip(scs, batched):
-        assert_metrics_close(case_metrics(simulate(sc)), case_metrics(rb))
-        assert rb.stats["batch_size"] == len(scs)
+    for sc, mb in zip(scs, batched):
+        assert mb.status == "ok", mb.error
+        assert_metrics_close(case_metrics(simulate(sc)), case_metrics(mb.result))
+        assert mb.result.stats["batch_size"] == len(scs)
 
 
 def test_batched_sweep_matches_serial_sweep(scenario_path):
@@ -77,7 +79,7 @@ def test_unbatchable_cases_run_one_by_one(scenario_path):
     def one(task):
         seen.append(task["index"])
         return {"index": task["index"], "status": "stub"}
-    rows = {r["index"]: r for r in run_chunk(tasks, fn=one)}
+    rows = {r["index"]: r for r in run_chunk(tasks, fn=one, metrics=case_metrics)}
     assert sorted(seen) == [2, 3]
     assert rows[0]["status"] == rows[1]["status"] == "ok"
     with pytest.raises(ValueError):

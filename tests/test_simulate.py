@@ -4,7 +4,7 @@ import pytest
 
 from snoworm import load_scenario, simulate
 from snoworm.energy import energy_balance
-from snoworm.simulate import SolverError
+from snoworm import SolverError
 
 
 @pytest.fixture(scope="module")
@@ -33,9 +33,9 @@ def test_fig7_staggered_reaches_fig6(fig6, scenario_path):
 
 def test_steady_state_agrees_with_root_finder(fig6):
     from types import SimpleNamespace
-    from snoworm.params import parameter_set
+    from snoworm.params import parameter_set, terrain_params
     from snoworm.steady import steady_state
-    from snoworm.terrain import FROSTYBOY_TERRAIN
+    FROSTYBOY_TERRAIN = terrain_params("frostyboy")
     seg = SimpleNamespace(**parameter_set("frostyboy")["segment"])
     ss = steady_state(0.9, seg, FROSTYBOY_TERRAIN, wheel_speed_mps=1.8, drawbar_N=200.0 / 6)
     assert fig6.segments["slip"][-1, 0] == pytest.approx(ss.slip, abs=2e-4)
@@ -55,7 +55,7 @@ def test_energy_balance(scenario_path):
 
 def test_solver_failure_raises(monkeypatch, scenario_path):
     import importlib
-    S = importlib.import_module("snoworm.simulate")
+    S = importlib.import_module("snoworm.driver")
 
     class Bad:
         status, message, nfev, njev, nlu = -1, "Required step size is less than spacing between numbers.", 1, 0, 0

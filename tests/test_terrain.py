@@ -6,7 +6,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from snoworm import terrain
-from snoworm.terrain import FROSTYBOY_TERRAIN as TP, TerrainProfile
+from snoworm.params import terrain_params
+from snoworm.terrain import TerrainProfile
+
+TP = terrain_params("frostyboy")
 
 FN = 90 * 9.81 / 4   # static normal force per wheel [N]
 RW = 0.265

@@ -19,7 +19,7 @@ kernel (:meth:`snoworm.dynamics.ChainModel.evaluate`)::
 
 ``q`` starts at 0, so at the motor start time the set-point starts at the nominal speed plus
 the proportional term (bumpless; starting from ``v_sp = 0`` the chain can fall into the stall
-equilibrium of MODEL.md section 5, Fig 11 note).  ``v_sp >= 0`` is the paper's constraint that
+equilibrium of docs/model.md section 5, Fig 11 note).  ``v_sp >= 0`` is the paper's constraint that
 "the lead segment does not drive backwards" (Fig 8).
 
 Targets and their conversion to link-force references
@@ -71,7 +71,7 @@ Predicted steady state
 The free segment carries ``W_f`` at its nominal wheel speed, which fixes its slip and the
 chain's ground speed ``V``; every controlled segment ``k`` then carries ``W_k`` at ``V``, which
 fixes its slip ``i_k`` and its steady set-point ``V / (1 - i_k)``.  For Fig 8 this gives a
-leader set-point of 1.679 m/s; for Figs 9-10 1.800 / 1.747 / 1.800 m/s (MODEL.md section 5).
+leader set-point of 1.679 m/s; for Figs 9-10 1.800 / 1.747 / 1.800 m/s (docs/model.md section 5).
 """
 from __future__ import annotations
 
@@ -82,9 +82,10 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .. import steady, terrain
-from ..dynamics import Controls
-from ..schema import ScenarioError, field, suggest
-from . import Interval, Mode, start_times
+from ..controls import Controls
+from ..schema import Config, ScenarioError, field, suggest
+from ..sections import ModeConfig
+from .base import Mode, register_mode, rolling_interval, start_times
 
 __all__ = ["TargetsConfig", "ForceControlConfig", "ForceControlMode", "ForcePlan", "plan",
            "available_drawbar_N", "SHARE_RULES"]
@@ -97,8 +98,10 @@ SATURATION_TOL_MPS = 1e-4
 
 
 @dataclass(frozen=True)
-class TargetsConfig:
+class TargetsConfig(Config):
     """What the force loops should achieve: exactly one kind of target (see the module docstring)."""
+
+    _section = "mode.targets"
 
     link_forces_N: Optional[tuple[float, ...]] = field(
         None, unit="N", doc="link-force references, tension positive, one per link from the front")
@@ -129,7 +132,7 @@ class TargetsConfig:
 
 
 @dataclass(frozen=True)
-class ForceControlConfig:
+class ForceControlConfig(ModeConfig):
     """``mode: {type: force_control, speed_mps: 1.8, start_time_s: 1, targets: {...}}`` (section 5.2)."""
 
     type: str = field(choices=("force_control",), doc="mode name")
@@ -145,6 +148,8 @@ class ForceControlConfig:
     max_speed_mps: Optional[float] = field(
         None, gt=0, unit="m/s", doc="upper limit of a loop's set-point (default: the no-load wheel speed R_w*w_nl)")
 
+    #: the state carries the outer force-loop integrators
+    force_loop = True
     #: extra plots made by :func:`snoworm.plotting.plot_result` for this mode
     extra_plots = ("force_diagram",)
 
@@ -174,9 +179,12 @@ class ForceControlConfig:
                                     "to share the tow (or give link_forces_N).")
 
     def check_scenario(self, sc, path):
-        """Build-time feasibility: every segment can pull its share; set-points within [0, v_max]."""
-        from ..simulate import build_model
-        plan(self, sc, build_model(sc), path)
+        """Feasibility: every segment can pull its share; set-points within [0, v_max] (the plan)."""
+        sc.mode_plan   # noqa: B018 - computing the plan raises ScenarioError if a target is impossible
+
+    def prepare(self, sc):
+        """The :class:`ForcePlan`, computed once per scenario (``scenario.mode_plan``)."""
+        return plan(self, sc, sc.chain_model)
 
 
 # ---------------------------------------------------------------------- steady-state helpers
@@ -294,9 +302,8 @@ def plan(cfg: ForceControlConfig, sc, model, path="mode") -> ForcePlan:
     vmax = (np.full(n, cfg.max_speed_mps) if cfg.max_speed_mps is not None
             else R * model.seg.no_load_speed_radps)
     # terrain under each segment at its start position (worst axle)
-    Y0 = model.unpack(model.initial_state())
-    xa = Y0[:, model.idx["x_m"], None] + model._axle_offset
-    xt = np.min(model.profile(xa), axis=-1)
+    x0 = model.field(model.unpack(model.initial_state()), "x_m")
+    xt = np.min(model.xt_at_axles(x0), axis=-1)
     t = cfg.targets
     tpath = f"{path}.targets"
     if t.link_forces_N is not None:
@@ -363,15 +370,17 @@ def plan(cfg: ForceControlConfig, sc, model, path="mode") -> ForcePlan:
                      float(V), sp, slip)
 
 
+@register_mode
 class ForceControlMode(Mode):
     """Outer PI loops on the link forces, wheel-speed set-points in ``[0, v_max]`` (paper section 5.2)."""
 
-    force_loop = True
+    name = "force_control"
+    config_class = ForceControlConfig
 
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)
         n = model.n
-        self.plan = plan(cfg, scenario, model)
+        self.plan = scenario.mode_plan
         self.t_start = start_times(cfg.start_time_s, n)
         self.breaks = np.unique(self.t_start)
         p = self.plan
@@ -383,10 +392,7 @@ class ForceControlMode(Mode):
             fc_vmax_mps=p.vmax_mps)
 
     def interval(self, t, y):
-        on = (self.t_start <= t + 1e-12).astype(float)
-        later = self.breaks[self.breaks > t + 1e-12]
-        t_end = float(later[0]) if later.size else np.inf
-        return Interval(t_end, self._base.with_(motor_on=on), [], "force control")
+        return rolling_interval(t, self.t_start, self.breaks, self._base, "force control")
 
     def summary(self, result) -> dict:
         """Targets, predicted and final steady state, and saturation of the loops."""

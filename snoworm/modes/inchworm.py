@@ -46,9 +46,10 @@ from typing import Optional
 import numpy as np
 
 from .. import terrain
-from ..dynamics import Controls
-from ..schema import ScenarioError, field
-from . import Interval, Mode
+from ..controls import Controls
+from ..schema import ScenarioError, field, suggest
+from ..sections import ModeConfig
+from .base import Interval, Mode, register_mode
 
 __all__ = ["InchwormConfig", "InchwormMode", "GAITS", "gait_plan", "progress_conditions"]
 
@@ -63,7 +64,7 @@ STROKE_TOL_M = 1e-3
 
 
 @dataclass(frozen=True)
-class InchwormConfig:
+class InchwormConfig(ModeConfig):
     """``mode: {type: inchworm, gait: six_segment, ...}`` (paper section 5.1)."""
 
     type: str = field(choices=("inchworm",), doc="mode name")
@@ -95,7 +96,6 @@ class InchwormConfig:
         g = self.gait
         if isinstance(g, str):
             if g not in GAITS:
-                from ..schema import suggest
                 raise ScenarioError(f"{path}.gait: unknown gait {g!r}.{suggest(g, GAITS)} Known gaits: "
                                     f"{', '.join(GAITS)}; or give a list of phases such as [[1], [0]].")
             return
@@ -224,8 +224,12 @@ def progress_conditions(F_c, Ft_front, Ftr_front, Ftr_rear):
             "progress": bool(eq4 > 0 and eq5 >= 0)}
 
 
+@register_mode
 class InchwormMode(Mode):
     """Run a push-pull gait on a chain with prismatic joints; phases change on stroke-limit events."""
+
+    name = "inchworm"
+    config_class = InchwormConfig
 
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)
@@ -253,10 +257,9 @@ class InchwormMode(Mode):
     def _segment_forces(self, y):
         """Per segment: full forward terrain resistance and locked-wheel traction (i = 1) [N]."""
         m = self.model
-        x = m.field(m.unpack(y), "x_m")
-        X = m.profile(x[:, None] + m._axle_offset)
-        Fn = m._Fn
-        nw = m._nw[:, None]
+        X = m.xt_at_axles(m.field(m.unpack(y), "x_m"))
+        Fn = m.normal_force_N
+        nw = m.wheels_per_axle[:, None]
         Ftr = (nw * terrain.resistance_force(np.inf, Fn, X, m.tp)).sum(-1)
         Ft1 = (nw * terrain.traction_force(1.0, Fn, X, m.tp)).sum(-1)
         return Ftr, Ft1
@@ -336,15 +339,14 @@ class InchwormMode(Mode):
             joint_anchor=np.where(plan.role < 0, np.arange(n - 1), np.arange(n - 1) + 1),
             joint_ka=np.full(n - 1, cfg.anchor_gain_Ns_per_m if cfg.joint_control != "force" else 0.0))
         events, self._event_joints = [], []
-        si = m.idx["s_m"]
-        ns = m.n_s
         for j in np.nonzero(active)[0]:
+            k = m.layout.flat_index(j, "s_m")      # extension of joint j (the link behind segment j)
             if plan.role[j] > 0:
                 target = L.stroke_max_m[j] - STROKE_TOL_M
-                ev = (lambda t_, y_, j=j, a=target: y_[j * ns + si] - a)
+                ev = (lambda t_, y_, k=k, a=target: y_[k] - a)
             else:
                 target = L.stroke_min_m[j] + STROKE_TOL_M
-                ev = (lambda t_, y_, j=j, a=target: a - y_[j * ns + si])
+                ev = (lambda t_, y_, k=k, a=target: a - y_[k])
             ev.direction = 1
             events.append(ev)
             self._event_joints.append(int(j))

@@ -33,7 +33,7 @@ supervisor checks the steady rolling feasibility of the whole chain at its curre
     D_avail = sum over segments k and axles a of  max_drawbar_N(X_t(x_k,a)) / 2  -  F_tow
 
 with ``max_drawbar_N`` the steady-state largest drawbar of a segment on uniform terrain
-(:func:`snoworm.steady.max_drawbar_N`, MODEL.md section 2; an axle carries half a segment).
+(:func:`snoworm.steady.max_drawbar_N`, docs/model.md section 2; an axle carries half a segment).
 Rolling resumes when ``D_avail >= resume_margin_N``: the segments on good snow can drag those
 still on the bad patch and the tow.  A chain on uniform snow with no tow resumes exactly when
 X_t is above the immobilisation limit (0.586 for FrostyBoy) by a margin set by
@@ -49,16 +49,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import steady, terrain
-from ..dynamics import Controls
+from ..controls import Controls
 from ..schema import ScenarioError, build, field
-from . import Interval, Mode
+from ..sections import ModeConfig
+from .base import Interval, Mode, register_mode
 from .inchworm import InchwormConfig, InchwormMode
 
 __all__ = ["SupervisorConfig", "SupervisorMode", "chain_drawbar_surplus_N"]
 
 
 @dataclass(frozen=True)
-class SupervisorConfig:
+class SupervisorConfig(ModeConfig):
     """``mode: {type: supervisor, rolling_speed_mps: ..., inching: {...}, ...}``."""
 
     type: str = field(choices=("supervisor",), doc="mode name")
@@ -97,7 +98,7 @@ class SupervisorConfig:
 def chain_drawbar_surplus_N(model, segments, x_m, wheel_speed_mps) -> float:
     """Steady drawbar the chain could develop rolling at its current position, minus the tow [N].
 
-    ``sum_k sum_axles max_drawbar_N(X_t(axle)) / 2 - F_tow`` (MODEL.md section 2 per-segment
+    ``sum_k sum_axles max_drawbar_N(X_t(axle)) / 2 - F_tow`` (docs/model.md section 2 per-segment
     maximum drawbar; each axle carries half a segment).  Positive: the chain can roll.
 
     Parameters
@@ -111,7 +112,7 @@ def chain_drawbar_surplus_N(model, segments, x_m, wheel_speed_mps) -> float:
     wheel_speed_mps : float
         Rolling wheel-speed set-point [m/s].
     """
-    X = model.profile(np.asarray(x_m, float)[:, None] + model._axle_offset)
+    X = model.xt_at_axles(x_m)
     total = 0.0
     for k, seg in enumerate(segments):
         for a in range(X.shape[1]):
@@ -119,8 +120,12 @@ def chain_drawbar_surplus_N(model, segments, x_m, wheel_speed_mps) -> float:
     return total - model.tow_force_N
 
 
+@register_mode
 class SupervisorMode(Mode):
     """Roll; switch to the inchworm gait when immobilised; switch back when rolling is feasible."""
+
+    name = "supervisor"
+    config_class = SupervisorConfig
 
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)
@@ -148,12 +153,11 @@ class SupervisorMode(Mode):
     def _leader_slip(self, y):
         m = self.model
         Y = m.unpack(y)
-        w = Y[0, 2:4] * m.seg.wheel_radius_m[0]
-        return float(np.mean(terrain.slip(w, Y[0, m.idx["v_mps"]], m.tp.slip_eps_mps)))
+        w = Y[0, m.layout.omega] * m.seg.wheel_radius_m[0]
+        return float(np.mean(terrain.slip(w, m.field(Y, "v_mps")[0], m.tp.slip_eps_mps)))
 
     def _xt_under(self, y):
-        m = self.model
-        return m.profile(self._x(y)[:, None] + m._axle_offset).mean(-1)
+        return self.model.xt_at_axles(self._x(y)).mean(-1)
 
     def _switch(self, t, y, new, kind, detail):
         self.state = new

@@ -10,15 +10,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics import Controls
+from ..controls import Controls
 from ..schema import ScenarioError, field
-from . import Interval, Mode, start_times
+from ..sections import ModeConfig
+from .base import Mode, register_mode, rolling_interval, start_times
 
 __all__ = ["UniformConfig", "UniformMode"]
 
 
 @dataclass(frozen=True)
-class UniformConfig:
+class UniformConfig(ModeConfig):
     """``mode: {type: uniform, speed_mps: ..., start_time_s: ...}``."""
 
     type: str = field(choices=("uniform",), doc="mode name")
@@ -32,9 +33,17 @@ class UniformConfig:
             raise ScenarioError(f"{path}.speed_mps: give one speed for all segments or {vehicle.segments}; "
                                 f"got {len(self.speed_mps)}.")
 
+    def batch_signature(self):
+        """Members with the same start times have the same intervals (speeds may differ)."""
+        return ("uniform", tuple(self.start_time_s))
 
+
+@register_mode
 class UniformMode(Mode):
     """Drive every segment at its wheel-speed set-point from its start time on."""
+
+    name = "uniform"
+    config_class = UniformConfig
 
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)
@@ -42,9 +51,7 @@ class UniformMode(Mode):
         self.t_start = start_times(cfg.start_time_s, n)
         self.speed = np.asarray(cfg.speed_mps, float) * np.ones(n)
         self.breaks = np.unique(self.t_start)
+        self.base = Controls.rolling(n, np.zeros(n), self.speed)
 
     def interval(self, t, y):
-        on = (self.t_start <= t + 1e-12).astype(float)
-        later = self.breaks[self.breaks > t + 1e-12]
-        t_end = float(later[0]) if later.size else np.inf
-        return Interval(t_end, Controls.rolling(self.model.n, on, self.speed), [], "rolling")
+        return rolling_interval(t, self.t_start, self.breaks, self.base, "rolling")

@@ -1,0 +1,248 @@
+"""The simulation driver: assembled case -> ``solve_ivp`` per interval -> :class:`~snoworm.results.Result`.
+
+One interval driver serves single runs (:func:`simulate`) and batched stacks
+(:func:`simulate_batch`): the integration restarts at every controller start time and every
+gait phase change (state events), so no switch of a controller falls inside a solver step
+(docs/model.md section 6).  An interval that fails with the configured method is retried with
+the implicit methods not yet tried; when every method fails, :class:`SolverError` carries the
+solvers' messages.  A failed run never returns a partial result as if it were whole.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from .controls import Controls
+from .dynamics import ChainModel
+from .modes import mode_class
+from .results import Result
+
+__all__ = ["SolverError", "Case", "assemble", "simulate", "simulate_batch", "batch_key", "BatchMember",
+           "solver_options", "output_grid", "ATOL"]
+
+
+class SolverError(RuntimeError):
+    """The ODE solver failed; the message carries the solver's own message and where it failed."""
+
+
+#: Absolute tolerance of each state field, multiplied by ``simulation.atol_scale``.
+ATOL = {"x_m": 1e-6, "v_mps": 1e-6, "omega_front": 1e-5, "omega_rear": 1e-5,
+        "integral_front_Nm": 1e-4, "integral_rear_Nm": 1e-4, "q_mps": 1e-6, "s_m": 1e-7}
+
+#: Safety bound on consecutive zero-length intervals (a mode whose events re-trigger at once).
+MAX_STUCK_INTERVALS = 50
+
+
+@dataclass
+class Case:
+    """A scenario assembled for a run: its chain model and a fresh mode (built once per run)."""
+
+    scenario: object
+    model: ChainModel
+    mode: object
+
+
+def assemble(sc) -> Case:
+    """Pair a scenario's chain model (built once per scenario) with a new instance of its mode."""
+    model = sc.chain_model
+    return Case(sc, model, mode_class(sc.mode)(sc.mode, sc, model))
+
+
+def solver_options(model: ChainModel, sim, method=None) -> dict:
+    """``solve_ivp`` keyword arguments for the model: method, tolerances, Jacobian structure."""
+    method = method or sim.method
+    opts = {"method": method, "rtol": sim.rtol, "atol": model.layout.per_state(ATOL) * sim.atol_scale}
+    if sim.max_step_s is not None:
+        opts["max_step"] = sim.max_step_s
+    if method == "LSODA":
+        opts["lband"], opts["uband"] = model.bandwidths()
+        opts["jac"] = model.jacobian_banded
+    elif method in ("BDF", "Radau"):
+        opts["jac"] = model.jacobian_sparse
+    return opts
+
+
+def output_grid(t0, t1, dt, include_start):
+    """Output times of an interval: the multiples of ``dt`` inside it, its end, and its start if asked."""
+    k0 = int(np.floor(t0 / dt + 1e-9)) + 1
+    k1 = int(np.ceil(t1 / dt - 1e-9)) - 1
+    g = np.arange(k0, k1 + 1) * dt
+    pts = [t0] if include_start else []
+    return np.array(pts + list(g[(g > t0) & (g < t1)]) + [t1])
+
+
+def _fallbacks(method):
+    """The configured method first, then the implicit methods not yet tried."""
+    return [method] + [m for m in ("BDF", "Radau") if m != method]
+
+
+def _terminal(ev):
+    """A mode's event ``ev(t, y)`` as a terminal solve_ivp event (which also receives ``args``)."""
+    def f(t, y, _ctl):
+        return ev(t, y)
+    f.terminal = True
+    f.direction = getattr(ev, "direction", 0)
+    return f
+
+
+def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label):
+    """Integrate one interval with method fallbacks; ``(ts, ys, t_next, y_next, event_index)``."""
+    sol, failures = None, []
+    for method in _fallbacks(sim.method):
+        try:
+            sol = solve_ivp(model.rhs, (t, t1), y, t_eval=t_eval, events=events or None, args=(ctl,),
+                            **solver_options(model, sim, method))
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            failures.append(f"{method}: {exc}")
+            sol = None
+            continue
+        for k in ("nfev", "njev", "nlu"):
+            stats[k] += int(getattr(sol, k))
+        if sol.status >= 0 and all(np.all(np.isfinite(a)) for a in (sol.y, *(sol.y_events or ()))):
+            break
+        reached = sol.t[-1] if np.size(sol.t) else t
+        failures.append(f"{method}: {sol.message} (near t = {reached:.6g} s)")
+        sol = None
+    if sol is None:
+        raise SolverError(f"every method failed at t = {t:.6g} s in interval '{label}': "
+                          + "; ".join(failures) + ". Try a smaller simulation.rtol or max_step_s.")
+    if failures:                    # the interval succeeded after this many failed methods
+        stats["retries"] = stats.get("retries", 0) + len(failures)
+    stats["intervals"] += 1
+    ts = np.asarray(sol.t, float)
+    ys = np.asarray(sol.y, float).T if ts.size else np.empty((0, y.size))
+    if sol.status != 1:
+        return ts, ys, t1, sol.y[:, -1].copy(), None
+    t_hit, which = min((te[0], j) for j, te in enumerate(sol.t_events) if len(te))
+    y_hit = sol.y_events[which][0]
+    keep = ts < t_hit
+    return np.append(ts[keep], t_hit), np.vstack([ys[keep], y_hit]), float(t_hit), y_hit.copy(), which
+
+
+def _integrate(model, modes, sim, name):
+    """THE interval loop: ``modes`` (one per member) drive ``model`` (stacked if several members).
+
+    Returns ``(pieces per member, phases, stats)``.  Raises :class:`SolverError`, or ValueError
+    when the members of a stack ask for different intervals (they then run one by one).
+    """
+    B = len(modes)
+    t, T = 0.0, sim.duration_s
+    y = np.concatenate([md.initial_state() for md in modes])
+    pieces, phases = [[] for _ in range(B)], []
+    stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0}
+    stuck = 0
+    while t < T - 1e-12:
+        ys_b = y.reshape(B, -1)
+        ivs = [md.interval(t, ys_b[b]) for b, md in enumerate(modes)]
+        iv = ivs[0]
+        t1 = float(min(iv.t_end, T))
+        if B > 1 and (any(v.events for v in ivs) or any(float(min(v.t_end, T)) != t1 for v in ivs)):
+            raise ValueError("the members of a batch ask for different intervals")
+        if t1 <= t:
+            raise SolverError(f"mode of {name!r} asked for an empty interval at t = {t:.6g} s ({iv.label}).")
+        ctl = iv.controls if B == 1 else Controls.stack([v.controls for v in ivs])
+        t_eval = output_grid(t, t1, sim.output_dt_s, include_start=not phases)
+        ts, ys, t_next, y_next, which = _solve_interval(
+            model, ctl, t, t1, y, [_terminal(ev) for ev in iv.events], sim, t_eval, stats, iv.label)
+        if ts.size:
+            ys_m = ys.reshape(ts.size, B, -1)
+            for b in range(B):
+                pieces[b].append((ts, ys_m[:, b, :], ivs[b].controls))
+        phases.append({"t_start_s": t, "t_end_s": t_next, "label": iv.label})
+        stuck = stuck + 1 if t_next - t < 1e-9 else 0
+        if stuck > MAX_STUCK_INTERVALS:
+            raise SolverError(f"mode of {name!r} keeps ending intervals at t = {t:.6g} s without progress "
+                              f"({iv.label}); its phase-change events re-trigger immediately.")
+        t, y = t_next, y_next
+        if which is not None:
+            modes[0].on_event(t, y, which)
+    return pieces, phases, stats
+
+
+def simulate(sc) -> Result:
+    """Run a scenario and return its :class:`~snoworm.results.Result`.
+
+    Raises
+    ------
+    SolverError
+        If every solver method fails on an interval (the message includes the solvers'
+        messages, the time reached and the interval's label).
+    """
+    wall0 = time.perf_counter()
+    case = assemble(sc)
+    pieces, phases, stats = _integrate(case.model, [case.mode], sc.simulation, sc.name)
+    stats["wall_time_s"] = time.perf_counter() - wall0
+    return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
+
+
+def batch_key(sc):
+    """A hashable key shared by the scenarios that can run as one stacked system, or None.
+
+    Members must share the mode's batch signature (:meth:`ModeConfig.batch_signature`: the same
+    intervals, no events), the state layout, link types, solver settings, terrain coefficients
+    and the X_t profile (or all have constant X_t).
+    """
+    sig = sc.mode.batch_signature()
+    if sig is None:
+        return None
+    model = sc.chain_model
+    sim = sc.simulation
+    profile = "constant" if model.profile.is_constant else model.profile
+    return (sig, model.n, model.layout.fields, tuple(model.links.prismatic.tolist()), sim.duration_s,
+            sim.output_dt_s, sim.rtol, sim.atol_scale, sim.method, sim.max_step_s, model.tp, profile)
+
+
+@dataclass
+class BatchMember:
+    """Outcome of one member of a batched run: ``status`` ``"ok"`` with its ``result``, or
+    ``"solver_failure"`` with the solver's message in ``error``."""
+
+    scenario: object
+    result: Result | None
+    status: str
+    error: str = ""
+
+
+def simulate_batch(scenarios) -> list:
+    """Run scenarios of one :func:`batch_key` as ONE stacked system through the same interval driver.
+
+    The members' models are stacked (:meth:`ChainModel.stack`: the same kernel with one more
+    leading axis on the parameters) and integrated together; LSODA's error test is a weighted
+    max-norm, so every member is held to the tolerance it has alone.  If the stacked solve fails,
+    each member runs alone, so one bad member does not fail the others.
+
+    Returns
+    -------
+    list of BatchMember
+        One per scenario, in order.
+
+    Raises
+    ------
+    ValueError
+        If the scenarios do not share a batch key.
+    """
+    wall0 = time.perf_counter()
+    scs = list(scenarios)
+    keys = {batch_key(sc) for sc in scs}
+    if None in keys or len(keys) != 1:
+        raise ValueError("simulate_batch needs scenarios with one batch key (see snoworm.driver.batch_key)")
+    cases = [assemble(sc) for sc in scs]
+    try:
+        big = ChainModel.stack([c.model for c in cases]) if len(cases) > 1 else cases[0].model
+        pieces, phases, stats = _integrate(big, [c.mode for c in cases], scs[0].simulation, scs[0].name)
+    except (SolverError, ValueError):
+        return [_alone(sc) for sc in scs]
+    wall = (time.perf_counter() - wall0) / len(scs)
+    return [BatchMember(c.scenario, Result.from_pieces(c.scenario, c.model, c.mode, pieces[b], [dict(p) for p in phases],
+                                                       dict(stats, batch_size=len(scs), wall_time_s=wall)), "ok")
+            for b, c in enumerate(cases)]
+
+
+def _alone(sc) -> BatchMember:
+    try:
+        return BatchMember(sc, simulate(sc), "ok")
+    except SolverError as exc:
+        return BatchMember(sc, None, "solver_failure", str(exc))

@@ -1,0 +1,147 @@
+"""The mode contract: what a mobility mode provides, and the open registry of modes.
+
+A mode turns its validated configuration into a sequence of integration intervals, each with
+piecewise-constant :class:`~snoworm.controls.Controls` and, optionally, state events that end
+the interval (a gait phase change).  The physics never changes between modes (paper section 5:
+the modes are controllers of the same chain).
+
+A new mode is one module defining a :class:`~snoworm.sections.ModeConfig` subclass (its
+``mode:`` section, validated on construction) and a :class:`Mode` subclass naming it, registered
+with :func:`register_mode` -- also from a user's own module, before the scenario is loaded.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field as dc_field
+
+import numpy as np
+
+from ..controls import Controls
+from ..schema import ScenarioError
+from ..scenario import register_mode_config
+from ..sections import ModeConfig
+
+__all__ = ["Mode", "Interval", "MODES", "register_mode", "mode_class", "start_times", "rolling_interval"]
+
+#: ``mode.type`` -> :class:`Mode` subclass (see :func:`register_mode`).
+MODES: dict = {}
+
+
+@dataclass
+class Interval:
+    """One integration interval: controls held constant until ``t_end`` or an event.
+
+    Attributes
+    ----------
+    t_end : float
+        End time [s] (``inf``: until an event or the end of the run).
+    controls : Controls
+        The inputs held during the interval.
+    events : list of callable
+        Terminal state events ``ev(t, y) -> float`` (zero crossing ends the interval), each
+        optionally with a ``direction`` attribute as in :func:`scipy.integrate.solve_ivp`.
+    label : str
+        A name for the interval (results' ``phases``, error messages).
+    """
+
+    t_end: float
+    controls: Controls
+    events: list = dc_field(default_factory=list)
+    label: str = ""
+
+
+class Mode:
+    """Base class of mobility modes: every hook a mode may provide, with its default.
+
+    Class attributes
+    ----------------
+    name : str
+        The ``mode.type`` this mode answers to.
+    config_class : type
+        Its :class:`~snoworm.sections.ModeConfig` subclass.
+
+    Parameters
+    ----------
+    cfg : ModeConfig
+        The validated mode section.
+    scenario : Scenario
+        The whole scenario (``scenario.mode_plan`` holds the config's prepared plan).
+    model : ChainModel
+        The assembled chain (read its parameters; never change them).
+
+    Hooks
+    -----
+    1. :meth:`initial_state` -- the state at t = 0 (default: the chain at rest).
+    2. :meth:`interval` -- **required**: the controls from time ``t`` and state ``y`` on.
+    3. :meth:`on_event` -- called when one of the interval's events ended it (required if
+       :meth:`interval` returns events).
+    4. :meth:`summary` -- mode-specific metrics for ``summary.json`` (default: none).
+
+    Events worth reporting go to ``self.log`` as dicts with ``t_s``, ``kind`` and ``detail``.
+    """
+
+    name = ""
+    config_class = ModeConfig
+
+    def __init__(self, cfg, scenario, model):
+        self.cfg = cfg
+        self.scenario = scenario
+        self.model = model
+        self.log = []   # events: dicts with t_s, kind, detail
+
+    def initial_state(self) -> np.ndarray:
+        """State at t = 0 (flat); default: the chain at rest, joints at zero extension."""
+        return self.model.initial_state()
+
+    def interval(self, t: float, y: np.ndarray) -> Interval:
+        """The interval starting at ``t`` in state ``y``."""
+        raise NotImplementedError(f"mode {self.name!r} must implement interval(t, y)")
+
+    def on_event(self, t: float, y: np.ndarray, index: int) -> None:
+        """Event ``index`` of the current interval's events ended it at ``t`` in state ``y``."""
+        raise NotImplementedError(f"mode {self.name!r} returned events but does not implement on_event")
+
+    def summary(self, result) -> dict:
+        """Mode-specific summary metrics (added to ``summary.json``)."""
+        return {}
+
+
+def register_mode(cls):
+    """Register a :class:`Mode` subclass under ``cls.name`` (usable as a class decorator).
+
+    Makes ``mode: {type: <name>, ...}`` in a scenario validate against ``cls.config_class`` and
+    run with ``cls``.
+    """
+    if not (isinstance(cls, type) and issubclass(cls, Mode)) or not cls.name:
+        raise TypeError(f"register_mode needs a Mode subclass with a name, got {cls!r}")
+    register_mode_config(cls.name, cls.config_class)
+    MODES[cls.name] = cls
+    return cls
+
+
+def mode_class(cfg):
+    """The :class:`Mode` subclass registered for a validated mode config."""
+    return MODES[cfg.type]
+
+
+def start_times(values, n_segments, path="mode.start_time_s"):
+    """One start time for all segments, or one per segment, as an array of length N."""
+    v = np.asarray(values, float)
+    if v.size == 1:
+        return np.full(n_segments, float(v.reshape(-1)[0]))
+    if v.size != n_segments:
+        raise ScenarioError(f"{path}: give one start time for all segments or {n_segments} (one per segment); "
+                            f"got {v.size}.")
+    return v
+
+
+def rolling_interval(t, t_start, breaks, base: Controls, label: str) -> Interval:
+    """Motors on from each segment's start time: ``base`` with ``motor_on`` set, until the next start.
+
+    Shared by the modes whose only switches are motor start times (uniform, force control); the
+    integration restarts at every start time so no switch falls inside a solver step.
+    """
+    on = (t_start <= t + 1e-12).astype(float)
+    later = breaks[breaks > t + 1e-12]
+    t_end = float(later[0]) if later.size else np.inf
+    return Interval(t_end, base.with_(motor_on=on), [], label)
+

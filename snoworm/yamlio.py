@@ -1,0 +1,249 @@
+"""Hardened YAML reading for user scenario files.
+
+:func:`read_yaml` and :func:`load_yaml_text` return what :func:`yaml.safe_load` returns for ordinary
+input, but turn hostile or broken input (unknown tags, duplicate keys, alias bombs, deep nesting, huge or
+non-UTF-8 files, syntax errors) into a short :class:`~snoworm.schema.ScenarioError` (:func:`quote` cuts values).
+"""
+from __future__ import annotations
+
+import codecs
+import os
+import reprlib
+
+import yaml
+from yaml.events import MappingStartEvent, SequenceStartEvent
+from yaml.nodes import ScalarNode, SequenceNode
+
+from .schema import ScenarioError
+
+__all__ = ["MAX_BYTES", "MAX_DEPTH", "MAX_INT_CHARS", "MAX_NODES", "load_yaml_text", "quote", "read_yaml"]
+
+#: Node budget after expanding aliases (a scenario has ~100 nodes, a 30 000-point profile 90 000).
+MAX_NODES = 100_000
+#: Deepest nesting of mappings and sequences, through aliases too (scenarios use at most 4).
+MAX_DEPTH = 50
+#: Largest input: bytes of a file, characters of a text (shipped scenarios are ~1 kB).
+MAX_BYTES = 4 * 2**20
+#: Longest integer text, Python's own limit for decimal digits (sexagesimal 1:2:3... is quadratic).
+MAX_INT_CHARS = 4300
+
+_SYNTAX_HINT = "Fix the syntax (indentation, colons, quotes)."
+_BOMB = f"more than {MAX_NODES} values after expanding aliases: too many aliases / nodes (a YAML alias bomb?)."
+_DEEP = f"nested more than {MAX_DEPTH} levels deep (counting aliases); a scenario needs only a few levels."
+_SKIP_KEY_TAGS = ("tag:yaml.org,2002:merge", "tag:yaml.org,2002:value")  # '<<' and '=' keys
+
+
+def quote(value, limit: int = 100) -> str:
+    """The repr of ``value`` cut to ``limit`` characters, for error messages.
+
+    Parameters
+    ----------
+    value : object
+        Offending value; may be huge (a 2 MB string, a long list).
+    limit : int
+        Most characters of the repr kept.
+
+    Returns
+    -------
+    str
+        ``repr(value)`` if short, else its head and the total length: ``'xxxx...' (2000000 characters)``.
+    """
+    is_text = isinstance(value, (str, bytes, bytearray))
+    try:  # reprlib shortens containers and other objects; only the head of a string is repr'd
+        text = repr(value[:limit + 1]) if is_text else reprlib.repr(value)
+    except ValueError:  # an int beyond Python's str-digit limit
+        text = f"<{type(value).__name__}>"
+    if len(text) <= limit and not (is_text and len(value) > limit):
+        return text
+    unit = "characters" if isinstance(value, str) else "bytes" if is_text else "items"
+    return f"{text[:limit]}... ({len(value) if hasattr(value, '__len__') else '?'} {unit})"
+
+
+def _clip(text, limit: int = 120) -> str:
+    """PyYAML's or Python's own problem text, cut (it may echo a long alias, tag or value)."""
+    return str(text) if len(str(text)) <= limit else f"{str(text)[:limit]}... ({len(str(text))} characters)"
+
+
+def _error(source: str, mark, message: str) -> ScenarioError:
+    """A ScenarioError naming the source and the line and column of ``mark``."""
+    where = f", line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+    return ScenarioError(f"{source}{where}: {message}")
+
+
+class _Loader(yaml.SafeLoader):
+    """SafeLoader with size and depth guards while composing, and graph checks before constructing."""
+
+    def __init__(self, text: str, source: str):
+        super().__init__(text)
+        self.source, self._depth, self._composed, self._memo = source, 0, 0, {}
+
+    def compose_node(self, parent, index):
+        """Compose one node, refusing more than MAX_NODES nodes or MAX_DEPTH nesting."""
+        event = self.peek_event()
+        nested = isinstance(event, (SequenceStartEvent, MappingStartEvent))
+        self._composed, self._depth = self._composed + 1, self._depth + nested
+        try:
+            if self._composed > MAX_NODES or self._depth > MAX_DEPTH:
+                raise _error(self.source, event.start_mark, _BOMB if self._composed > MAX_NODES else _DEEP)
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= nested
+
+    def walk(self, node, level: int = 0):
+        """(expanded size, nesting height) of ``node`` inside ``level`` collections; checks it.
+
+        Aliases share nodes (and constructed objects: the blow-up would hit whoever walks the data later),
+        so sizes are memoised per node and the walk stops once one passes MAX_NODES, before constructing.
+        """
+        if isinstance(node, ScalarNode):
+            return 1, 0
+        key = id(node)
+        if key in self._memo and self._memo[key] is None:  # met again while walking its own children
+            raise _error(self.source, node.start_mark, "recursive alias: this node contains an alias to "
+                         "itself. Recursive structures are not allowed; remove the alias.")
+        if key not in self._memo:
+            if level >= MAX_DEPTH:
+                raise _error(self.source, node.start_mark, _DEEP)
+            self._memo[key] = None
+            if not isinstance(node, SequenceNode):
+                self._check_duplicate_keys(node)
+            children = node.value if isinstance(node, SequenceNode) else [n for kv in node.value for n in kv]
+            count, height = 1, 0
+            for child in children:
+                n, h = self.walk(child, level + 1)
+                count, height = count + n, max(height, h)
+                if count > MAX_NODES:
+                    raise _error(self.source, child.start_mark, _BOMB)
+            self._memo[key] = (count, height + 1)
+        if level + self._memo[key][1] > MAX_DEPTH:
+            raise _error(self.source, node.start_mark, _DEEP)
+        return self._memo[key]
+
+    def _check_duplicate_keys(self, node) -> None:
+        """Refuse a key given twice in one mapping (PyYAML silently keeps the last)."""
+        seen = {}
+        for key_node, _ in node.value:
+            if not isinstance(key_node, ScalarNode) or key_node.tag in _SKIP_KEY_TAGS:
+                continue  # merged keys may be overridden; complex keys fail when constructed
+            key = self.construct_object(key_node)  # scalars construct to hashable values
+            first = seen.setdefault(key, key_node)
+            if first is not key_node:
+                raise _error(self.source, key_node.start_mark, f"duplicate key {quote(key)} (first at line "
+                             f"{first.start_mark.line + 1}); YAML would silently keep only the last. "
+                             "Remove or rename one.")
+
+    def construct_object(self, node, deep=False):
+        """Construct a node; a value its tag cannot read, or an absurdly long int, is a ScenarioError."""
+        if node.tag == "tag:yaml.org,2002:int" and len(node.value) > MAX_INT_CHARS:
+            raise _error(self.source, node.start_mark,
+                         f"integer {quote(node.value)} is too long (more than {MAX_INT_CHARS} characters).")
+        try:
+            return super().construct_object(node, deep=deep)
+        except ScenarioError:
+            raise
+        except (ValueError, TypeError, AttributeError, OverflowError) as exc:  # !!timestamp 2020-13-45, !!int x
+            what = quote(node.value) if isinstance(node, ScalarNode) else "this value"
+            why = f" ({_clip(exc)})" if isinstance(exc, ValueError) else ""
+            raise _error(self.source, node.start_mark, f"cannot read {what} as {quote(node.tag)}{why}.") from None
+
+    def construct_unknown(self, node):
+        """Refuse any tag SafeLoader does not know (``!!python/object``, custom ``!tags``)."""
+        raise _error(self.source, node.start_mark, f"unknown tag {quote(node.tag)}: tags that create "
+                     "Python objects or custom types are not allowed. Remove the tag.")
+
+
+_Loader.add_constructor(None, _Loader.construct_unknown)
+
+
+def _load(text: str, source: str):
+    """``(True, data)``, or ``(False, None)`` when ``text`` holds no YAML document."""
+    if len(text) > MAX_BYTES:
+        raise ScenarioError(f"{source}: {len(text)} characters, over the {MAX_BYTES} allowed (a scenario is a few kB).")
+    try:
+        loader = _Loader(text, source)
+        node = loader.get_single_node()
+        if node is None:
+            return False, None
+        loader.walk(node)
+        return True, loader.construct_document(node)
+    except yaml.MarkedYAMLError as exc:
+        at = f" at line {exc.context_mark.line + 1}" if exc.context_mark else ""
+        context = f" ({_clip(exc.context)}{at})" if exc.context else ""
+        raise _error(source, exc.problem_mark or exc.context_mark,
+                     f"not valid YAML: {_clip(exc.problem)}{context}. {_SYNTAX_HINT}") from None
+    except yaml.reader.ReaderError as exc:
+        line = text.count("\n", 0, exc.position) + 1
+        raise ScenarioError(f"{source}, line {line}: character #x{exc.character:04x} is not allowed in YAML "
+                            "(write control characters as escapes in double quotes). Remove it.") from None
+    except yaml.YAMLError as exc:
+        raise ScenarioError(f"{source}: not valid YAML: {_clip(exc)}. {_SYNTAX_HINT}") from None
+    except RecursionError:
+        raise ScenarioError(f"{source}: {_DEEP}") from None
+
+
+def load_yaml_text(text: str, source: str):
+    """Parse YAML text like :func:`yaml.safe_load`, with the guards of this module.
+
+    Parameters
+    ----------
+    text : str
+        YAML text.
+    source : str
+        Name of the text (a path, ``--set key``) that starts each error message.
+
+    Returns
+    -------
+    object
+        What :func:`yaml.safe_load` returns for ordinary input (None for an empty text).
+
+    Raises
+    ------
+    ScenarioError
+        Syntax errors, unknown tags, duplicate keys, recursive aliases, more than :data:`MAX_NODES`
+        nodes after expanding aliases, nesting beyond :data:`MAX_DEPTH`, text beyond :data:`MAX_BYTES`.
+    """
+    return _load(text, source)[1]
+
+
+def read_yaml(path):
+    """Read and parse a UTF-8 YAML file (a byte-order mark is allowed) safely.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    object
+        The parsed data, as :func:`load_yaml_text`.
+
+    Raises
+    ------
+    ScenarioError
+        A missing, unreadable, empty (blank or comments only), oversized or non-UTF-8 file, or any
+        error of :func:`load_yaml_text`; the message starts with the path.
+    """
+    name = os.fsdecode(path)
+    try:
+        with open(name, "rb") as fh:
+            data = fh.read(MAX_BYTES + 1)
+    except FileNotFoundError:
+        raise ScenarioError(f"{name}: no such file. Check the path.") from None
+    except OSError as exc:
+        raise ScenarioError(f"{name}: cannot read the file ({exc.strerror or exc}).") from None
+    if len(data) > MAX_BYTES:
+        raise ScenarioError(f"{name}: larger than {MAX_BYTES} bytes (a scenario is a few kB); wrong file?")
+    if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE) or b"\0" in data:  # UTF-32 BOMs are caught too
+        raise ScenarioError(f"{name}: the file is not UTF-8 text (a UTF-16 or UTF-32 byte-order mark or NUL "
+                            "bytes: UTF-16, UTF-32 or a binary file); save it as UTF-8.")
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise ScenarioError(f"{name}, line {line}: byte {data[exc.start]:#04x} is not valid UTF-8 (Latin-1, "
+                            "Windows-1252 or another encoding?); save it as UTF-8.") from None
+    found, value = _load(text, name)
+    if not found:
+        raise ScenarioError(f"{name}: the file is empty (no YAML content, only blanks or comments).")
+    return value
