@@ -14,6 +14,7 @@ from pathlib import Path
 
 import yaml
 
+from . import yamlio
 from .dynamics import ChainModel
 from .params import PARAMETER_SETS, parameter_set
 from .schema import Config, ScenarioError, build, dump, field, suggest
@@ -205,9 +206,9 @@ def parse_set_option(item: str):
     if not key or any(not p for p in key.split(".")):
         raise ScenarioError(f"--set {item!r}: the key must be a dotted path such as tow.force_N.")
     try:
-        value = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ScenarioError(f"--set {item!r}: the value is not valid YAML ({exc.problem}).") from None
+        value = yamlio.load_yaml_text(text, f"--set {key}")
+    except ScenarioError as exc:
+        raise ScenarioError(f"--set {yamlio.quote(item)}: the value is not valid YAML ({exc}).") from None
     return key, value
 
 
@@ -241,24 +242,12 @@ def apply_overrides(raw: dict, overrides) -> dict:
 
 
 def read_yaml(path) -> dict:
-    """Parse a YAML file, turning I/O and syntax errors into :class:`ScenarioError`."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(f"{path}: no such file. Check the path to the scenario.") from None
-    except OSError as exc:
-        raise ScenarioError(f"{path}: cannot be read ({exc.strerror}).") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise ScenarioError(f"{path}: not valid YAML{where}: {getattr(exc, 'problem', exc)}. "
-                            "Fix the syntax (indentation, colons, quotes).") from None
-    if data is None:
-        raise ScenarioError(f"{path}: the file is empty. A scenario needs the sections {', '.join(_TOP_KEYS[:-1])}.")
-    return data
+    """Parse a YAML file with the hardened reader (:func:`snoworm.yamlio.read_yaml`).
+
+    Syntax errors, non-UTF-8 files, duplicate keys, alias bombs, deep nesting, missing or empty
+    files become :class:`ScenarioError` naming the file.
+    """
+    return yamlio.read_yaml(path)
 
 
 def load_scenario(path, overrides=()) -> Scenario:

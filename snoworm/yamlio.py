@@ -1,8 +1,7 @@
 """Hardened YAML reading for user scenario files.
 
-:func:`read_yaml` and :func:`load_yaml_text` return what :func:`yaml.safe_load` returns for ordinary
-input, but turn hostile or broken input (unknown tags, duplicate keys, alias bombs, deep nesting, huge or
-non-UTF-8 files, syntax errors) into a short :class:`~snoworm.schema.ScenarioError` (:func:`quote` cuts values).
+:func:`read_yaml` and :func:`load_yaml_text` read YAML as :func:`yaml.safe_load` does, but hostile or broken
+input (unknown tags, duplicate keys, alias bombs, deep nesting, huge or non-UTF-8 files) gives a short ScenarioError.
 """
 from __future__ import annotations
 
@@ -18,14 +17,10 @@ from .schema import ScenarioError
 
 __all__ = ["MAX_BYTES", "MAX_DEPTH", "MAX_INT_CHARS", "MAX_NODES", "load_yaml_text", "quote", "read_yaml"]
 
-#: Node budget after expanding aliases (a scenario has ~100 nodes, a 30 000-point profile 90 000).
-MAX_NODES = 100_000
-#: Deepest nesting of mappings and sequences, through aliases too (scenarios use at most 4).
-MAX_DEPTH = 50
-#: Largest input: bytes of a file, characters of a text (shipped scenarios are ~1 kB).
-MAX_BYTES = 4 * 2**20
-#: Longest integer text, Python's own limit for decimal digits (sexagesimal 1:2:3... is quadratic).
-MAX_INT_CHARS = 4300
+MAX_NODES = 100_000  #: node budget after expanding aliases (scenario ~100, 30 000-point profile 90 000)
+MAX_DEPTH = 50  #: deepest nesting of mappings and sequences, through aliases too (scenarios use 4)
+MAX_BYTES = 4 * 2**20  #: largest input: bytes of a file, characters of a text (scenarios are ~1 kB)
+MAX_INT_CHARS = 4300  #: longest int text: Python's decimal limit (sexagesimal 1:2:3... is quadratic)
 
 _SYNTAX_HINT = "Fix the syntax (indentation, colons, quotes)."
 _BOMB = f"more than {MAX_NODES} values after expanding aliases: too many aliases / nodes (a YAML alias bomb?)."
@@ -89,6 +84,12 @@ class _Loader(yaml.SafeLoader):
         finally:
             self._depth -= nested
 
+    def fetch_flow_collection_start(self, token_class):
+        """Refuse '[' or '{' beyond MAX_DEPTH in the scanner already (it reads ~1 kB ahead, slowly)."""
+        if self.flow_level >= MAX_DEPTH:
+            raise _error(self.source, self.get_mark(), _DEEP)
+        super().fetch_flow_collection_start(token_class)
+
     def walk(self, node, level: int = 0):
         """(expanded size, nesting height) of ``node`` inside ``level`` collections; checks it.
 
@@ -105,9 +106,7 @@ class _Loader(yaml.SafeLoader):
             if level >= MAX_DEPTH:
                 raise _error(self.source, node.start_mark, _DEEP)
             self._memo[key] = None
-            if not isinstance(node, SequenceNode):
-                self._check_duplicate_keys(node)
-            children = node.value if isinstance(node, SequenceNode) else [n for kv in node.value for n in kv]
+            children = node.value if isinstance(node, SequenceNode) else self._checked_pairs(node)
             count, height = 1, 0
             for child in children:
                 n, h = self.walk(child, level + 1)
@@ -119,8 +118,8 @@ class _Loader(yaml.SafeLoader):
             raise _error(self.source, node.start_mark, _DEEP)
         return self._memo[key]
 
-    def _check_duplicate_keys(self, node) -> None:
-        """Refuse a key given twice in one mapping (PyYAML silently keeps the last)."""
+    def _checked_pairs(self, node) -> list:
+        """The key and value nodes of a mapping, refusing a key given twice (PyYAML keeps the last)."""
         seen = {}
         for key_node, _ in node.value:
             if not isinstance(key_node, ScalarNode) or key_node.tag in _SKIP_KEY_TAGS:
@@ -131,6 +130,7 @@ class _Loader(yaml.SafeLoader):
                 raise _error(self.source, key_node.start_mark, f"duplicate key {quote(key)} (first at line "
                              f"{first.start_mark.line + 1}); YAML would silently keep only the last. "
                              "Remove or rename one.")
+        return [n for pair in node.value for n in pair]
 
     def construct_object(self, node, deep=False):
         """Construct a node; a value its tag cannot read, or an absurdly long int, is a ScenarioError."""
@@ -141,7 +141,7 @@ class _Loader(yaml.SafeLoader):
             return super().construct_object(node, deep=deep)
         except ScenarioError:
             raise
-        except (ValueError, TypeError, AttributeError, OverflowError) as exc:  # !!timestamp 2020-13-45, !!int x
+        except (ValueError, TypeError, AttributeError, LookupError, OverflowError) as exc:  # !!bool x, !!int ''
             what = quote(node.value) if isinstance(node, ScalarNode) else "this value"
             why = f" ({_clip(exc)})" if isinstance(exc, ValueError) else ""
             raise _error(self.source, node.start_mark, f"cannot read {what} as {quote(node.tag)}{why}.") from None

@@ -60,7 +60,7 @@ def test_unknown_top_level_key():
 def test_malformed_yaml(tmp_path):
     p = tmp_path / "bad.yaml"
     p.write_text("vehicle:\n  segments: [1, 2\n")
-    with pytest.raises(ScenarioError, match="not valid YAML at line"):
+    with pytest.raises(ScenarioError, match=r"bad.yaml, line 3, column 1: not valid YAML"):
         load_scenario(p)
 
 
