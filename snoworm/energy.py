@@ -5,7 +5,7 @@ Beyond the paper (which reports no energy), computed after the solve from the re
 
 Definitions
 -----------
-Motors (per segment).  The motor rows of MODEL.md section 1 give the torque *at the wheel* with
+Motors (per segment).  The motor rows of docs/model.md section 1 give the torque *at the wheel* with
 the 20 % drivetrain loss already folded in (paper section 3), so the mechanical power at the
 wheels is ``P_m = n_w sum_axles T_m w``.  Electrical power is the motoring power divided by the
 drivetrain efficiency (``vehicle.segment.drivetrain_efficiency``, 0.8 [paper]):

@@ -1,4 +1,4 @@
-"""Wheel-terrain laws of the SnoWorm terrain model (paper section 3, MODEL.md section 2).
+"""Wheel-terrain laws of the SnoWorm terrain model (paper section 3, docs/model.md section 2).
 
 Every function here is a pure NumPy kernel, vectorised over any array shape (wheels, axles,
 segments, batch members).  They are the single implementation of each law: the chain dynamics,
@@ -38,7 +38,7 @@ __all__ = [
 
 @dataclass(frozen=True)
 class TerrainParams:
-    """Coefficients of the terrain model (paper Table 3 and MODEL.md section 2).
+    """Coefficients of the terrain model (paper Table 3 and docs/model.md section 2).
 
     Parameters
     ----------
@@ -51,10 +51,10 @@ class TerrainParams:
     peak_exponent_d : float
         Exponent ``d`` of X_t in the peak factor of Eq. 2 (``X_t**d``).  The paper's OCR is
         illegible there; ``d = 2`` satisfies every claim of the paper, ``d = 1`` is the
-        literal reading (MODEL.md section 2).
+        literal reading (docs/model.md section 2).
     tau0, tau1 : float
         Resistance-torque law ``T_rr = F_n R_w (tau0 + tau1 (1 - X)) sgn(omega)``, fitted to
-        Table 2 (MODEL.md section 2; the paper names the torque but never writes it out).
+        Table 2 (docs/model.md section 2; the paper names the torque but never writes it out).
     slip_eps_mps : float
         Regularisation speed ``v_eps`` of the slip denominator (Eq. 1 made finite at
         ``omega = 0``).  Steady results do not depend on it.
@@ -62,7 +62,7 @@ class TerrainParams:
         Speed scale ``v_s`` of the smooth sign ``tanh(V / v_s)`` used in Eq. 3 and in the
         resistance torque.
     torque_balance : {"contact", "traction"}
-        ``"contact"``: ``J dw/dt = T_m - R_w (F_t - F_tr) - T_rr`` (MODEL.md default).
+        ``"contact"``: ``J dw/dt = T_m - R_w (F_t - F_tr) - T_rr`` (docs/model.md default).
         ``"traction"``: ``J dw/dt = T_m - R_w F_t - T_rrB`` with
         ``T_rrB = 1.601 F_n R_w (1 - X) sgn(omega)``; same chassis motion and steady slips.
     """
@@ -78,7 +78,7 @@ class TerrainParams:
     torque_balance: str = "contact"
 
 
-#: Coefficient of the "traction" torque-balance convention (MODEL.md section 2).
+#: Coefficient of the "traction" torque-balance convention (docs/model.md section 2).
 TRACTION_BALANCE_TAU = 1.601
 
 # literal constants of the laws as 0-d arrays: NumPy multiplies an array by a 0-d array ~2x
@@ -119,7 +119,7 @@ def slip(wheel_speed_mps, V, eps_mps):
 
 
 def traction_force(i, F_n, X, p: TerrainParams):
-    """Magic-Formula tractive force per wheel, Eq. 2 (as read in MODEL.md section 2).
+    """Magic-Formula tractive force per wheel, Eq. 2 (as read in docs/model.md section 2).
 
     ``F_t = F_n X^d b_tF sin(2.8 X atan(atan(4 X^2 i)))`` -- the OCR's "cot" read as atan, E = 1.
     Odd in slip, bounded by ``F_n X^d b_tF``.
@@ -180,7 +180,7 @@ def resistance_from_coefficients(V, coef, p: TerrainParams):
 
 
 def resistance_torque(omega_mps, F_n, X, R_w, p: TerrainParams):
-    """Terrain resistance torque per wheel [N m], fitted law of MODEL.md section 2.
+    """Terrain resistance torque per wheel [N m], fitted law of docs/model.md section 2.
 
     ``T_rr = F_n R_w (tau0 + tau1 (1 - X)) sgn(omega)`` (``"contact"`` balance) or
     ``T_rrB = 1.601 F_n R_w (1 - X) sgn(omega)`` (``"traction"`` balance).
@@ -211,7 +211,7 @@ def wheel_reaction_torque(F_t, F_tr, T_rr, R_w, p: TerrainParams):
     """Terrain torque opposing the motor in the wheel torque balance [N m].
 
     ``J dw/dt = T_m - wheel_reaction_torque``; ``R_w (F_t - F_tr) + T_rr`` for the
-    ``"contact"`` convention, ``R_w F_t + T_rrB`` for ``"traction"`` (MODEL.md section 2).
+    ``"contact"`` convention, ``R_w F_t + T_rrB`` for ``"traction"`` (docs/model.md section 2).
     """
     if p.torque_balance == "traction":
         return R_w * F_t + T_rr
