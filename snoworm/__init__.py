@@ -10,7 +10,7 @@ Mode, ModeConfig, register_mode     -> add a mobility mode of your own
 
 The layers and their modules are described in docs/architecture.md.
 """
-__version__ = "0.1.0"
+from ._version import __version__  # noqa: E402
 
 from . import modes as modes  # noqa: E402  (registers the built-in modes)
 from .driver import BatchMember, SolverError, simulate, simulate_batch  # noqa: E402

@@ -24,12 +24,13 @@ Uncertainty
     Standard errors from the Jacobian at the solution: ``cov = s^2 (J^T J)^-1`` with
     ``s^2 = sum(r^2) / (n_residuals - n_params)``.  They are NaN when ``J^T J`` is singular
     (a parameter the data cannot determine, e.g. ``tau0`` and ``tau1`` from cases all at one X_t).
-    Slip does not depend on ``tau0, tau1`` (MODEL.md section 2), so slip residuals that no
+    Slip does not depend on ``tau0, tau1`` (docs/model.md section 2), so slip residuals that no
     fitted parameter can reduce inflate ``s`` and hence every standard error; fit a slip
     parameter too, or read the errors as conservative.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass, replace
@@ -43,27 +44,21 @@ from . import steady
 from .fileio import atomic_write_text
 from .groundtruth import FieldData, compare_table2, format_table2, read_field_data, vehicle_model
 from .schema import ScenarioError, suggest
+from .sections import TerrainModelConfig
 from .terrain import TerrainParams
 
 __all__ = ["FIT_NAMES", "BOUNDS", "CalibrationResult", "model_predictions", "calibrate", "run_calibration",
            "format_report", "terrain_model_yaml"]
 
-#: Coefficients that can be fitted, with bounds kept physically meaningful during the search.
-BOUNDS = {
-    "b_tF": (1e-3, 5.0),
-    "b_trF": (0.0, 2.0),
-    "A": (-5.0, 5.0),
-    "peak_exponent_d": (0.0, 6.0),
-    "tau0": (-np.inf, np.inf),
-    "tau1": (-np.inf, np.inf),
-    "xt": (0.05, 2.0),
-}
+#: Coefficients that can be fitted, with bounds kept physically meaningful during the search: every
+#: terrain-model field declaring ``search`` bounds (snoworm.sections.TerrainModelConfig), and X_t.
+BOUNDS = {**{f.name: f.metadata["search"] for f in dataclasses.fields(TerrainModelConfig) if f.metadata.get("search")},
+          "xt": (0.05, 2.0)}
 #: Names accepted by ``--fit``; ``xt`` fits the X_t of every case.
 FIT_NAMES = tuple(BOUNDS)
 
 #: Terrain-model keys written to ``terrain_model.yaml`` (those of ``terrain.model`` in a scenario).
-_MODEL_KEYS = ("b_tF", "b_trF", "A", "peak_exponent_d", "tau0", "tau1", "slip_eps_mps", "sign_eps_mps",
-               "torque_balance")
+_MODEL_KEYS = tuple(TerrainParams.__dataclass_fields__)
 
 
 def _check_fit(fit, n_cases):

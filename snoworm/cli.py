@@ -11,7 +11,7 @@ import sys
 
 import click
 
-from . import __version__
+from ._version import __version__
 
 EXIT_SOLVER = 1
 EXIT_INPUT = 2
@@ -26,8 +26,8 @@ def handle_errors(fn):
     """Turn ScenarioError into exit 2 and SolverError into exit 1, each with a one-paragraph message."""
     @functools.wraps(fn)
     def wrapper(*a, **kw):
-        from .schema import ScenarioError
-        from .driver import SolverError
+        from .schema import ScenarioError  # lazy: start-up
+        from .driver import SolverError  # lazy: start-up
         try:
             return fn(*a, **kw)
         except ScenarioError as exc:
@@ -75,8 +75,8 @@ def run(scenario, out_dir, sets, no_plot):
     Nothing is written if the scenario is invalid (exit 2) or the solver fails (exit 1);
     each file is written atomically.
     """
-    from .driver import simulate
-    from .scenario import load_scenario
+    from .driver import simulate  # lazy: start-up
+    from .scenario import load_scenario  # lazy: start-up
     sc = load_scenario(scenario, sets)
     res = simulate(sc)
     paths = res.write(out_dir, plot=not no_plot)
@@ -96,7 +96,7 @@ def run(scenario, out_dir, sets, no_plot):
 @handle_errors
 def validate(scenario, sets):
     """Check SCENARIO without running it (exit 0 if valid, 2 with the reason if not)."""
-    from .scenario import load_scenario
+    from .scenario import load_scenario  # lazy: start-up
     sc = load_scenario(scenario, sets)
     click.echo(f"{scenario}: valid ({sc.vehicle.segments} segments, mode {sc.mode.type}, "
                f"{sc.simulation.duration_s:g} s)")
@@ -128,7 +128,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot):
     and X_t, prints measured against modelled speed, slip and torque, and writes
     --out/table2.csv (with residuals, model minus measured) and --out/table2.png.
     """
-    from .groundtruth import run_groundtruth
+    from .groundtruth import run_groundtruth  # lazy: start-up
     _, text, paths = run_groundtruth(out_dir, data_path, parameter_set_name, model_file, plot=not no_plot)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
@@ -152,7 +152,7 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
     that of forward motion (Eq. 3 with sgn = +1).  Prints the slip at which the net force
     crosses zero for each X_t, or says that it stays negative.
     """
-    from .groundtruth import run_terrain_curves
+    from .groundtruth import run_terrain_curves  # lazy: start-up
     _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name, model_file, plot=not no_plot,
                                         n_points=n_points)
     click.echo(text)
@@ -184,7 +184,7 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     --out/terrain_model.yaml (use it in a scenario with terrain.model_file) and
     --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
     """
-    from .calibrate import run_calibration
+    from .calibrate import run_calibration  # lazy: start-up
     _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
                                      torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale)
     click.echo(text)
@@ -231,7 +231,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, b
     Exit status: 0 when the sweep completes (even with failed cases), 2 on bad input, 1 if a
     worker process or the Dask cluster fails, 130 when interrupted (re-run to resume).
     """
-    from .sweep import SweepExecutionError, run_sweep
+    from .sweep import SweepExecutionError, run_sweep  # lazy: start-up
     try:
         table = run_sweep(scenario, sets, out_dir=out_dir, jobs=jobs, scheduler=scheduler, zip_=zip_,
                           save_cases=save_cases, plot=not no_plot, batch=batch)
@@ -278,7 +278,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
     drawbar); inching by short simulations of the inchworm gait of the scenario's supervisor or
     inchworm mode.  Writes --out/mobility_map.csv and --out/mobility_map.png.
     """
-    from .mobility import run_mobility_map
+    from .mobility import run_mobility_map  # lazy: start-up
     _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps=rolling_speed_mps,
                                       inching=not no_inching, inch_duration_s=inch_duration_s, jobs=jobs,
                                       plot=not no_plot)
@@ -306,7 +306,7 @@ def paper(out_dir, quick, strict):
     --out/report.md, --out/report.html and --out/claims.json.  One progress line per item goes
     to stderr.  A failing claim is reported, not fatal: the exit status is 0 unless --strict.
     """
-    from .paper import run_paper
+    from .paper import run_paper  # lazy: start-up
     rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True))
     n_ok = sum(c.holds for c in rep.claims)
     click.echo(f"{n_ok} of {len(rep.claims)} claims hold ({'quick' if quick else 'full'} mode, "

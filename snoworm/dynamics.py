@@ -369,42 +369,10 @@ class ChainModel:
         w, integ = Y[..., L.omega], Y[..., L.integral]
         R = self._R
         cd = self._controls(ctl)
-        # terrain, per axle (Eqs. 1-3, resistance torque), X_t evaluated at each axle
-        wm = w * R
         V = v[..., None]
-        i = terrain.slip(wm, V, tp.slip_eps_mps)
-        if self._coef is not None:          # X_t constant: position-independent factors precomputed
-            c_t, c_r, c_q = self._coef
-            X = self._Xc
-        else:
-            Fn = self.normal_force_N
-            X = self.profile(x[..., None] + self.axle_offset_m)
-            c_t = terrain.traction_coefficients(Fn, X, tp)
-            c_r = terrain.resistance_coefficients(Fn, X, tp)
-            c_q = terrain.torque_coefficient(Fn, X, R, tp)
-        Ft = terrain.traction_from_coefficients(i, c_t)
-        Ftr = terrain.resistance_from_coefficients(V, c_r, tp)
-        Trr = terrain.torque_from_coefficient(wm, c_q, tp)
-        # links (tension positive): a spring-damper in series with the prismatic actuator
+        X, i, Ft, Ftr, Trr = self._terrain(x, V, w * R)
         dY = np.empty_like(Y)
-        if self.n > 1:
-            rel = v[..., :-1] - v[..., 1:]
-            stretch = x[..., :-1] - x[..., 1:] - self._L0
-            if self.has_joints:
-                s = Y[..., :-1, L.s]
-                T_spring = link_law.spring_force_N(stretch, s, self._k_link)
-                ds = self._joint_rate(s, v, rel, T_spring, ctl, cd)
-                dY[..., :-1, L.s] = ds
-                dY[..., -1, L.s] = 0.0
-                damper_v = rel - ds
-            else:
-                T_spring = link_law.spring_force_N(stretch, None, self._k_link)
-                damper_v = rel
-            T = link_law.link_force_N(T_spring, damper_v, self._c_link)
-        else:
-            T = T_spring = damper_v = np.zeros(x.shape[:-1] + (0,))
-            if self.has_joints:
-                dY[..., L.s] = 0.0
+        T, T_spring, damper_v = self._links(Y, x, v, ctl, cd, dY)
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
         sp = ctl.speed_sp_mps
         if self.force_loop:
@@ -447,6 +415,52 @@ class ChainModel:
             "terrain_dissipation_W": self.wheels_per_axle * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),
         }
         return dY, out
+
+    def _terrain(self, x, V, wm):
+        """Per-axle terrain quantities (Eqs. 1-3, resistance torque), X_t evaluated at each axle.
+
+        Returns ``(X, slip, F_t, F_tr, T_rr)`` per wheel, shape ``(..., N, 2)``.
+        """
+        tp, R = self._tpk, self._R
+        i = terrain.slip(wm, V, tp.slip_eps_mps)
+        if self._coef is not None:          # X_t constant: position-independent factors precomputed
+            c_t, c_r, c_q = self._coef
+            X = self._Xc
+        else:
+            Fn = self.normal_force_N
+            X = self.profile(x[..., None] + self.axle_offset_m)
+            c_t = terrain.traction_coefficients(Fn, X, tp)
+            c_r = terrain.resistance_coefficients(Fn, X, tp)
+            c_q = terrain.torque_coefficient(Fn, X, R, tp)
+        Ft = terrain.traction_from_coefficients(i, c_t)
+        Ftr = terrain.resistance_from_coefficients(V, c_r, tp)
+        Trr = terrain.torque_from_coefficient(wm, c_q, tp)
+        return X, i, Ft, Ftr, Trr
+
+    def _links(self, Y, x, v, ctl, cd, dY):
+        """Link forces (tension positive): spring-damper in series with the prismatic actuator.
+
+        Writes the actuators' extension rates into ``dY``; returns ``(T, T_spring, damper speed)``.
+        """
+        L = self.layout
+        if self.n == 1:
+            if self.has_joints:
+                dY[..., L.s] = 0.0
+            T = np.zeros(x.shape[:-1] + (0,))
+            return T, T, T
+        rel = v[..., :-1] - v[..., 1:]
+        stretch = x[..., :-1] - x[..., 1:] - self._L0
+        if self.has_joints:
+            s = Y[..., :-1, L.s]
+            T_spring = link_law.spring_force_N(stretch, s, self._k_link)
+            ds = self._joint_rate(s, v, rel, T_spring, ctl, cd)
+            dY[..., :-1, L.s] = ds
+            dY[..., -1, L.s] = 0.0
+            damper_v = rel - ds
+        else:
+            T_spring = link_law.spring_force_N(stretch, None, self._k_link)
+            damper_v = rel
+        return link_law.link_force_N(T_spring, damper_v, self._c_link), T_spring, damper_v
 
     def _joint_rate(self, s, v, rel, T_spring, ctl: Controls, cd):
         """Extension rate of the prismatic actuators: the commanded servo within the actuator's limits.

@@ -10,6 +10,7 @@ same as a sparse matrix for BDF and Radau.
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import block_diag, dia_matrix
 
 __all__ = ["sparsity", "bandwidths", "BandedDifferences", "to_sparse"]
 
@@ -69,7 +70,6 @@ def sparsity(model, member: bool = False):
             P[k * ns:(k + 1) * ns, (k + 1) * ns:(k + 2) * ns] = nxt
     if member or not L.batch_shape:
         return P
-    from scipy.sparse import block_diag
     return block_diag([P] * L.n_batch, format="csr").astype(bool)   # stacked chains
 
 
@@ -123,6 +123,5 @@ class BandedDifferences:
 
 def to_sparse(packed, lband: int, uband: int):
     """A packed band matrix (LAPACK layout) as a sparse CSC matrix."""
-    from scipy.sparse import dia_matrix
     n = packed.shape[1]
     return dia_matrix((packed, np.arange(uband, -lband - 1, -1)), shape=(n, n)).tocsc()

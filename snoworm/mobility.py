@@ -208,7 +208,7 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
                                                        wheel_speed_mps=wheel_speed_mps)
         except ValueError:
             limits[f] = None
-    return {"rows": rows, "xts": xts, "tows": tows, "rolling_limit_xt": limits, "inching": inching,
+    return {"rows": rows, "xts": xts, "tows": tows, "regions": REGIONS, "rolling_limit_xt": limits, "inching": inching,
             "inch_duration_s": inch_duration_s, "wheel_speed_mps": wheel_speed_mps,
             "wall_time_s": time.perf_counter() - wall0, "scenario": sc.name}
 

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
 from .fileio import atomic_write_text
 
 __all__ = ["Claim", "Variant", "Section", "Context", "PaperReport", "ITEMS", "QUICK_INCHWORM_DURATION_S",

@@ -1,4 +1,8 @@
-"""Plots of results.  The only module that imports matplotlib (Agg backend, files only)."""
+"""Plots of results and study tables.  The only module that imports matplotlib (Agg backend, files only).
+
+Figures are drawn from data alone (a :class:`~snoworm.results.Result`, or the tables and dicts
+the studies return): this module imports neither the driver nor the studies.
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,6 +12,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.colors import ListedColormap  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
 
 from .fileio import atomic_path  # noqa: E402
 
@@ -317,9 +323,7 @@ def plot_mobility_map(mmap, path):
     less electrical energy per metre than rolling are marked with a star.  Right: electrical
     energy per metre of each mode against X_t, one colour per tow.
     """
-    from matplotlib.colors import ListedColormap
-    from matplotlib.patches import Patch
-    from .mobility import REGIONS
+    REGIONS = tuple(mmap["regions"])
     xts, tows = np.asarray(mmap["xts"]), np.asarray(mmap["tows"])
     code = {r: j for j, r in enumerate(REGIONS)}
     Z = np.zeros((tows.size, xts.size))

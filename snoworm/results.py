@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
 from .energy import energy_metrics
 from .fileio import atomic_write_text
 from .scenario import dump_scenario

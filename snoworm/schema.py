@@ -32,7 +32,7 @@ class ScenarioError(ValueError):
 
 
 def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None, unit="", doc="",
-          default_factory=_MISSING):
+          default_factory=_MISSING, search=None):
     """A dataclass field with validation metadata.
 
     Parameters
@@ -47,8 +47,10 @@ def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None,
         SI unit, shown in messages.
     doc : str
         One-line meaning, shown in messages.
+    search : (float, float), optional
+        Bounds of a parameter search over this value (``snoworm calibrate``); ``None``: not fitted.
     """
-    md = dict(gt=gt, ge=ge, lt=lt, le=le, choices=choices, unit=unit, doc=doc)
+    md = dict(gt=gt, ge=ge, lt=lt, le=le, choices=choices, unit=unit, doc=doc, search=search)
     kw = {"metadata": md}
     if default is not _MISSING:
         kw["default"] = default

@@ -72,12 +72,13 @@ class TerrainModelConfig(Config):
     """Terrain-model coefficients (paper Table 3, docs/model.md section 2)."""
 
     _section = "terrain.model"
-    b_tF: float = field(gt=0, doc="Eq. 2 slip-to-tractive-force coefficient")
-    b_trF: float = field(ge=0, doc="Eq. 3 terrain resistance coefficient")
-    A: float = field(doc="Eq. 3 terrain coefficient exponent")
-    peak_exponent_d: float = field(doc="exponent of X_t in Eq. 2's peak factor (2 default, 1 literal)")
-    tau0: float = field(doc="resistance torque law constant")
-    tau1: float = field(doc="resistance torque law slope in (1 - X_t)")
+    b_tF: float = field(gt=0, search=(1e-3, 5.0), doc="Eq. 2 slip-to-tractive-force coefficient")
+    b_trF: float = field(ge=0, search=(0.0, 2.0), doc="Eq. 3 terrain resistance coefficient")
+    A: float = field(search=(-5.0, 5.0), doc="Eq. 3 terrain coefficient exponent")
+    peak_exponent_d: float = field(search=(0.0, 6.0),
+                                   doc="exponent of X_t in Eq. 2's peak factor (2 default, 1 literal)")
+    tau0: float = field(search=(-math.inf, math.inf), doc="resistance torque law constant")
+    tau1: float = field(search=(-math.inf, math.inf), doc="resistance torque law slope in (1 - X_t)")
     slip_eps_mps: float = field(gt=0, unit="m/s", doc="slip regularisation speed")
     sign_eps_mps: float = field(gt=0, unit="m/s", doc="smooth-sign speed scale")
     torque_balance: str = field(choices=("contact", "traction"), doc="wheel torque-balance convention")

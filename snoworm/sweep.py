@@ -62,7 +62,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from . import __version__
+from ._version import __version__
 from .driver import SolverError, simulate
 from .fileio import atomic_write_text
 from .scenario import Scenario, apply_overrides, read_yaml, scenario_from_dict

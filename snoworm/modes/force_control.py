@@ -284,6 +284,52 @@ def _shares(rule, idx, W_total, xt, segs, tp, nominal):
     return w / w.sum()
 
 
+def _check_drawbar(W, T, F_tow, xt, segs, tp, nominal, tpath):
+    """Every segment can pull its net wheel force ``W`` (and the chain the tow); the available drawbar."""
+    n = len(W)
+    avail, why = zip(*(available_drawbar_N(xt[j], segs[j], tp, nominal[j]) for j in range(n)))
+    avail = np.array(avail)
+    if F_tow > avail.sum() + 1e-9:
+        raise ScenarioError(
+            f"{tpath}: impossible target: the tow of {F_tow:g} N exceeds the drawbar the whole chain can pull, "
+            f"{avail.sum():.1f} N (per segment {np.round(avail, 1).tolist()} N on X_t = {np.round(xt, 3).tolist()}); "
+            "no load sharing can carry it. Lower tow.force_N or add segments.")
+    for j in range(n):
+        if W[j] > avail[j] + 1e-9:
+            raise ScenarioError(
+                f"{tpath}: impossible target: segment {j} would have to pull {W[j]:.1f} N (net wheel force; "
+                f"link references {np.round(T, 1).tolist()} N, tow {F_tow:g} N) but can pull at most "
+                f"{avail[j]:.1f} N on X_t = {xt[j]:g} (limited by the {why[j]}). Lower that segment's share, "
+                f"or use load_shares: drawbar.")
+    return avail, why
+
+
+def _predict(W, f, controlled, xt, segs, tp, nominal, vmax, path, tpath):
+    """Predicted steady state: the free segment ``f`` sets the ground speed; ``(V, set-points, slips)``."""
+    n = len(W)
+    slip = np.full(n, np.nan)
+    i_f = _slip_for(W[f], xt[f], segs[f], tp, wheel_speed_mps=nominal[f])
+    if i_f is None:
+        raise ScenarioError(f"{tpath}: impossible target: the free segment {f} cannot develop a net wheel force "
+                            f"of {W[f]:.1f} N at {nominal[f]:g} m/s on X_t = {xt[f]:g}.")
+    slip[f] = i_f
+    V = nominal[f] * (1.0 - i_f)
+    sp = np.array(nominal, float)
+    for j in np.flatnonzero(controlled):
+        i = _slip_for(W[j], xt[j], segs[j], tp, ground_speed_mps=V)
+        if i is None:
+            raise ScenarioError(f"{tpath}: impossible target: segment {j} cannot develop a net wheel force of "
+                                f"{W[j]:.1f} N while moving at {V:.3f} m/s on X_t = {xt[j]:g} (it would need more "
+                                "braking than locked wheels give). Change the link forces.")
+        slip[j] = i
+        sp[j] = V / (1.0 - i)
+        if sp[j] > vmax[j]:
+            raise ScenarioError(f"{tpath}: impossible target: segment {j} would need a wheel-speed set-point of "
+                                f"{sp[j]:.3f} m/s, above max_speed_mps = {vmax[j]:.3f} m/s. Raise "
+                                f"{path}.max_speed_mps or lower the segment's share.")
+    return V, sp, slip
+
+
 def plan(cfg: ForceControlConfig, sc, model, path="mode") -> ForcePlan:
     """Convert the targets to link-force references and check they are reachable (module docstring).
 
@@ -330,42 +376,8 @@ def plan(cfg: ForceControlConfig, sc, model, path="mode") -> ForcePlan:
     sigma = np.where(k < f, 1.0, -1.0)
     link = np.where(k < f, k, k - 1)
     link[f] = n - 1
-    # feasibility
-    avail, why = zip(*(available_drawbar_N(xt[j], segs[j], tp, nominal[j]) for j in range(n)))
-    avail = np.array(avail)
-    if F_tow > avail.sum() + 1e-9:
-        raise ScenarioError(
-            f"{tpath}: impossible target: the tow of {F_tow:g} N exceeds the drawbar the whole chain can pull, "
-            f"{avail.sum():.1f} N (per segment {np.round(avail, 1).tolist()} N on X_t = {np.round(xt, 3).tolist()}); "
-            "no load sharing can carry it. Lower tow.force_N or add segments.")
-    for j in range(n):
-        if W[j] > avail[j] + 1e-9:
-            raise ScenarioError(
-                f"{tpath}: impossible target: segment {j} would have to pull {W[j]:.1f} N (net wheel force; "
-                f"link references {np.round(T, 1).tolist()} N, tow {F_tow:g} N) but can pull at most "
-                f"{avail[j]:.1f} N on X_t = {xt[j]:g} (limited by the {why[j]}). Lower that segment's share, "
-                f"or use load_shares: drawbar.")
-    # predicted steady state: the free segment sets the ground speed
-    slip = np.full(n, np.nan)
-    i_f = _slip_for(W[f], xt[f], segs[f], tp, wheel_speed_mps=nominal[f])
-    if i_f is None:
-        raise ScenarioError(f"{tpath}: impossible target: the free segment {f} cannot develop a net wheel force "
-                            f"of {W[f]:.1f} N at {nominal[f]:g} m/s on X_t = {xt[f]:g}.")
-    slip[f] = i_f
-    V = nominal[f] * (1.0 - i_f)
-    sp = np.array(nominal, float)
-    for j in np.flatnonzero(controlled):
-        i = _slip_for(W[j], xt[j], segs[j], tp, ground_speed_mps=V)
-        if i is None:
-            raise ScenarioError(f"{tpath}: impossible target: segment {j} cannot develop a net wheel force of "
-                                f"{W[j]:.1f} N while moving at {V:.3f} m/s on X_t = {xt[j]:g} (it would need more "
-                                "braking than locked wheels give). Change the link forces.")
-        slip[j] = i
-        sp[j] = V / (1.0 - i)
-        if sp[j] > vmax[j]:
-            raise ScenarioError(f"{tpath}: impossible target: segment {j} would need a wheel-speed set-point of "
-                                f"{sp[j]:.3f} m/s, above max_speed_mps = {vmax[j]:.3f} m/s. Raise "
-                                f"{path}.max_speed_mps or lower the segment's share.")
+    avail, why = _check_drawbar(W, T, F_tow, xt, segs, tp, nominal, tpath)
+    V, sp, slip = _predict(W, f, controlled, xt, segs, tp, nominal, vmax, path, tpath)
     return ForcePlan(W, T, f, controlled, link.astype(int), sigma, avail, tuple(why), xt, nominal, vmax,
                      float(V), sp, slip)
 

@@ -1,0 +1,124 @@
+"""The architecture as executable rules (docs/architecture.md).
+
+* The layer contract of pyproject.toml ([tool.importlinter]) holds: ``lint-imports`` passes.
+* No import cycle between snoworm modules, counting imports inside functions too.
+* An import inside a function is only for an optional or slow-to-import dependency (or in the
+  CLI, for start-up time), and says why in a comment on its line or the line above.
+"""
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PKG = ROOT / "snoworm"
+
+#: Dependencies that may be imported inside a function: optional extras, and the heavy imports
+#: that runs not needing them should not pay for at start-up.
+LAZY_OK = {"dask", "distributed", "pandas", "xarray", "gymnasium", "tqdm", "matplotlib", "threadpoolctl",
+           "multiprocessing", "threading", "concurrent", "snoworm.plotting"}
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _imports(path: Path):
+    """(imported module, line, inside a function?) for every import statement of a module."""
+    name = _module_name(path)
+    pkg = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
+    tree = ast.parse(path.read_text())
+    out = []
+
+    def visit(node, in_func):
+        for child in ast.iter_child_nodes(node):
+            f = in_func or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef))
+            if isinstance(child, ast.Import):
+                out.extend((a.name, child.lineno, f) for a in child.names)
+            elif isinstance(child, ast.ImportFrom):
+                if child.level:
+                    base = pkg.split(".")
+                    base = base[:len(base) - child.level + 1]
+                    mod = ".".join(base + ([child.module] if child.module else []))
+                else:
+                    mod = child.module
+                for a in child.names:       # `from . import x` may import a submodule x
+                    sub = f"{mod}.{a.name}"
+                    out.append((sub if (ROOT / Path(*sub.split("."))).with_suffix(".py").exists()
+                                or (ROOT / Path(*sub.split("."))).is_dir() else mod, child.lineno, f))
+            visit(child, f)
+    visit(tree, False)
+    return out
+
+
+def _modules():
+    return sorted(p for p in PKG.rglob("*.py"))
+
+
+def test_layer_contract_holds():
+    exe = Path(sys.executable).with_name("lint-imports")
+    proc = subprocess.run([str(exe)], cwd=ROOT, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
+    assert "KEPT" in proc.stdout and "BROKEN" not in proc.stdout
+
+
+def test_no_import_cycle():
+    graph = {}
+    for p in _modules():
+        me = _module_name(p)
+        graph[me] = {m for m, _, _ in _imports(p) if m.startswith("snoworm") and m != me}
+    # package __init__ files re-export their children; an edge child -> parent package is the
+    # import of the package object itself (e.g. `from . import x`), not a cycle of the layers
+    for me in graph:
+        graph[me] = {m for m in graph[me] if not me.startswith(m + ".")}
+    index, low, stack, on, cycles = {}, {}, [], set(), []
+
+    def strong(v, counter=[0]):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in graph:
+                continue
+            if w not in index:
+                strong(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(sorted(comp))
+    sys.setrecursionlimit(10_000)
+    for v in sorted(graph):
+        if v not in index:
+            strong(v)
+    assert not cycles, f"import cycles: {cycles}"
+
+
+def test_function_level_imports_are_justified():
+    bad = []
+    for p in _modules():
+        lines = p.read_text().splitlines()
+        cli = p.name in ("cli.py", "__main__.py")
+        for mod, line, in_func in _imports(p):
+            if not in_func:
+                continue
+            top = mod.split(".")[0]
+            allowed = cli or top in LAZY_OK or mod in LAZY_OK
+            text = lines[line - 1] + (lines[line - 2] if line >= 2 else "")
+            if not allowed or "#" not in text:
+                bad.append(f"{p.relative_to(ROOT)}:{line} imports {mod} inside a function"
+                           + ("" if allowed else " (not an optional or slow dependency)")
+                           + ("" if "#" in text else " without a comment saying why"))
+    assert not bad, "\n".join(bad)
