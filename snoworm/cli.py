@@ -285,7 +285,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
-# ---------------------------------------------------------------- paper reproduction (snoworm/paper.py)
+# ---------------------------------------------------------------- paper reproduction (snoworm/paper/)
 
 @main.command()
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
@@ -306,7 +306,7 @@ def paper(out_dir, quick, strict):
     --out/report.md, --out/report.html and --out/claims.json.  One progress line per item goes
     to stderr.  A failing claim is reported, not fatal: the exit status is 0 unless --strict.
     """
-    from .paper import run_paper
+    from .paper import run_paper  # imported here, not at the top: keeps start-up of the other commands fast
     rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True))
     n_ok = sum(c.holds for c in rep.claims)
     click.echo(f"{n_ok} of {len(rep.claims)} claims hold ({'quick' if quick else 'full'} mode, "
