@@ -69,7 +69,7 @@ def test_variants_show_the_d1_failures(quick_report):
     readings = next(s for s in rep.sections if s.key == "readings")
     d1 = next(v for v in readings.variants if v.overrides == {"terrain.model.peak_exponent_d": 1})
     verdict = {c.id: c.holds for c in d1.claims}
-    # MODEL.md section 2: at d = 1 these two fail, the X_t = 1 crossing and the torques do not
+    # docs/model.md section 2: at d = 1 these two fail, the X_t = 1 crossing and the torques do not
     assert verdict["fig3.xt05_never_positive"] is False
     assert verdict["table2.case5_slip"] is False
     assert verdict["fig3.xt1_zero_crossing"] is True

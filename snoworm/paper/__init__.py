@@ -4,7 +4,7 @@ Every item of the paper with numbers behind it -- Figure 3, Table 2, Figure 5, F
 is recomputed from the shipped scenarios and the steady-state model, and each statement of the
 paper about it is turned into a :class:`Claim` by a *check function*: the claim's ``holds`` is
 derived from the computed numbers and a stated tolerance, never written down.  Where the model
-chose a reading of the paper (MODEL.md section 2: the peak exponent ``d`` of Eq. 2, the
+chose a reading of the paper (docs/model.md section 2: the peak exponent ``d`` of Eq. 2, the
 resistance-torque law fitted to Table 2, the wheel torque-balance convention), the same checks
 are re-run under the alternative and the report shows which claims then change.
 
@@ -16,7 +16,7 @@ Data flow::
       -> report.md, report.html (figures embedded as base64 PNG), claims.json
 
 Two kinds of claim (``Claim.source``): ``"paper"`` -- stated in the paper (quoted with its
-section); ``"model"`` -- a number of the reference model (MODEL.md) the paper does not print,
+section); ``"model"`` -- a number of the reference model (docs/model.md) the paper does not print,
 e.g. Fig 6's 4.80 % slip or the d = 1 failure slips.  Both count for ``--strict``; the claims
 re-evaluated under an alternative reading (``Section.variants``) do not -- they are expected to
 change.
@@ -34,9 +34,9 @@ from __future__ import annotations
 from .claims import (QUICK_INCHWORM_DURATION_S, SCENARIO_DIR, STEADY_WINDOW_S, Claim, Context, Section, Variant,
                      find_claim, make_claim, start_time_s, steady_mean)
 from .fig3_table2 import TABLE2_CASES, check_fig3, check_table2, item_fig3, item_table2, table2_model
-from .fig5 import (FIG5_LATE_EVERY_MAX, FIG5_LATE_FRACTION_MAX, FIG5_MOVE_MIN_M, FIG5_NONPAIR_RMS_MIN, FIG5_PAIR_RMS_MAX,
-                   FIG5_PAIRS, FIG5_PEAK_EARLY_FRACTION, FIG5_XT_HIGH, SLIDING_FRACTION, backward_sliding_timing,
-                   check_fig5, item_fig5, pair_overlap)
+from .fig5 import (FIG5_LATE_EVERY_MAX, FIG5_LATE_FRACTION_MAX, FIG5_MOVE_MIN_M, FIG5_NONPAIR_RMS_MIN,
+                   FIG5_PAIR_RMS_MAX, FIG5_PAIRS, FIG5_PEAK_EARLY_FRACTION, FIG5_XT_HIGH, SLIDING_FRACTION,
+                   backward_sliding_timing, check_fig5, item_fig5, pair_overlap)
 from .fig6_11 import (FC_TOL_N, FIG6_TOL_N, PAPER_TOW_N, check_fig6, check_fig7, check_fig8, check_fig9, check_fig11,
                       item_fig6, item_fig7, item_fig8, item_fig9, item_fig11)
 from .readings import item_readings

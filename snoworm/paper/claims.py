@@ -45,7 +45,7 @@ class Claim:
     statement : str
         What is claimed (quote or paraphrase, with the paper's section).
     source : {"paper", "model"}
-        ``"paper"``: stated in the paper; ``"model"``: a reference-model number (MODEL.md).
+        ``"paper"``: stated in the paper; ``"model"``: a reference-model number (docs/model.md).
     computed : dict
         The computed value(s) the verdict is derived from (SI units in the keys).
     tolerance : str

@@ -117,7 +117,7 @@ def check_table2(data, rows, sim) -> list:
     claims.append(make_claim(
         "table2.dynamic_equals_steady", "Table 2",
         "the dynamic one-segment runs (scenarios frostyboy_case1..5) end in the steady state found by "
-        "root finding (MODEL.md section 3)", {"max_slip_difference_pct": 100 * float(np.nanmax(ds)),
+        "root finding (docs/model.md section 3)", {"max_slip_difference_pct": 100 * float(np.nanmax(ds)),
                                               "max_torque_difference_Nm": float(np.nanmax(dT))},
         "|slip difference| <= 0.05 percentage points and |torque difference| <= 0.05 N m for every case",
         bool(np.all(ds <= 5e-4) and np.all(dT <= 0.05)), source="model"))
@@ -148,7 +148,7 @@ def item_table2(ctx: Context) -> Section:
     s.tables.append(_table2_md(data, rows, sim))
     s.notes.append("The torques of cases 1, 2, 3 and 5 agree by construction: the paper never writes out its "
                    "terrain resistance torque, and the law T_rr = F_n R_w (tau0 + tau1 (1 - X_t)) was fitted "
-                   "to those four cases (MODEL.md section 2, [fitted]). Case 4 (towing 28.8 N) is the only "
+                   "to those four cases (docs/model.md section 2, [fitted]). Case 4 (towing 28.8 N) is the only "
                    "torque not used in the fit. The slips are predictions of Eq. 2 (with d = 2).")
     if ctx.out_dir is not None:
         s.figures.append(plotting.plot_table2(rows, ctx.figure("table2.png")))

@@ -40,7 +40,7 @@ def check_fig6(res) -> list:
                f"|net wheel force - 33.33 N| <= {FIG6_TOL_N:g} N for every segment",
                bool(np.all(np.abs(W - PAPER_TOW_N / n) <= FIG6_TOL_N))),
         make_claim("fig6.slip", "Fig 6",
-               "steady slip 4.80 % on X_t = 0.9 at 1.8 m/s with 33.3 N per segment (MODEL.md section 5, derived)",
+               "steady slip 4.80 % on X_t = 0.9 at 1.8 m/s with 33.3 N per segment (docs/model.md section 5, derived)",
                {"slip_pct": 100 * slip}, "|slip - 4.80 %| <= 0.05 percentage points for every segment",
                bool(np.all(np.abs(slip - 0.048) <= 5e-4)), source="model"),
     ]
@@ -127,7 +127,7 @@ def check_fig8(res) -> list:
                {"net_wheel_forces_N": W}, f"|rear net - 200 N| <= {FC_TOL_N:g} N and |leader net| <= {FC_TOL_N:g} N",
                abs(W[-1] - PAPER_TOW_N) <= FC_TOL_N and abs(W[0]) <= FC_TOL_N, source="model"),
         make_claim("fig8.leader_setpoint", "Fig 8",
-               "leader wheel-speed set-point about 1.679 m/s at X_t = 0.9 (MODEL.md section 5, derived)",
+               "leader wheel-speed set-point about 1.679 m/s at X_t = 0.9 (docs/model.md section 5, derived)",
                {"leader_setpoint_mps": sp0}, "|set-point - 1.679 m/s| <= 0.01 m/s", abs(sp0 - 1.679) <= 0.01,
                source="model"),
         make_claim("fig8.setpoint_nonnegative", "Fig 8",
@@ -181,7 +181,7 @@ def check_fig9(res) -> list:
                f"|middle net connector| <= {FC_TOL_N:g} N; wheel nets within {FC_TOL_N:g} N of 100 / 0 / 100 N",
                abs(C[1]) <= FC_TOL_N and bool(np.all(np.abs(W - [100.0, 0.0, 100.0]) <= FC_TOL_N))),
         make_claim("fig9.middle_setpoint_lowest", "Figs 9-10",
-               "the middle segment, pulling nothing, runs the lowest wheel-speed set-point (Fig 9; MODEL.md: "
+               "the middle segment, pulling nothing, runs the lowest wheel-speed set-point (Fig 9; docs/model.md: "
                "1.800 / 1.747 / 1.800 m/s)", {"setpoints_mps": sp},
                "middle set-point < leader's and < rear's (strictly)", sp[1] < sp[0] and sp[1] < sp[2]),
     ]

@@ -24,7 +24,7 @@ def item_readings(ctx: Context) -> Section:
     s = Section("readings", "Readings of the paper chosen by the model, and their alternatives", (
         "Eq. 2's exponent d on X_t in the peak factor is illegible in the paper (OCR); the terrain resistance "
         "torque is named but never written out; the wheel torque balance is described only in words "
-        "(MODEL.md section 2)."), scenarios=["Fig 3 and Table 2 checks re-run with terrain.model overrides",
+        "(docs/model.md section 2)."), scenarios=["Fig 3 and Table 2 checks re-run with terrain.model overrides",
                                              "tow6_uniform with terrain.model.torque_balance=traction"])
     # d = 1, the literal reading
     d1 = ctx.child({"peak_exponent_d": 1}, plot=True)
@@ -39,7 +39,7 @@ def item_readings(ctx: Context) -> Section:
     s.claims.append(make_claim(
         "readings.d1_fails_as_documented", "Fig 3, Table 2",
         "with d = 1 the X_t = 0.5 net force turns positive above ~74 % slip and case 5's slip is 16.7 % "
-        "(MODEL.md section 2): the reason d = 2 is the default", {"xt05_net_ge_0_from_slip_pct": first_up,
+        "(docs/model.md section 2): the reason d = 2 is the default", {"xt05_net_ge_0_from_slip_pct": first_up,
                                                                  "case5_slip_pct": 100 * case5},
         "X_t = 0.5 net force >= 0 from a slip within 2 points of 74 %, case 5 slip within 0.5 points of 16.7 %",
         abs(first_up - 74.0) <= 2.0 and abs(100 * case5 - 16.7) <= 0.5, source="model"))
@@ -60,7 +60,7 @@ def item_readings(ctx: Context) -> Section:
     s.claims.append(make_claim(
         "readings.traction_convention_same_slips", "Table 2, Fig 6",
         "the alternative wheel torque balance J dw/dt = T_m - R_w F_t - T_rrB gives the same chassis motion and "
-        "steady slips (MODEL.md section 2)",
+        "steady slips (docs/model.md section 2)",
         {"table2_max_slip_difference_pct": max(ds), "fig6_max_slip_difference_pct": 100 * float(np.max(np.abs(s6c - s6t))),
          "table2_torques_traction_Nm": [b["torque_Nm"] for b in sim_t]},
         "steady slips of the five Table 2 runs and of Fig 6 differ by <= 0.01 percentage points",

@@ -41,7 +41,7 @@ def _header(rep) -> list:
             f"**{n_ok} of {len(rep.claims)} claims hold.**",
             "Every verdict is computed from the simulation results by a check function in `snoworm/paper/` "
             "with the tolerance shown; source 'paper' = stated in the paper, 'model' = a reference-model number "
-            "(MODEL.md) the paper does not print. Steady values are means over the last "
+            "(docs/model.md) the paper does not print. Steady values are means over the last "
             f"{STEADY_WINDOW_S:g} s of a run."]
 
 
