@@ -285,7 +285,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
-# ---------------------------------------------------------------- paper reproduction (snoworm/paper.py)
+# ---------------------------------------------------------------- paper reproduction (snoworm/paper/)
 
 @main.command()
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),

@@ -1,0 +1,94 @@
+"""The paper-reproduction report end to end (snoworm/paper/report.py, `snoworm paper`).
+
+The quick report runs end to end and every claim in it holds; a solver or input error in one
+item becomes a failing claim; the CLI's exit status follows --strict.
+"""
+from __future__ import annotations
+
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from snoworm import paper
+from snoworm.cli import main
+
+FIGURES = ("fig3_terrain_curves.png", "table2.png", "fig5_speeds.png", "fig5_positions.png", "fig6_forces.png",
+           "fig7_forces.png", "fig8_forces.png", "fig8_speeds.png", "fig9_forces.png", "fig9_speeds.png",
+           "fig10_force_diagram.png", "fig11_forces.png", "fig11_speeds.png", "fig3_d1_terrain_curves.png")
+
+
+@pytest.fixture(scope="module")
+def quick_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("paper")
+    lines = []
+    rep = paper.run_paper(out, quick=True, progress=lines.append)
+    return rep, out, lines
+
+
+def test_quick_report_writes_everything(quick_report):
+    rep, out, lines = quick_report
+    for name in FIGURES + ("report.md", "report.html", "claims.json"):
+        assert (out / name).is_file() and (out / name).stat().st_size > 0, name
+    md = (out / "report.md").read_text(encoding="utf-8")
+    html = (out / "report.html").read_text(encoding="utf-8")
+    for c in rep.claims:
+        assert c.id in md and c.id in html
+    # self-contained: every figure embedded, no relative image links
+    assert html.count("data:image/png;base64,") == len(FIGURES)
+    assert "src='fig" not in html
+    data = json.loads((out / "claims.json").read_text(encoding="utf-8"))
+    assert data["quick"] is True and len(data["claims"]) == len(rep.claims)
+    assert data["all_hold"] == rep.all_hold
+    # one progress line per item
+    assert len(lines) == len(paper.ITEMS)
+    assert all(line.startswith(f"[{k}/{len(paper.ITEMS)}]") for k, line in enumerate(lines, 1))
+
+
+def test_every_claim_holds_in_quick_mode(quick_report):
+    rep = quick_report[0]
+    failed = [(c.id, c.computed, c.tolerance) for c in rep.claims if not c.holds]
+    assert not failed, failed
+    assert rep.all_hold
+
+
+def test_every_figure_has_claims_with_numbers(quick_report):
+    rep = quick_report[0]
+    figures = {c.figure for c in rep.claims}
+    for fig in ("Fig 3", "Table 2", "Fig 5", "Fig 6", "Fig 7", "Fig 8", "Figs 9-10", "Fig 11"):
+        assert fig in figures, fig
+    ids = [c.id for c in rep.claims]
+    assert len(ids) == len(set(ids))
+    for c in rep.claims:
+        assert c.computed and c.tolerance and c.source in ("paper", "model") and isinstance(c.holds, bool)
+
+
+def _claims(items, **kw):
+    return {c.id: c for s in paper.evaluate(items, **kw) for c in s.claims}
+
+
+def test_solver_or_input_error_becomes_a_failing_claim():
+    c = _claims(["fig6"], scenario_overrides={"tow6_uniform": ["tow.force_N=heavy"]})
+    assert list(c) == ["fig6.ran"] and not c["fig6.ran"].holds and "error" in c["fig6.ran"].computed
+
+
+def test_unknown_item_is_rejected():
+    from snoworm.schema import ScenarioError
+    with pytest.raises(ScenarioError, match="unknown report item"):
+        paper.evaluate(["fig99"])
+
+
+# ------------------------------------------------------------------ CLI
+
+def _fake_report(holds):
+    c = paper.Claim("x.y", "Fig 6", "a statement", "paper", {"v": 1.0}, "v <= 2", holds)
+    return paper.PaperReport([paper.Section("x", "X", "", claims=[c])], True, 0.1)
+
+
+@pytest.mark.parametrize("holds,strict,code", [(True, True, 0), (False, False, 0), (False, True, 1)])
+def test_cli_exit_status(monkeypatch, tmp_path, holds, strict, code):
+    monkeypatch.setattr(paper, "run_paper", lambda out, quick=False, progress=None: _fake_report(holds))
+    args = ["paper", "--out", str(tmp_path), "--quick"] + (["--strict"] if strict else [])
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == code, res.output
+    assert ("1 of 1 claims hold" if holds else "0 of 1 claims hold") in res.output
