@@ -6,7 +6,7 @@ Three pieces, each a pure function of a parameter set plus a thin writer:
   shipped ``frostyboy_2020.csv`` (paper Table 2) and validates it.
 * :func:`compare_table2` runs the steady-state model (:func:`snoworm.steady.steady_state`) on
   every case at its measured wheel speed ``R_w*omega``, drawbar and assigned ``X_t``, and lists
-  measured against modelled ground speed, slip and torque (MODEL.md section 3).
+  measured against modelled ground speed, slip and torque (docs/model.md section 3).
 * :func:`terrain_curves` evaluates the terrain laws (Eqs. 2 and 3) against slip at given
   ``X_t`` (paper Figure 3), with the zero crossing of the net longitudinal force.
 
@@ -25,10 +25,10 @@ import numpy as np
 from scipy.optimize import brentq
 
 from . import steady, terrain
-from .fileio import atomic_write_text
 from .params import PARAMETER_SETS, parameter_set
 from .scenario import SegmentConfig, TerrainModelConfig, read_model_file
 from .schema import ScenarioError, build, dump, suggest
+from .tables import csv_text, write_csv
 from .terrain import TerrainParams
 
 __all__ = [
@@ -231,7 +231,7 @@ TABLE2_COLUMNS = ("case", "xt", "drawbar_N", "wheel_speed_mps", "speed_measured_
 
 
 def compare_table2(data: FieldData, seg, tp: TerrainParams) -> list:
-    """Measured against modelled steady state for every case (paper Table 2, MODEL.md section 3).
+    """Measured against modelled steady state for every case (paper Table 2, docs/model.md section 3).
 
     The model runs at the case's measured wheel speed ``R_w*omega`` and drawbar with the
     case's X_t.  Residuals are model minus measured.  An immobilised case has NaN model values.
@@ -256,13 +256,8 @@ def compare_table2(data: FieldData, seg, tp: TerrainParams) -> list:
 
 
 def table2_csv(rows) -> str:
-    """CSV text of :func:`compare_table2` rows (full precision, slip as a fraction)."""
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(TABLE2_COLUMNS)
-    for r in rows:
-        w.writerow([r["case"]] + [f"{r[c]:.6g}" for c in TABLE2_COLUMNS[1:]])
-    return buf.getvalue()
+    """CSV text of :func:`compare_table2` rows (6 significant digits, slip as a fraction)."""
+    return csv_text(TABLE2_COLUMNS, rows)
 
 
 def format_table2(rows) -> str:
@@ -301,9 +296,9 @@ def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostybo
         (f" with terrain model {model_file}" if model_file else "") + \
         f" (d = {tp.peak_exponent_d:g}, torque balance '{tp.torque_balance}')\n" + format_table2(rows)
     out = Path(out_dir)
-    paths = [atomic_write_text(out / "table2.csv", table2_csv(rows))]
+    paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows)]
     if plot:
-        from . import plotting
+        from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
         paths.append(plotting.plot_table2(rows, out / "table2.png"))
     return rows, text, paths
 
@@ -378,14 +373,18 @@ def terrain_curves(xts, seg, tp: TerrainParams, n_points: int = 1001) -> Terrain
     return TerrainCurves(i, xt, float(F_n), Ft, Ftr, net, zc)
 
 
+#: Columns of ``terrain_curves.csv`` (long format, per wheel).
+CURVE_COLUMNS = ("xt", "slip", "traction_N", "resistance_N", "net_N")
+
+
+def _curve_rows(c: TerrainCurves):
+    for m, x in enumerate(c.xt):
+        yield from zip(np.full(c.slip.size, x), c.slip, c.traction_N[m], c.resistance_N[m], c.net_N[m])
+
+
 def terrain_curves_csv(c: TerrainCurves) -> str:
     """Long-format CSV: ``xt, slip, traction_N, resistance_N, net_N`` (per wheel)."""
-    buf = io.StringIO()
-    buf.write("xt,slip,traction_N,resistance_N,net_N\n")
-    for m, x in enumerate(c.xt):
-        data = np.column_stack([np.full(c.slip.size, x), c.slip, c.traction_N[m], c.resistance_N[m], c.net_N[m]])
-        np.savetxt(buf, data, fmt="%.6g", delimiter=",")
-    return buf.getvalue()
+    return csv_text(CURVE_COLUMNS, _curve_rows(c))
 
 
 def format_zero_crossings(c: TerrainCurves) -> str:
@@ -412,8 +411,8 @@ def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", mode
     seg, tp = vehicle_model(parameter_set_name, model_file)
     c = terrain_curves(xts, seg, tp, n_points)
     out = Path(out_dir)
-    paths = [atomic_write_text(out / "terrain_curves.csv", terrain_curves_csv(c))]
+    paths = [write_csv(out / "terrain_curves.csv", CURVE_COLUMNS, _curve_rows(c))]
     if plot:
-        from . import plotting
+        from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
         paths.append(plotting.plot_terrain_curves(c, out / "terrain_curves.png"))
     return c, format_zero_crossings(c), paths

@@ -5,7 +5,7 @@ terrain; this map sweeps X_t and the tow for one vehicle.
 
 Rolling (steady state, milliseconds per cell)
     The chain rolls when each segment's share of the tow, ``F_tow / N``, is below its largest
-    steady drawbar on uniform terrain, :func:`snoworm.steady.max_drawbar_N` (MODEL.md
+    steady drawbar on uniform terrain, :func:`snoworm.steady.max_drawbar_N` (docs/model.md
     section 2; without tow this is X_t > 0.586 for FrostyBoy).  Speed and torque follow from
     :func:`snoworm.steady.steady_state` at the rolling wheel-speed set-point; the electrical
     energy per metre is ``N n_wheels max(T_m w, 0) / (eta V)`` (definitions in
@@ -24,17 +24,19 @@ run in ``jobs`` worker processes.
 """
 from __future__ import annotations
 
-import io
 import time
-from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
 
 from . import steady
-from .schema import ScenarioError
 from .driver import SolverError, simulate
 from .energy import energy_metrics
+from .parallel import ProcessExecutor
 from .scenario import load_scenario, scenario_from_dict
+from .schema import ScenarioError
+from .sweep.spec import RANGE, parse_spec
+from .tables import CellFormat, csv_text, write_csv
 
 __all__ = ["parse_grid", "parse_list", "rolling_cell", "inching_scenario", "mobility_map", "map_csv",
            "rolling_speed_of", "REGIONS"]
@@ -43,30 +45,30 @@ __all__ = ["parse_grid", "parse_list", "rolling_cell", "inching_scenario", "mobi
 REGIONS = ("immobile", "inching only", "rolling")
 
 
+def _numbers(text: str, name: str, expected: str) -> np.ndarray:
+    """The values of ``text`` (:func:`snoworm.sweep.spec.parse_spec`), which must all be numbers."""
+    opt = f"{name} {text!r}"
+    values = parse_spec(name, text, option=opt)
+    if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in values):
+        raise ScenarioError(f"{opt}: expected {expected}.")
+    return np.array(values, dtype=float)
+
+
 def parse_grid(text: str, name: str = "--xt") -> np.ndarray:
-    """``"start:stop:count"`` -> ``numpy.linspace(start, stop, count)`` (or a comma list)."""
-    try:
-        if ":" in text:
-            a, b, n = text.split(":")
-            n = int(n)
-            if n < 1:
-                raise ValueError
-            return np.linspace(float(a), float(b), n)
-        return parse_list(text, name)
-    except ValueError:
-        raise ScenarioError(f"{name} {text!r}: expected START:STOP:COUNT (e.g. 0.2:1.0:9) or a comma-separated "
-                            "list of numbers.") from None
+    """``"start:stop:count"`` (inclusive, ``count`` values) or a comma list -> array of floats.
+
+    The grammar of ``snoworm sweep --set`` (:func:`snoworm.sweep.spec.parse_spec`); messages
+    name the option ``name``.
+    """
+    return _numbers(text, name, "START:STOP:COUNT (e.g. 0.2:1.0:9) or a comma-separated list of numbers")
 
 
 def parse_list(text: str, name: str = "--tow") -> np.ndarray:
-    """``"0,100,200"`` -> array of floats."""
-    try:
-        vals = np.array([float(v) for v in text.split(",") if v.strip()])
-    except ValueError:
-        raise ScenarioError(f"{name} {text!r}: expected a comma-separated list of numbers, e.g. 0,100,200.") from None
-    if vals.size == 0:
-        raise ScenarioError(f"{name}: give at least one value.")
-    return vals
+    """``"0,100,200"`` -> array of floats (a list only, no range)."""
+    expected = "a comma-separated list of numbers, e.g. 0,100,200"
+    if RANGE.match(text.strip()):
+        raise ScenarioError(f"{name} {text!r}: expected {expected}.")
+    return _numbers(text, name, expected)
 
 
 def rolling_speed_of(sc) -> float:
@@ -188,8 +190,8 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
     if inching:
         tasks = [(inching_scenario(sc, r["xt"], r["tow_N"], inch_duration_s), inch_min_speed_mps) for r in rows]
         if jobs > 1:
-            with ProcessPoolExecutor(max_workers=jobs) as ex:
-                outs = list(ex.map(_inch_run, tasks))
+            with ProcessExecutor(jobs) as pool:
+                outs = pool.map(_inch_run, tasks)
         else:
             outs = [_inch_run(tk) for tk in tasks]
         for r, o in zip(rows, outs):
@@ -219,40 +221,26 @@ MAP_COLUMNS = ("xt", "tow_N", "region", "rolling", "rolling_speed_mps", "rolling
                "inching_energy_per_metre_J_per_m", "inching_cheaper", "inching_note")
 
 
+#: Cells of ``mobility_map.csv``: 6 significant digits, booleans 1/0, commas in notes as ``;``.
+MAP_FORMAT = CellFormat(comma=";")
+
+
 def map_csv(result: dict) -> str:
     """The map's rows as CSV text (empty fields for values that do not apply)."""
-    buf = io.StringIO()
-    buf.write(",".join(MAP_COLUMNS) + "\n")
-    for r in result["rows"]:
-        vals = []
-        for c in MAP_COLUMNS:
-            v = r.get(c)
-            if v is None:
-                vals.append("")
-            elif isinstance(v, bool):
-                vals.append("1" if v else "0")
-            elif isinstance(v, float):
-                vals.append(f"{v:.6g}")
-            else:
-                vals.append(str(v).replace(",", ";"))
-        buf.write(",".join(vals) + "\n")
-    return buf.getvalue()
+    return csv_text(MAP_COLUMNS, result["rows"], MAP_FORMAT)
 
 
 def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, rolling_speed_mps=None,
                      inching=True, inch_duration_s=8.0, jobs=1, plot=True):
     """Load a scenario, compute its map, write ``mobility_map.csv`` (and ``.png``); return (map, text, paths)."""
-    from pathlib import Path
-
-    from .fileio import atomic_write_text
     sc = load_scenario(scenario_path, sets)
     v = rolling_speed_of(sc) if rolling_speed_mps is None else float(rolling_speed_mps)
     res = mobility_map(sc, parse_grid(xt_spec, "--xt"), parse_list(tow_spec, "--tow"), wheel_speed_mps=v,
                        inching=inching, inch_duration_s=inch_duration_s, jobs=jobs)
     out = Path(out_dir)
-    paths = [atomic_write_text(out / "mobility_map.csv", map_csv(res))]
+    paths = [write_csv(out / "mobility_map.csv", MAP_COLUMNS, res["rows"], MAP_FORMAT)]
     if plot:
-        from .plotting import plot_mobility_map
+        from .plotting import plot_mobility_map   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
         paths.append(plot_mobility_map(res, out / "mobility_map.png"))
     lines = [f"{sc.name}: mobility map, {len(res['xts'])} X_t x {len(res['tows'])} tow values, "
              f"{res['wall_time_s']:.1f} s"]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from snoworm.driver import batch_key, simulate_batch
-from snoworm.sweep_batch import BatchExecutor, run_chunk
+from snoworm.sweep import BatchExecutor, run_chunk
 from snoworm.scenario import apply_overrides, load_scenario, read_yaml
 from snoworm import simulate
 from snoworm.sweep import case_metrics, run_sweep

@@ -1,9 +1,11 @@
-"""Batched sweep execution: stack cases of one batch key into one solve (:func:`snoworm.driver.simulate_batch`).
+"""Sweep executors: where the cases run.
 
-:class:`BatchExecutor` plugs into :func:`snoworm.sweep.run_sweep` (``batch=100`` /
-``snoworm sweep --batch 100``): it takes the sweep's tasks in chunks, groups the batchable ones
-(:func:`snoworm.driver.batch_key`), and runs everything else one by one through
-:func:`snoworm.sweep.run_case`.
+An executor is any object with ``map_unordered(fn, tasks)`` yielding ``fn(task)`` for every task
+in any order, and ``close()``.  :class:`SerialExecutor` runs them in this process,
+:class:`~snoworm.parallel.ProcessExecutor` (shared with the other studies) in local processes,
+:class:`DaskExecutor` on a Dask cluster, and :class:`BatchExecutor` stacks cases of one batch key
+(:func:`snoworm.driver.batch_key`) into one solve (:func:`snoworm.driver.simulate_batch`),
+running every other case one by one through the sweep's per-case function.
 """
 from __future__ import annotations
 
@@ -11,11 +13,71 @@ import functools
 import itertools
 import time
 
-from .driver import batch_key, simulate_batch
-from .scenario import scenario_from_dict
-from .schema import ScenarioError
+from ..driver import batch_key, simulate_batch
+from ..parallel import ProcessExecutor
+from ..scenario import scenario_from_dict
+from ..schema import ScenarioError
 
-__all__ = ["BatchExecutor", "run_chunk"]
+__all__ = ["SweepExecutionError", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "BatchExecutor",
+           "run_chunk"]
+
+
+class SweepExecutionError(RuntimeError):
+    """The executor failed (not a case): e.g. a worker process died or the Dask cluster was lost."""
+
+
+class SerialExecutor:
+    """Run the cases one after the other in this process."""
+
+    def map_unordered(self, fn, tasks):
+        for task in tasks:
+            yield fn(task)
+
+    def close(self):
+        pass
+
+
+class DaskExecutor:
+    """Run the cases on a Dask distributed cluster at ``address`` (``tcp://host:port``).
+
+    The workers need snoworm installed; ``save_cases`` and a relative ``terrain.model_file``
+    need a file system shared with the workers.  At most ``4 * workers`` cases are in flight.
+    """
+
+    def __init__(self, address):
+        try:
+            from distributed import Client   # optional dependency (snoworm[dask]): imported only when used
+        except ImportError:
+            raise ScenarioError(f"--scheduler {address}: Dask is not installed. Install it with "
+                                "pip install 'snoworm[dask]' (or pip install 'dask[distributed]').") from None
+        self.address = address
+        try:
+            self.client = address if hasattr(address, "submit") else Client(address, timeout="20s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise ScenarioError(f"--scheduler {address}: cannot connect to the Dask scheduler ({exc}). "
+                                "Check the address (tcp://host:port) and that the scheduler is running.") from None
+        self._own = not hasattr(address, "submit")
+
+    def map_unordered(self, fn, tasks):
+        from distributed import as_completed   # optional dependency, see __init__
+        n_workers = max(len(self.client.scheduler_info().get("workers", {})), 1)
+        window = 4 * n_workers
+        it = iter(tasks)
+        first = [self.client.submit(fn, t, pure=False) for t in itertools.islice(it, window)]
+        if not first:
+            return
+        ac = as_completed(first)
+        for fut in ac:
+            nxt = next(it, None)
+            if nxt is not None:
+                ac.add(self.client.submit(fn, nxt, pure=False))
+            result = fut.result()
+            fut.release()
+            yield result
+
+    def close(self):
+        if self._own:
+            self.client.close()
 
 
 def _run_group(tasks, scs, fallback, metrics):

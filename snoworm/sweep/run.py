@@ -1,0 +1,327 @@
+"""Running a sweep: :func:`run_sweep` and its steps.
+
+Data flow: the axes -> :func:`~snoworm.sweep.cases.build_cases` -> every case validated up front
+(invalid ones are recorded, not run) -> tasks (small plain dicts: the overridden scenario
+mapping, never a big object) -> an executor running :func:`~snoworm.sweep.metrics.run_case` ->
+one row per case, appended to ``summary.csv`` as it finishes -> a :class:`SweepTable` sorted
+by case id (and a plot).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..scenario import Scenario, apply_overrides, read_yaml, scenario_from_dict
+from ..schema import ScenarioError
+from ..tables import FULL, canonical_json, format_cell
+from .cases import build_cases
+from .executors import BatchExecutor, DaskExecutor, ProcessExecutor, SerialExecutor, SweepExecutionError
+from .metrics import METRIC_COLUMNS, case_metrics, one_line, run_case
+from .spec import as_axes
+from .table import SweepTable, prepare_dir, summary_columns
+
+__all__ = ["run_sweep"]
+
+
+# ---------------------------------------------------------------------------------- progress
+class _Progress:
+    """A one-line progress report on a terminal: cases done, failures, time left."""
+
+    def __init__(self, total, already, stream, enabled):
+        self.total, self.already, self.stream, self.enabled = total, already, stream, enabled
+        self.done = self.failed = 0
+        self.t0 = time.perf_counter()
+        self._last = 0.0
+
+    def update(self, failed: bool, force=False):
+        self.done += 1
+        self.failed += int(failed)
+        self.show(force)
+
+    def show(self, force=False):
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if not force and now - self._last < 0.1 and self.done + self.already < self.total:
+            return
+        self._last = now
+        n = self.already + self.done
+        width = 24
+        fill = int(width * n / max(self.total, 1))
+        el = now - self.t0
+        left = self.total - n
+        eta = f"~{_hms(el / self.done * left)} left" if self.done and left else ("done" if not left else "")
+        skip = f", {self.already} resumed" if self.already else ""
+        self.stream.write(f"\rsweep [{'#' * fill}{'.' * (width - fill)}] {n}/{self.total} cases{skip}, "
+                          f"{self.failed} failed, {_hms(el)} elapsed, {eta}   ")
+        self.stream.flush()
+
+    def close(self):
+        if self.enabled:
+            self.show(force=True)
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _hms(s):
+    s = int(round(s))
+    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60}:{s % 60:02d}"
+
+
+# ---------------------------------------------------------------------------------- driver
+def _base(scenario):
+    """(raw mapping, source name, base_dir) of a path or a Scenario object."""
+    if isinstance(scenario, Scenario):
+        return scenario.to_dict(), scenario.name, None
+    if isinstance(scenario, dict):
+        return scenario, "scenario", None
+    path = Path(scenario)
+    raw = read_yaml(path)
+    return raw, str(path), str(path.resolve().parent)
+
+
+def _definition(raw, axes, zip_):
+    return json.loads(json.dumps({
+        "scenario_sha256": hashlib.sha256(canonical_json(raw).encode()).hexdigest(),
+        "axes": [{"key": a.key, "values": list(a.values)} for a in axes],
+        "zip": bool(zip_),
+    }, default=str))
+
+
+def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
+              save_cases: bool = False, progress=None, plot: bool = True, executor=None,
+              batch: int = 0) -> SweepTable:
+    """Run a scenario over a grid (or zip) of values and return the summary table.
+
+    Parameters
+    ----------
+    scenario : str, Path, Scenario or dict
+        The base scenario (a YAML path, as for ``snoworm run``, or a scenario object/mapping).
+    sets : sequence
+        Axes: ``"KEY=SPEC"`` strings (see :func:`parse_spec`), ``(key, spec)`` pairs or
+        :class:`Axis` objects.  Several axes form a full grid (first axis slowest).
+    out_dir : str or Path, optional
+        Where ``sweep.json``, ``summary.csv`` and the plot go.  A re-run with the same
+        definition resumes; with another definition it is refused.  None: nothing is written.
+    jobs : int
+        Local worker processes (1: run in this process).
+    scheduler : str or distributed.Client, optional
+        Address of a Dask scheduler (``tcp://host:port``); overrides ``jobs``.
+    zip_ : bool
+        Pair the axes element by element (equal lengths) instead of a grid.
+    save_cases : bool
+        Write each case's time series to ``out_dir/cases/<case_id>/`` (needs ``out_dir``).
+    progress : bool, optional
+        Progress line on stderr; default: only when stderr is a terminal.
+    plot : bool
+        Write ``sweep.png`` (one varying axis, or zipped axes) or ``heatmap.png`` (two).
+    executor : object, optional
+        Anything with ``map_unordered(fn, tasks)`` and ``close()``; overrides jobs/scheduler.
+    batch : int
+        With ``batch > 1`` (and no scheduler or executor): integrate up to ``batch`` cases of the
+        same structure as one stacked system (:class:`~snoworm.sweep.executors.BatchExecutor`, ``jobs``
+        processes); other cases run one by one.  Same metrics within the solver tolerance.
+
+    Returns
+    -------
+    SweepTable
+        Every case (resumed and new), sorted by case id.
+
+    Raises
+    ------
+    ScenarioError
+        A malformed SPEC, unequal zip lengths, every case invalid, or an output directory
+        holding another sweep.
+    """
+
+    plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs)
+    out = Path(out_dir) if out_dir is not None else None
+    done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source) \
+        if out is not None else {}
+    if progress is None:
+        progress = sys.stderr.isatty()
+    bar = _Progress(len(plan.cases), len(done), sys.stderr, bool(progress))
+    own = executor is None
+    if own:
+        executor = _make_executor(scheduler, batch, jobs)
+    rows = dict(done)
+    todo = [c for c in plan.cases if c.index not in done]
+    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, save_cases)
+    table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys)
+    if out is not None and plot:
+        _plot(table, plan.axes, zip_, out)
+    return table
+
+
+@dataclass
+class _Plan:
+    """A sweep's cases, validated, and what its files record."""
+
+    axes: list
+    raw: dict
+    source: str
+    base_dir: str | None
+    cases: list
+    invalid: dict          # case index -> one-line error of the cases whose scenario is rejected
+    n_links: int
+    columns: list
+    definition: dict
+
+    @property
+    def keys(self):
+        return [a.key for a in self.axes]
+
+
+def _plan(scenario, sets, zip_, save_cases, out_dir, jobs) -> _Plan:
+    """Parse the axes, build the cases and validate each one (about 2 ms a case)."""
+    axes = as_axes(sets)
+    raw, source, base_dir = _base(scenario)
+    if not isinstance(raw, dict):
+        raise ScenarioError(f"{source}: a scenario must be a YAML mapping.")
+    cases = build_cases(axes, zip_)
+    if save_cases and out_dir is None:
+        raise ScenarioError("--save-cases needs --out: the time series are written under DIR/cases/.")
+    if int(jobs) < 1:
+        raise ScenarioError(f"-j/--jobs must be at least 1, got {jobs}.")
+    invalid, n_links = {}, 0
+    for c in cases:
+        try:
+            sc = scenario_from_dict(apply_overrides(raw, c.overrides(axes)), source, base_dir=base_dir)
+            n_links = max(n_links, sc.vehicle.segments - 1)
+        except ScenarioError as exc:
+            invalid[c.index] = one_line(exc)
+    if len(invalid) == len(cases):
+        first = invalid[cases[0].index]
+        raise ScenarioError(f"every case of the sweep is invalid, e.g. case {cases[0].case_id} "
+                            f"({', '.join(f'{a.key}={v}' for a, v in zip(axes, cases[0].values))}): {first}")
+    return _Plan(axes, raw, source, base_dir, cases, invalid, n_links, summary_columns(axes, n_links),
+                 _definition(raw, axes, zip_))
+
+
+def _make_executor(scheduler, batch, jobs):
+    """The executor of ``scheduler`` / ``batch`` / ``jobs`` (see :func:`run_sweep`)."""
+    if scheduler is not None:
+        return DaskExecutor(scheduler)
+    if int(batch) > 1:
+        return BatchExecutor(int(batch), int(jobs), ProcessExecutor(int(jobs)) if int(jobs) > 1 else None,
+                             metrics=case_metrics)
+    if int(jobs) > 1:
+        return ProcessExecutor(int(jobs))
+    return SerialExecutor()
+
+
+class _Recorder:
+    """Turns each case's result into a row: kept in ``rows``, appended to ``summary.csv`` (one
+    ``write`` and ``fsync`` per case) and counted on the progress line."""
+
+    def __init__(self, plan: _Plan, rows: dict, out, bar):
+        self.plan, self.rows, self.bar = plan, rows, bar
+        self.table = SweepTable(plan.columns, [], plan.keys)
+        self.path = out / "summary.csv" if out is not None else None
+        self.fd = None
+
+    def open(self):
+        if self.path is not None:
+            self.fd = os.open(self.path, os.O_WRONLY | os.O_APPEND)
+
+    def close(self):
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+
+    def record(self, c, result):
+        row = {"case_id": c.case_id, "case_key": c.key, **dict(zip(self.plan.keys, c.values))}
+        row.update(status=result["status"], error=result["error"])
+        for m in list(METRIC_COLUMNS)[:7] + ["energy_per_m_J", "immobilised"]:
+            row[m] = result.get(m)
+        links = result.get("final_link_forces_N") or []
+        for j in range(self.plan.n_links):
+            row[f"final_link_force_{j}_N"] = links[j] if j < len(links) else None
+        row["wall_time_s"] = result.get("wall_time_s")
+        if self.fd is not None:
+            os.write(self.fd, self.table.csv_line(row).encode("utf-8"))
+            os.fsync(self.fd)
+        self.rows[c.index] = row
+        self.bar.update(row["status"] != "ok")
+
+
+def _tasks(plan: _Plan, todo, out, save_cases):
+    """The tasks of the cases still to run (small plain dicts, made one at a time)."""
+    for c in todo:
+        if c.index in plan.invalid:
+            continue
+        save = str(out / "cases" / c.case_id) if save_cases else None
+        yield {"index": c.index, "raw": apply_overrides(plan.raw, c.overrides(plan.axes)), "source": plan.source,
+               "base_dir": plan.base_dir, "save_dir": save}
+
+
+def _execute(plan: _Plan, todo, executor, rec: _Recorder, own: bool, out, save_cases):
+    """Record the invalid cases, run the others on ``executor``, record each as it finishes; then
+    close the progress line, the executor (if the sweep made it) and ``summary.csv``."""
+    try:
+        rec.open()
+        rec.bar.show(force=True)
+        _run_cases(plan, todo, executor, rec, out, save_cases)
+    finally:
+        rec.bar.close()
+        if own:
+            executor.close()
+        rec.close()
+
+
+def _run_cases(plan: _Plan, todo, executor, rec: _Recorder, out, save_cases):
+    by_index = {c.index: c for c in plan.cases}
+    try:
+        for c in todo:
+            if c.index in plan.invalid:
+                rec.record(c, {"status": "invalid", "error": plan.invalid[c.index], "wall_time_s": 0.0})
+        for result in executor.map_unordered(run_case, _tasks(plan, todo, out, save_cases)):
+            rec.record(by_index[result["index"]], result)
+    except (KeyboardInterrupt, ScenarioError):
+        raise
+    except Exception as exc:  # the executor itself failed (a worker died, the cluster went away)
+        n = len(rec.rows)
+        where = f"; the {n} finished cases are in {out / 'summary.csv'}, re-run to resume" if out is not None else ""
+        raise SweepExecutionError(f"the sweep's executor failed ({type(exc).__name__}: {one_line(exc)}){where}.") from exc
+
+
+def _plot_positions(values):
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        return [float(v) for v in values], None
+    return list(range(len(values))), [format_cell(v, FULL) for v in values]
+
+
+def _plot(table, axes, zip_, out):
+    from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
+    varying = [a for a in axes if len(a.values) > 1]
+    ok = [r["status"] == "ok" for r in table.rows]
+    if zip_ or len(varying) == 1:
+        ax = varying[0] if varying else axes[0]
+        x, labels = _plot_positions(table.column(ax.key))
+        metrics = {m: table.column(m) for m in ("mean_speed_mps", "mean_slip", "max_link_force_N", "energy_per_m_J")}
+        plotting.plot_sweep(x, metrics, ax.key, out / "sweep.png", immobilised=table.column("immobilised"),
+                            ok=ok, tick_labels=labels)
+    elif len(varying) == 2:
+        ax_x, ax_y = varying
+        xi = {canonical_json(v): j for j, v in enumerate(ax_x.values)}
+        yi = {canonical_json(v): j for j, v in enumerate(ax_y.values)}
+        grid = np.full((len(ax_y.values), len(ax_x.values)), np.nan)
+        imm = np.zeros(grid.shape, bool)
+        fail = np.zeros(grid.shape, bool)
+        for r in table.rows:
+            j, k = yi[canonical_json(r[ax_y.key])], xi[canonical_json(r[ax_x.key])]
+            if r["status"] == "ok":
+                grid[j, k] = r["mean_speed_mps"]
+                imm[j, k] = bool(r["immobilised"])
+            else:
+                fail[j, k] = True
+        plotting.plot_sweep_heatmap([format_cell(v, FULL) for v in ax_x.values], [format_cell(v, FULL) for v in ax_y.values], grid,
+                                    ax_x.key, ax_y.key, "mean speed [m/s]", out / "heatmap.png",
+                                    immobilised=imm, failed=fail)
