@@ -1,6 +1,6 @@
-"""Force-control mode (paper section 5.2, Figs 8-11; MODEL.md section 5).
+"""Force-control mode (paper section 5.2, Figs 8-11; docs/model.md section 5).
 
-Steady states are checked against the force balance of MODEL.md section 5 and the one-segment
+Steady states are checked against the force balance of docs/model.md section 5 and the one-segment
 steady-state solver; forces within 2 N, set-points within 5 mm/s (the steady solver's
 predictions agree with the simulation to < 1e-4 m/s; the tolerance leaves room for solver
 settings).
@@ -45,12 +45,12 @@ def runs():
     return {n: _run(n) for n in ("pi2_zero", "pi3_equal", "pi3_middle_positive", "tow6_weak_segment")}
 
 
-# ---------------------------------------------------------------- steady states (MODEL.md 5)
+# ---------------------------------------------------------------- steady states (docs/model.md 5)
 def test_fig8_leader_zeroes_link_force(runs):
     T, W, sp, _ = _final(runs["pi2_zero"])
     assert abs(T[0]) < F_TOL_N
     assert W[1] == pytest.approx(200.0, abs=F_TOL_N)          # the rear carries the whole tow
-    assert sp[0] == pytest.approx(1.679, abs=V_TOL_MPS)       # MODEL.md section 5, Fig 8
+    assert sp[0] == pytest.approx(1.679, abs=V_TOL_MPS)       # docs/model.md section 5, Fig 8
     assert sp[1] == pytest.approx(1.8, abs=1e-9)              # the free rear segment at its nominal speed
 
 
@@ -120,7 +120,7 @@ def test_available_drawbar_terrain_and_motor_limits():
     segs = sc.vehicle.segment_params()
     healthy, why_h = available_drawbar_N(0.9, segs[0], model.tp, 1.8)
     weak, why_w = available_drawbar_N(0.9, segs[2], model.tp, 1.8)
-    assert healthy == pytest.approx(345.0, abs=1.0) and why_h == "terrain"    # MODEL.md section 2 table
+    assert healthy == pytest.approx(345.0, abs=1.0) and why_h == "terrain"    # docs/model.md section 2 table
     F_n = 90 * 9.81 / 4
     T_rr = F_n * 0.265 * (0.1710 + 1.7096 * 0.1)
     assert weak == pytest.approx(4 * (25.0 - T_rr) / 0.265, rel=1e-6) and why_w == "motor"

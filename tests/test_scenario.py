@@ -1,4 +1,5 @@
-"""Scenario validation: every shipped scenario is valid; bad input fails naming the field and the fix."""
+"""Scenarios (snoworm.scenario): every shipped scenario is valid; bad input fails naming the field and the fix;
+Scenario.with_ and to_dict; the mode-config registry and cached properties."""
 import pytest
 import yaml
 from hypothesis import given, settings, strategies as st
@@ -92,3 +93,47 @@ def test_shipped_scenarios_run(path):
     assert res.segments["x_m"].shape[1] == n and res.links["force_N"].shape[1] == n - 1
     assert res.t[-1] == pytest.approx(3.0)
     assert all(np.all(np.isfinite(a)) for a in res.segments.values())
+
+
+# ------------------------------------------------------------------ Scenario.with_, to_dict, cached properties
+
+def test_with_returns_a_validated_new_scenario():
+    sc = load_scenario(SCENARIOS / "tow6_uniform.yaml")
+    new = sc.with_({"tow.force_N": 150, "terrain.xt": 0.7}, name="lighter")
+    assert (new.tow.force_N, new.terrain.xt, new.name) == (150.0, 0.7, "lighter")
+    assert (sc.tow.force_N, sc.terrain.xt, sc.name) == (200.0, 0.9, "tow6_uniform")     # the original is unchanged
+    assert new.vehicle == sc.vehicle and new.mode == sc.mode
+    assert new.chain_model.tow_force_N == 150.0                # built from the new values
+
+
+@pytest.mark.parametrize("changes, match", [
+    ({"terrain.xt": -1}, r"^terrain\.xt: must be greater than 0"),
+    ({"vehicle.segmnets": 3}, r"Did you mean 'segments'"),
+    ({"mode.speed_mps": [1.8, 1.8]}, r"^mode\.speed_mps: give one speed for all segments or 6"),
+])
+def test_with_raises_like_a_scenario_file(changes, match):
+    sc = load_scenario(SCENARIOS / "tow6_uniform.yaml")
+    with pytest.raises(ScenarioError, match=match):
+        sc.with_(changes)
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
+def test_to_dict_round_trips(path):
+    sc = load_scenario(path)
+    d = sc.to_dict()
+    assert scenario_from_dict(d, base_dir=path.parent) == sc
+    assert yaml.safe_load(yaml.safe_dump(d)) == d               # plain YAML-able data
+
+
+def test_cached_properties_are_built_once():
+    sc = load_scenario(SCENARIOS / "pi3_equal.yaml")
+    assert sc.chain_model is sc.chain_model
+    assert sc.mode_plan is sc.mode_plan and sc.mode_plan is not None     # force control prepares a plan
+    assert load_scenario(SCENARIOS / "tow6_uniform.yaml").mode_plan is None
+
+
+def test_mode_configs_registry_holds_the_built_in_modes():
+    from snoworm.scenario import MODE_CONFIGS
+    assert {"uniform", "force_control", "inchworm", "supervisor"} <= set(MODE_CONFIGS)
+    sc = load_scenario(SCENARIOS / "inchworm6.yaml")
+    assert type(sc.mode) is MODE_CONFIGS["inchworm"]

@@ -1,4 +1,4 @@
-"""Terrain laws (MODEL.md section 2): hand-computed values and properties (hypothesis)."""
+"""Terrain laws (docs/model.md section 2): hand-computed values and properties (hypothesis)."""
 import math
 
 import numpy as np
@@ -27,7 +27,7 @@ def test_resistance_hand_values():
     # Eq. 3: b_trF F_n / X^A, forward motion well above the smooth-sign scale
     assert terrain.resistance_force(1.0, FN, 1.0, TP) == pytest.approx(0.165 * FN, rel=1e-9)
     assert terrain.resistance_force(1.0, FN, 0.25, TP) == pytest.approx(0.165 * FN / 0.25**0.6, rel=1e-9)
-    # MODEL.md section 5: ~335 N per 4-wheel segment at X = 0.25
+    # docs/model.md section 5: ~335 N per 4-wheel segment at X = 0.25
     assert abs(4 * terrain.resistance_force(1.0, FN, 0.25, TP) - 335) < 1.0
 
 

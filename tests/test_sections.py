@@ -1,0 +1,58 @@
+"""Scenario sections (snoworm.sections): the terrain section compiles to one X_t profile; its validation."""
+import numpy as np
+import pytest
+
+from snoworm.scenario import ScenarioError, scenario_from_dict
+from tests.conftest import traverse_raw as _base
+
+
+def test_patches_compile_to_one_profile():
+    sc = scenario_from_dict(_base(xt=0.9, patches=[{"start_m": 8, "end_m": 18, "xt": 0.3, "ramp_m": 0.5},
+                                                   {"start_m": 30, "end_m": 31, "xt": 0.5}]))
+    p = sc.terrain.compile()
+    X = p(np.array([0.0, 7.5, 7.75, 8.0, 13.0, 18.0, 18.25, 18.5, 25.0, 30.5, 29.998, 40.0]))
+    np.testing.assert_allclose(X, [0.9, 0.9, 0.6, 0.3, 0.3, 0.3, 0.6, 0.9, 0.9, 0.5, 0.9, 0.9], atol=1e-3)
+    # the chain model evaluates the same table (one evaluation path)
+    assert sc.chain_model.profile == p
+
+
+def test_random_profile_reproducible_and_seeded():
+    spec = {"mean": 0.6, "std": 0.15, "correlation_length_m": 5.0, "seed": 7, "length_m": 2000.0, "min_xt": 0.1}
+    a = scenario_from_dict(_base(random=spec)).terrain.compile()
+    b = scenario_from_dict(_base(random=dict(spec))).terrain.compile()
+    c = scenario_from_dict(_base(random={**spec, "seed": 8})).terrain.compile()
+    assert a == b                                     # same seed: identical table
+    va, vc = np.array(a.values), np.array(c.values)
+    assert va.shape == vc.shape and np.max(np.abs(va - vc)) > 0.1    # another seed: another profile
+    assert va.min() >= 0.1                             # clipped, X_t > 0
+    # 400 correlation lengths: sampling error of the mean ~0.01 (tolerance 0.04), of the std ~7 % (tolerance 25 %)
+    assert abs(va.mean() - 0.6) < 0.04 and abs(va.std() - 0.15) < 0.25 * 0.15
+    # correlation at one correlation length ~ 1/e (sampling error ~0.07, tolerance 0.15)
+    x = va - va.mean()
+    lag = 8                                            # grid spacing is correlation_length_m / 8
+    assert abs(np.corrcoef(x[:-lag], x[lag:])[0, 1] - np.exp(-1)) < 0.15
+
+
+@pytest.mark.parametrize("terrain, match", [
+    ({"xt": 0.9, "patches": [{"start_m": 5, "end_m": 5, "xt": 0.3}]}, "end_m: must be greater than start_m"),
+    ({"xt": 0.9, "patches": [{"start_m": 5, "end_m": 8, "xt": 0.0}]}, r"patches\[0\]\.xt: must be greater than 0"),
+    ({"xt": 0.9, "patches": [{"start_m": 5, "end_m": 8, "xt": 0.3, "ramp_m": 1},
+                             {"start_m": 9, "end_m": 12, "xt": 0.3}]}, r"patches\[1\]: overlaps patches\[0\]"),
+    ({"xt": 0.9, "patches": [{"start_m": 5, "end_m": 8, "xt": 0.3, "ramp": 1}]}, "Did you mean 'ramp_m'"),
+    ({"xt": 0.9, "patches": [{"start_m": 5, "end_m": 8, "xt": 0.3, "ramp_m": -1}]}, "ramp_m: must be at least 0"),
+    ({"profile": [[0, 0.9], [5, 0.3]], "patches": []}, "patches lie on a base X_t"),
+    ({"xt": 0.9, "random": {"mean": 0.6, "std": 0.1, "correlation_length_m": 5, "seed": 1, "length_m": 50}},
+     "give exactly one of 'xt'"),
+    ({"random": {"mean": 0.6, "std": -0.1, "correlation_length_m": 5, "seed": 1, "length_m": 50}},
+     r"random\.std: must be at least 0"),
+    ({"random": {"mean": 0.6, "std": 0.1, "correlation_length_m": 0, "seed": 1, "length_m": 50}},
+     r"random\.correlation_length_m: must be greater than 0"),
+    ({"random": {"mean": 0.6, "std": 0.1, "correlation_length_m": 5, "length_m": 50}}, r"random\.seed: is required"),
+    ({"random": {"mean": 0.6, "std": 0.1, "correlation_length_m": 5, "seed": 1.5, "length_m": 50}},
+     "whole number"),
+    ({"random": {"mean": 0.6, "std": 0.1, "correlation_length_m": 1e-4, "seed": 1, "length_m": 50}},
+     "200000 grid points"),
+])
+def test_terrain_validation_errors(terrain, match):
+    with pytest.raises(ScenarioError, match=match):
+        scenario_from_dict(_base(**terrain))
