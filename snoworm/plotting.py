@@ -369,7 +369,7 @@ def plot_mobility_map(mmap, path):
     return save(fig, path)
 
 
-# ------------------------------------------------------------------ paper reproduction (paper.py)
+# ------------------------------------------------------------------ paper reproduction (snoworm/paper/)
 
 def plot_inchworm_pairs(result, path, pairs=((0, 3), (1, 4), (2, 5))):
     """Ground speed of the segments that move together, one panel per pair (paper Fig 5).

@@ -17,6 +17,7 @@ from ..driver import batch_key, simulate_batch
 from ..parallel import ProcessExecutor
 from ..scenario import scenario_from_dict
 from ..schema import ScenarioError
+from .metrics import case_metrics
 
 __all__ = ["SweepExecutionError", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "BatchExecutor",
            "run_chunk"]
@@ -138,8 +139,8 @@ class BatchExecutor:
         Local worker processes, each integrating whole chunks (1: in this process).
     pool : object, optional
         A process executor with ``map_unordered`` (made by the caller when ``jobs > 1``).
-    metrics : callable
-        ``metrics(result) -> dict``, the sweep's per-case metrics.
+    metrics : callable, optional
+        ``metrics(result) -> dict``, the per-case metrics (default: :func:`snoworm.sweep.metrics.case_metrics`).
     """
 
     def __init__(self, batch_size: int = 100, jobs: int = 1, pool=None, metrics=None):
@@ -148,7 +149,7 @@ class BatchExecutor:
         self.batch_size = int(batch_size)
         self.jobs = int(jobs)
         self._pool = pool
-        self._metrics = metrics
+        self._metrics = case_metrics if metrics is None else metrics
 
     def _chunks(self, tasks):
         it = iter(tasks)
