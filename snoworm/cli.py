@@ -266,7 +266,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, b
 @click.option("--no-inching", is_flag=True, help="Rolling only (steady state, no inching simulations).")
 @click.option("--inch-duration", "inch_duration_s", type=click.FloatRange(min=0, min_open=True), default=8.0,
               show_default=True, help="Simulated time of each inching run [s].")
-@click.option("--jobs", type=click.IntRange(min=1), default=1, show_default=True,
+@click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
               help="Worker processes for the inching runs.")
 @click.option("--no-plot", is_flag=True, help="Skip mobility_map.png.")
 @handle_errors

@@ -34,7 +34,8 @@ from .driver import SolverError, simulate
 from .energy import energy_metrics
 from .parallel import ProcessExecutor
 from .scenario import load_scenario, scenario_from_dict
-from .schema import ScenarioError
+from .modes import InchwormMode
+from .schema import ScenarioError, dump
 from .sweep.spec import RANGE, parse_spec
 from .tables import CellFormat, csv_text, write_csv
 
@@ -72,26 +73,23 @@ def parse_list(text: str, name: str = "--tow") -> np.ndarray:
 
 
 def rolling_speed_of(sc) -> float:
-    """The rolling wheel-speed set-point of a scenario's mode (supervisor or uniform) [m/s]."""
-    m = sc.mode
-    if m.type == "supervisor":
-        return float(m.rolling_speed_mps)
-    if m.type == "uniform":
-        return float(m.speed_mps[0])
-    raise ScenarioError(f"mode.type: the mobility map takes the rolling wheel speed from a 'supervisor' or "
-                        f"'uniform' mode; this scenario's mode is {m.type!r}. Pass --rolling-speed.")
+    """The rolling wheel-speed set-point of a scenario's mode (:meth:`ModeConfig.rolling_speed`) [m/s]."""
+    v = sc.mode.rolling_speed()
+    if v is None:
+        raise ScenarioError(f"mode.type: the mobility map takes the rolling wheel speed from the scenario's mode, "
+                            f"and mode {sc.mode.type!r} does not roll at one speed (a 'supervisor' or 'uniform' "
+                            "mode does). Pass --rolling-speed.")
+    return float(v)
 
 
 def _inching_mode_raw(sc) -> dict:
-    m = sc.mode
-    if m.type == "supervisor":
-        raw = dict(m.inching)
-    elif m.type == "inchworm":
-        raw = {k: v for k, v in sc.to_dict()["mode"].items() if k != "type"}
-    else:
-        raise ScenarioError(f"mode.type: the mobility map takes the inching gait from a 'supervisor' or "
-                            f"'inchworm' mode; this scenario's mode is {m.type!r}. Use --no-inching for rolling only.")
-    raw.update({"type": "inchworm", "start_time_s": 0.0})
+    raw = sc.mode.inching_settings()
+    if raw is None:
+        raise ScenarioError(f"mode.type: the mobility map takes the inching gait from the scenario's mode, and mode "
+                            f"{sc.mode.type!r} does not inch (a 'supervisor' or 'inchworm' mode does). "
+                            "Use --no-inching for rolling only.")
+    raw = dump(raw)
+    raw.update({"type": InchwormMode.name, "start_time_s": 0.0})
     return raw
 
 

@@ -290,6 +290,16 @@ class ModeConfig(Config):
         """
         return None
 
+    def rolling_speed(self):
+        """The wheel-speed set-point R_w*omega [m/s] this mode rolls at, or None (studies such as the
+        mobility map ask it)."""
+        return None
+
+    def inching_settings(self):
+        """The inchworm settings (keys of the inchworm mode but ``type`` and ``start_time_s``) this
+        mode inches with, or None."""
+        return None
+
     def batch_signature(self):
         """A hashable description of the mode's intervals if it can run in a batched stack
         (event-free, the same intervals for every member with the same signature), else None."""

@@ -40,6 +40,7 @@ backward sliding peaks shortly after motion starts and then drops off, as in Fig
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Optional
 
@@ -85,6 +86,10 @@ class InchwormConfig(ModeConfig):
     start_time_s: float = field(0.0, ge=0, unit="s", doc="time the gait starts (motors off before)")
     feedforward: str = field("resistance", choices=("resistance", "none"),
                              doc="speed control's force feed-forward: the mover's terrain resistance, or none")
+
+    def inching_settings(self):
+        """This mode's own settings (without ``type`` and ``start_time_s``)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in ("type", "start_time_s")}
 
     def phases(self):
         """The gait as a tuple of phases (tuples of moving segment indices)."""

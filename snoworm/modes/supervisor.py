@@ -85,6 +85,12 @@ class SupervisorConfig(ModeConfig):
                                     "when the supervisor detects immobilisation).")
         return build(InchwormConfig, {**raw, "type": "inchworm", "start_time_s": 0.0}, f"{path}.inching")
 
+    def rolling_speed(self):
+        return float(self.rolling_speed_mps)
+
+    def inching_settings(self):
+        return dict(self.inching)
+
     def _check(self, path):
         self.inching_config(path)
         if self.stuck_window_s < self.check_interval_s:

@@ -33,6 +33,10 @@ class UniformConfig(ModeConfig):
             raise ScenarioError(f"{path}.speed_mps: give one speed for all segments or {vehicle.segments}; "
                                 f"got {len(self.speed_mps)}.")
 
+    def rolling_speed(self):
+        """The first segment's set-point [m/s]."""
+        return float(self.speed_mps[0])
+
     def batch_signature(self):
         """Members with the same start times have the same intervals (speeds may differ)."""
         return ("uniform", tuple(self.start_time_s))
