@@ -102,3 +102,18 @@ def traverse_raw(**terrain):
     raw = yaml.safe_load((SCENARIOS / "traverse_patch.yaml").read_text())
     raw["terrain"] = terrain
     return raw
+
+
+@pytest.fixture(scope="session")
+def frostyboy():
+    """(segment, terrain parameters) of the frostyboy set (ground truth and calibration tests)."""
+    from snoworm import groundtruth
+    return groundtruth.vehicle_model("frostyboy")
+
+
+@pytest.fixture(scope="session")
+def data():
+    """The shipped FrostyBoy field data (paper Table 2)."""
+    from snoworm import groundtruth
+    return groundtruth.read_field_data()
+

@@ -22,17 +22,9 @@ from snoworm.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("1", "2", "3", "4", "5")
-HEADER = "case,surface,speed_mps,wheel_speed_mps,slip,torque_Nm,drawbar_N,xt"
+HEADER = ",".join(gt.FIELD_COLUMNS)   # the field-data CSV header
 
 
-@pytest.fixture(scope="module")
-def frostyboy():
-    return gt.vehicle_model("frostyboy")
-
-
-@pytest.fixture(scope="module")
-def data():
-    return gt.read_field_data()
 
 
 def test_calibration_recovers_torque_law(data, frostyboy):

@@ -25,17 +25,9 @@ CASES = ("1", "2", "3", "4", "5")
 # docs/model.md section 3: the default model at the Table 2 wheel speeds
 MODEL_TORQUE_NM = (10.0, 27.0, 30.0, 31.9, 45.0)
 MODEL_SLIP_PCT = (2.1, 6.3, 7.8, 9.3, 30.4)
-HEADER = "case,surface,speed_mps,wheel_speed_mps,slip,torque_Nm,drawbar_N,xt"
+HEADER = ",".join(gt.FIELD_COLUMNS)   # the field-data CSV header
 
 
-@pytest.fixture(scope="module")
-def frostyboy():
-    return gt.vehicle_model("frostyboy")
-
-
-@pytest.fixture(scope="module")
-def data():
-    return gt.read_field_data()
 
 
 @pytest.fixture(scope="module")
