@@ -88,13 +88,18 @@ def _terminal(ev):
     return f
 
 
-def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label):
-    """Integrate one interval with method fallbacks; ``(ts, ys, t_next, y_next, event_index)``."""
+def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts):
+    """Integrate one interval with method fallbacks; ``(ts, ys, t_next, y_next, event_index)``.
+
+    ``opts`` caches :func:`solver_options` per method for the run (built when first needed).
+    """
     sol, failures = None, []
     for method in _fallbacks(sim.method):
+        if method not in opts:
+            opts[method] = solver_options(model, sim, method)
         try:
             sol = solve_ivp(model.rhs, (t, t1), y, t_eval=t_eval, events=events or None, args=(ctl,),
-                            **solver_options(model, sim, method))
+                            **opts[method])
         except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failures.append(f"{method}: {exc}")
             sol = None
@@ -133,7 +138,7 @@ def _integrate(model, modes, sim, name):
     y = np.concatenate([md.initial_state() for md in modes])
     pieces, phases = [[] for _ in range(B)], []
     stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0}
-    stuck = 0
+    stuck, opts = 0, {}
     while t < T - 1e-12:
         ys_b = y.reshape(B, -1)
         ivs = [md.interval(t, ys_b[b]) for b, md in enumerate(modes)]
@@ -146,7 +151,7 @@ def _integrate(model, modes, sim, name):
         ctl = iv.controls if B == 1 else Controls.stack([v.controls for v in ivs])
         t_eval = output_grid(t, t1, sim.output_dt_s, include_start=not phases)
         ts, ys, t_next, y_next, which = _solve_interval(
-            model, ctl, t, t1, y, [_terminal(ev) for ev in iv.events], sim, t_eval, stats, iv.label)
+            model, ctl, t, t1, y, [_terminal(ev) for ev in iv.events], sim, t_eval, stats, iv.label, opts)
         if ts.size:
             ys_m = ys.reshape(ts.size, B, -1)
             for b in range(B):
