@@ -119,7 +119,9 @@ def run_case(task: dict) -> dict:
     ----------
     task : dict
         ``index``, ``raw`` (the scenario mapping with the case's overrides applied),
-        ``source``, ``base_dir`` and ``save_dir`` (None, or where to write the time series).
+        ``source``, ``base_dir`` and ``save_dir`` (None, or where to write the time series);
+        optionally ``scenario``, the :class:`~snoworm.scenario.Scenario` already validated from
+        ``raw`` in this process (the batched executor's grouping), so it is not validated twice.
 
     Returns
     -------
@@ -130,7 +132,8 @@ def run_case(task: dict) -> dict:
     wall0 = time.perf_counter()
     out = {"index": task["index"], "status": "ok", "error": ""}
     try:
-        sc = scenario_from_dict(task["raw"], task.get("source", "scenario"), base_dir=task.get("base_dir"))
+        sc = task.get("scenario") or scenario_from_dict(task["raw"], task.get("source", "scenario"),
+                                                        base_dir=task.get("base_dir"))
         res = simulate(sc)
         out.update(case_metrics(res))
         if task.get("save_dir"):
