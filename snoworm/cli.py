@@ -23,17 +23,20 @@ def _fail(msg, code):
 
 
 def handle_errors(fn):
-    """Turn ScenarioError into exit 2 and SolverError into exit 1, each with a one-paragraph message."""
+    """Turn ScenarioError into exit 2, SolverError and ControllerError into exit 1, each with a clear message."""
     @functools.wraps(fn)
     def wrapper(*a, **kw):
         from .schema import ScenarioError  # lazy: start-up
         from .driver import SolverError  # lazy: start-up
+        from .modes.controller import ControllerError  # lazy: start-up
         try:
             return fn(*a, **kw)
         except ScenarioError as exc:
             _fail(str(exc), EXIT_INPUT)
         except SolverError as exc:
             _fail(f"solver failure: {exc}", EXIT_SOLVER)
+        except ControllerError as exc:      # the user's controller raised or returned a bad command
+            _fail(str(exc), EXIT_SOLVER)
         except BrokenPipeError:  # output piped into e.g. `head`: not an error of ours
             sys.stderr.close()
             sys.exit(0)

@@ -42,6 +42,8 @@ class Simulator:
     ----------
     t_s : float
         Time reached [s].
+    last_step : tuple or None
+        ``(ts, ys, controls)`` of the last step: its output times, flat states and controls.
     """
 
     def __init__(self, scenario):
@@ -59,6 +61,7 @@ class Simulator:
         self._pieces, self._phases = [], []
         self._stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "wall_time_s": 0.0}
         self._opts = {}
+        self.last_step = None
         return self.observation()
 
     def observation(self) -> Observation:
@@ -99,6 +102,7 @@ class Simulator:
             self.commands.restore(saved)
             raise
         self._pieces.append((ts, ys, ctl))
+        self.last_step = (ts, ys, ctl)
         self._phases.append({"t_start_s": t, "t_end_s": t_next, "label": "step"})
         self.t_s, self._y = t_next, y_next
         self._stats["wall_time_s"] += time.perf_counter() - wall0
