@@ -220,7 +220,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, b
 
     \b
     summary.csv has one row per case, appended as each case finishes (completion order):
-      case_id, case_key, the swept values, status (ok, solver_failure, invalid, error), error,
+      case_id, case_key, the swept values, status (ok, solver_failure, invalid, error, controller_failure), error,
       n_segments, distance_m, mean_speed_mps, late_speed_mps (mean forward speed over the
       last 25 % of the run), mean_slip and max_slip (signed slip over the segments and the
       second half of the run), max_link_force_N (largest |force| over the run),

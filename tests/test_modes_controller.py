@@ -159,3 +159,12 @@ def test_sweep_over_mode_params(tmp_path):
     d = [float(r["distance_m"]) for r in recs]
     assert d[1] > d[0] * 1.3          # faster wheels, farther
     assert rows is None or len(rows) == 2
+
+
+def test_failing_controller_is_a_sweep_case_status(tmp_path):
+    from snoworm.sweep import STATUSES, run_case
+    p = _write(tmp_path, GOOD, _mode("Raises"), sim={"duration_s": 1.0})
+    raw = yaml.safe_load(p.read_text())
+    out = run_case({"index": 0, "raw": raw, "source": str(p), "base_dir": str(tmp_path), "save_dir": None})
+    assert out["status"] == "controller_failure" and "controller" in STATUSES[-1]
+    assert "controller raised at t = 0.35 s" in out["error"] and "my controller broke" in out["error"]
