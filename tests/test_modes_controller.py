@@ -133,20 +133,6 @@ def test_controller_run_equals_simulator_stepped_with_same_commands():
     np.testing.assert_allclose(stepped.links["force_N"], ran.links["force_N"], rtol=1e-12, atol=1e-9)
 
 
-@pytest.mark.slow
-def test_tow6_driven_by_controller_reproduces_uniform_mode():
-    """Issue 14: 1.8 m/s to every segment from t = 1 s reproduces tow6_uniform's link forces within 1 N."""
-    uni = load_scenario(SCENARIOS / "tow6_uniform.yaml")
-    sc = uni.with_({"mode": {"type": "controller", "controller": "tests.controller_helpers:Uniform",
-                             "period_s": 0.02, "params": {"speed_mps": 1.8, "start_time_s": 1.0}}})
-    a, b = simulate(uni), simulate(sc)
-    # the controller run also has a sample at every period's end: compare at the uniform run's times
-    idx = np.minimum(np.searchsorted(b.t, a.t - 1e-9), b.t.size - 1)
-    np.testing.assert_allclose(b.t[idx], a.t, atol=1e-9)
-    assert np.max(np.abs(a.links["force_N"])) > 100          # the comparison is not of two idle chains
-    assert np.max(np.abs(b.links["force_N"][idx] - a.links["force_N"])) < 1.0
-
-
 def test_sweep_over_mode_params(tmp_path):
     from snoworm.sweep import run_sweep
     p = _write(tmp_path, GOOD, _mode("Const", v=1.0), sim={"duration_s": 2.0})
