@@ -113,3 +113,25 @@ def test_observation_is_read_only_and_matches_the_outputs(prismatic2):
 
 def test_command_keys_documented():
     assert set(COMMAND_KEYS) == {"wheel_speed_mps", "wheel_torque_Nm", "wheel_lock", "joint_force_N", "joint_length_m"}
+
+
+def test_observation_from_values_for_unit_tests():
+    from snoworm.modes import Observation
+    obs = Observation(t_s=1.0, x_m=[0.0, -1.5], v_mps=[1.0, 1.0], wheel_speed_mps=[1.1, 1.1], slip=[0.1, 0.1],
+                      motor_torque_Nm=[5.0, 5.0], xt=[0.9, 0.9], link_force_N=[3.0], link_length_m=[1.5],
+                      joint_extension_m=[0.0])
+    assert obs.link_force_N[0] == 3.0 and obs.x_m.dtype == float
+    with pytest.raises(ValueError):
+        obs.x_m[0] = 2.0
+    with pytest.raises(TypeError, match="missing"):
+        Observation(t_s=0.0, x_m=[0.0])
+
+
+def test_observation_keeps_the_state_it_was_made_from(fixed6):
+    """Computed when first read, but from a copy of the state and controls at observation time."""
+    y = random_state(fixed6, np.random.default_rng(6))
+    ctl = CommandState(fixed6).apply({"wheel_speed_mps": [1.0] * 6})
+    expected = output_series(fixed6, y[None], ctl)[0]["v_mps"][0].copy()
+    obs = observe(fixed6, y, ctl, 0.5)
+    y[:] = 0.0                                   # the caller's array changes afterwards
+    np.testing.assert_array_equal(obs.v_mps, expected)

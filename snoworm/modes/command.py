@@ -12,7 +12,6 @@ commands become the same :class:`~snoworm.controls.Controls` either way (docs/co
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -31,9 +30,19 @@ COMMAND_KEYS = {
 }
 
 
-@dataclass(frozen=True)
+#: Observation arrays: name -> (table of :func:`output_series`, its column).
+_SOURCES = {"x_m": (0, "x_m"), "v_mps": (0, "v_mps"), "wheel_speed_mps": (0, "wheel_speed_mps"), "slip": (0, "slip"),
+            "motor_torque_Nm": (0, "motor_torque_Nm"), "xt": (0, "xt"), "link_force_N": (1, "force_N"),
+            "link_length_m": (1, "length_m"), "joint_extension_m": (1, "extension_m")}
+
+
 class Observation:
     """What a controller measures at time ``t_s`` (read-only; arrays cannot be written).
+
+    Build one from values (``Observation(t_s=0.0, x_m=..., ...)``, e.g. to unit-test a
+    controller) or from a state with :func:`observe`; then the arrays are computed by
+    :func:`snoworm.outputs.output_series` when first read (a controller reading only ``t_s``
+    costs no evaluation of the chain).
 
     Attributes
     ----------
@@ -48,32 +57,56 @@ class Observation:
         distance [m] and prismatic joint extension (0 for a fixed link) [m].
     """
 
-    t_s: float
-    x_m: np.ndarray
-    v_mps: np.ndarray
-    wheel_speed_mps: np.ndarray
-    slip: np.ndarray
-    motor_torque_Nm: np.ndarray
-    xt: np.ndarray
-    link_force_N: np.ndarray
-    link_length_m: np.ndarray
-    joint_extension_m: np.ndarray
+    __slots__ = ("_t", "_vals", "_src")
+    FIELDS = ("t_s",) + tuple(_SOURCES)
+
+    def __init__(self, t_s, **arrays):
+        if set(arrays) != set(_SOURCES):
+            raise TypeError(f"Observation needs t_s and exactly {', '.join(_SOURCES)}; "
+                            f"missing {sorted(set(_SOURCES) - set(arrays))}, unknown {sorted(set(arrays) - set(_SOURCES))}")
+        object.__setattr__(self, "_t", float(t_s))
+        object.__setattr__(self, "_vals", {k: _frozen(v) for k, v in arrays.items()})
+        object.__setattr__(self, "_src", None)
+
+    @classmethod
+    def _of_state(cls, model, y, ctl, t):
+        obs = cls.__new__(cls)
+        object.__setattr__(obs, "_t", float(t))
+        object.__setattr__(obs, "_vals", None)
+        object.__setattr__(obs, "_src", (model, np.array(y, float), ctl))
+        return obs
+
+    def _values(self) -> dict:
+        if self._vals is None:
+            model, y, ctl = self._src
+            tables = output_series(model, y[None, :], ctl)
+            object.__setattr__(self, "_vals", {k: _frozen(tables[i][c][0]) for k, (i, c) in _SOURCES.items()})
+            object.__setattr__(self, "_src", None)
+        return self._vals
+
+    @property
+    def t_s(self) -> float:
+        return self._t
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"Observation is read-only (cannot set {name!r})")
+
+    def __repr__(self):
+        return "Observation(" + ", ".join(f"{k}={getattr(self, k)!r}" for k in self.FIELDS) + ")"
 
     def as_dict(self) -> dict:
         """Name -> value (arrays copied, writable)."""
-        return {f.name: (np.array(getattr(self, f.name)) if f.name != "t_s" else self.t_s) for f in fields(self)}
+        return {"t_s": self._t} | {k: np.array(v) for k, v in self._values().items()}
 
 
-_SEG = {"x_m": "x_m", "v_mps": "v_mps", "wheel_speed_mps": "wheel_speed_mps", "slip": "slip",
-        "motor_torque_Nm": "motor_torque_Nm", "xt": "xt"}
-_LINK = {"link_force_N": "force_N", "link_length_m": "length_m", "joint_extension_m": "extension_m"}
+for _name in _SOURCES:
+    setattr(Observation, _name, property(lambda self, _n=_name: self._values()[_n]))
 
 
 def observe(model, y, ctl, t) -> Observation:
-    """The :class:`Observation` of flat state ``y`` at time ``t`` reached under controls ``ctl``."""
-    seg, lk = output_series(model, np.asarray(y, float)[None, :], ctl)
-    kw = {k: seg[src][0] for k, src in _SEG.items()} | {k: lk[src][0] for k, src in _LINK.items()}
-    return Observation(t_s=float(t), **{k: _frozen(v) for k, v in kw.items()})
+    """The :class:`Observation` of flat state ``y`` at time ``t`` reached under controls ``ctl``
+    (computed from a copy of ``y`` when first read)."""
+    return Observation._of_state(model, y, ctl, t)
 
 
 def _frozen(a):
