@@ -104,3 +104,21 @@ def test_joint_force_and_length_commands_through_the_actuator():
     assert obs.link_force_N[0] == pytest.approx(-120.0, abs=1.0)
     obs = sim.step({"joint_length_m": [-5.0]}, 3.0)        # beyond the stroke: held at the end stop
     assert obs.joint_extension_m[0] >= L.stroke_min_m[0] - 0.01
+
+
+def test_solver_failure_leaves_the_simulator_at_the_step_start(tow6, monkeypatch):
+    import snoworm.simulator as S
+    from snoworm.driver import SolverError
+    sim = Simulator(tow6)
+    sim.step({"wheel_speed_mps": [1.0] * 6}, 0.2)
+    before = sim.observation()
+
+    def boom(*a, **k):
+        raise SolverError("every method failed (test)")
+    monkeypatch.setattr(S, "solve_interval", boom)
+    with pytest.raises(SolverError):
+        sim.step({"wheel_speed_mps": [2.0] * 6}, 0.2)
+    assert sim.t_s == before.t_s
+    np.testing.assert_array_equal(sim.observation().x_m, before.x_m)
+    np.testing.assert_array_equal(sim.commands.controls.speed_sp_mps, 1.0)   # the failed step's command undone
+    assert sim.result().t[-1] == pytest.approx(0.2)
