@@ -97,11 +97,14 @@ class _EnvCore:
         return cmd
 
     def reset(self, *, seed=None, options=None):
+        """Back to t = 0 (the chain is deterministic; ``seed`` seeds the spaces' sampling): ``(obs, info)``."""
         super().reset(seed=seed)
         self._obs, self._stalled_s = self.sim.reset(), 0.0
         return self._vector(self._obs), {"t_s": self._obs.t_s}
 
     def step(self, action):
+        """Hold ``action`` for ``dt_s``: ``(obs, reward, terminated, truncated, info)``; ``info`` has
+        ``t_s`` and ``motor_energy_J``, the motors' electrical energy in the step [J]."""
         prev = self._obs
         obs = self.sim.step(self._command(action), self.dt_s)
         ts, ys, ctl = self.sim.last_step

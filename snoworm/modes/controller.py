@@ -29,7 +29,7 @@ from ..sections import ModeConfig
 from .base import Interval, Mode, register_mode
 from .command import CommandState, observe
 
-__all__ = ["ControllerConfig", "ControllerMode", "ControllerError", "load_controller", "user_traceback"]
+__all__ = ["ControllerConfig", "ControllerMode", "ControllerError", "load_controller", "construct", "user_traceback"]
 
 _PKG_DIR = Path(__file__).resolve().parents[1]
 
@@ -160,6 +160,14 @@ class ControllerMode(Mode):
         self.calls = 0
 
     def interval(self, t, y):
+        """Call the controller with the observation at ``t``; hold its command until ``t + period_s``.
+
+        Raises
+        ------
+        ControllerError
+            If the controller raises (its own traceback frames in the message) or returns a bad
+            command (the key and the time in the message).
+        """
         obs = observe(self.model, y, self.commands.controls, t)
         try:
             command = self.controller(obs)
@@ -173,4 +181,5 @@ class ControllerMode(Mode):
         return Interval(t + self.cfg.period_s, ctl, [], "controller")
 
     def summary(self, result) -> dict:
+        """The controller (as resolved) and how many times it was called."""
         return {"controller": self.cfg.controller, "controller_calls": self.calls}
