@@ -43,6 +43,9 @@ def test_uniform_speeds_one_panel(uniform):
     panels = [a for a in fig.axes if a.get_ylabel().startswith("ground speed")]
     assert len(panels) == 1 and len(_labels(panels[0])) == 6
     assert runs.moving_groups(uniform) is None
+    # set-points that do not switch between a few values are lines, not a chart
+    assert [a.get_ylabel() for a in fig.axes][-1] == "wheel-speed\nset-point [m/s]"
+    assert len(fig.axes[-1].get_lines()) == 6
 
 
 def test_legends_outside_the_data(uniform):

@@ -78,6 +78,23 @@ def _setpoint_chart(a, fig, result):
     fig.colorbar(m, ax=a, label="wheel-speed\nset-point [m/s]", pad=0.01)
 
 
+def _switching_setpoints(result) -> bool:
+    """True when the set-points switch between a few values (a gait), better read as a chart;
+    False when they vary smoothly or stay put (force control, uniform), better read as lines."""
+    sp = np.round(result.segments["speed_setpoint_mps"], 9)
+    jumps = (np.diff(sp, axis=0) != 0).sum(0)
+    return np.unique(sp).size <= 4 and int(jumps.max(initial=0)) >= 2
+
+
+def _setpoint_lines(a, result):
+    t, sp = result.t, result.segments["speed_setpoint_mps"]
+    for k in range(sp.shape[1]):
+        a.plot(t, sp[:, k], label=_seg_label(k), **series_style(k, t.size))
+    a.set_ylabel("wheel-speed\nset-point [m/s]")
+    a.grid(alpha=0.3)
+    legend_outside(a)
+
+
 def plot_groups(result, groups=None, *, ax=None, fig=None):
     """Ground speed of the segments that move together, one panel per group (paper Fig 5).
 
@@ -108,14 +125,17 @@ def plot_speeds(result, *, ax=None, fig=None):
     """Ground speed per segment and the wheel-speed set-points against time (paper Figs 5, 8, 9, 11).
 
     An inchworm run gets one speed panel per moving group (as the paper's Fig 5), other modes
-    one panel with every segment (distinct colour, line style and marker each); the last panel
-    charts the set-points (a colour per value, a row per segment).  Returns the Figure.
+    one panel with every segment (distinct colour, line style and marker each).  The last panel
+    shows the set-points: as a chart (a row per segment, a colour per value) when they switch
+    between a few values (a gait), else as lines.  Returns the Figure.
     """
     own = ax is None and fig is None
     groups = moving_groups(result) or [tuple(range(result.n_segments))]
     n = len(groups)
+    chart = _switching_setpoints(result)
+    last = max(1.0, 0.25 * result.n_segments) if chart else 1.6
     fig, axes = new_figure(ax, fig, n + 1, 1, figsize=(9, 1.9 * n + 2.6), sharex=True,
-                           gridspec_kw={"height_ratios": [2.2] * n + [max(1.0, 0.25 * result.n_segments)]})
+                           gridspec_kw={"height_ratios": [2.2] * n + [last]})
     t, v = result.t, result.segments["v_mps"]
     for a, grp in zip(axes[:n, 0], groups):
         for k in grp:
@@ -123,7 +143,10 @@ def plot_speeds(result, *, ax=None, fig=None):
         a.set_ylabel("ground speed\n[m/s]")
         a.grid(alpha=0.3)
         legend_outside(a)
-    _setpoint_chart(axes[n, 0], fig, result)
+    if chart:
+        _setpoint_chart(axes[n, 0], fig, result)
+    else:
+        _setpoint_lines(axes[n, 0], result)
     axes[-1, 0].set_xlabel("time [s]")
     _title(fig, axes, f"{result.scenario.name}: speeds" + (" (one panel per moving group)" if n > 1 else ""), own)
     return fig
