@@ -19,7 +19,27 @@ import numpy as np
 from ._version import __version__
 from .scenario import dump_scenario
 
-__all__ = ["versions", "to_pandas", "to_xarray", "units_of"]
+__all__ = ["versions", "to_pandas", "to_xarray", "units_of", "require_pandas", "require_xarray"]
+
+_EXTRA = "pip install 'snoworm[data]'"
+
+
+def require_pandas():
+    """The pandas module, or an ImportError saying how to install it."""
+    try:
+        import pandas   # lazy: optional dependency (snoworm[data])
+    except ImportError as exc:
+        raise ImportError(f"this needs pandas, which is not installed: {_EXTRA}") from exc
+    return pandas
+
+
+def require_xarray():
+    """The xarray module, or an ImportError saying how to install it."""
+    try:
+        import xarray   # lazy: optional dependency (snoworm[data])
+    except ImportError as exc:
+        raise ImportError(f"this needs xarray, which is not installed: {_EXTRA}") from exc
+    return xarray
 
 
 def units_of(columns: dict) -> dict:
@@ -65,7 +85,7 @@ def to_pandas(result) -> dict:
     in the CSV files' order.  Units in ``DataFrame.attrs["units"]``; the scenario name in
     ``attrs["scenario"]``.
     """
-    import pandas as pd   # lazy: optional dependency (snoworm[data])
+    pd = require_pandas()
     seg_cols, link_cols = _columns(result)
     seg_units, link_units = units_of(seg_cols), units_of(link_cols)
     frames = {}
@@ -86,7 +106,7 @@ def to_xarray(result):
     hold the resolved scenario as YAML text (``scenario_yaml``), its name and the package
     versions (``version_<package>``), so a saved file records how it was made.
     """
-    import xarray as xr   # lazy: optional dependency (snoworm[data])
+    xr = require_xarray()
     seg_cols, link_cols = _columns(result)
     data = {}
     for cols, series, dims in ((seg_cols, result.segments, ("time", "segment")),

@@ -64,3 +64,9 @@ def test_to_xarray_dims_units_and_provenance(res, tmp_path):
     ds.to_netcdf(path, engine="scipy")
     with xr.open_dataset(path, engine="scipy") as back:
         xr.testing.assert_identical(back.load(), ds)
+
+
+def test_missing_pandas_says_how_to_install(res, monkeypatch):
+    monkeypatch.setitem(__import__("sys").modules, "pandas", None)
+    with pytest.raises(ImportError, match=r"needs pandas, which is not installed: pip install 'snoworm\[data\]'"):
+        res.to_pandas()

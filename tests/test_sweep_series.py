@@ -70,3 +70,10 @@ def test_load_sweep_round_trip(tmp_path):
 def test_unknown_series_format():
     with pytest.raises(ScenarioError, match="series: expected one of folders, netcdf, got 'hdf'"):
         run_sweep(TOW6, SETS, series="hdf")
+
+
+def test_netcdf_without_xarray_is_bad_input(monkeypatch, tmp_path):
+    monkeypatch.setitem(__import__("sys").modules, "xarray", None)     # import xarray -> ImportError
+    with pytest.raises(ScenarioError, match=r"--series netcdf needs xarray: pip install 'snoworm\[data\]'"):
+        run_sweep(TOW6, SETS, out_dir=tmp_path, series="netcdf")
+    assert list(tmp_path.iterdir()) == []                              # nothing written

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..dataset import require_xarray
 from ..results import LINK_COLUMNS, SEGMENT_COLUMNS
 from ..scenario import Scenario, apply_overrides, read_yaml, scenario_from_dict
 from ..schema import ScenarioError
@@ -153,7 +154,7 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
     if series == "netcdf":
         save_cases = True
         try:
-            import xarray  # noqa: F401  # lazy: optional dependency (snoworm[data]), checked before any case runs
+            require_xarray()       # before any case runs
         except ImportError:
             raise ScenarioError("--series netcdf needs xarray: pip install 'snoworm[data]' "
                                 "(or keep the default --series folders).") from None

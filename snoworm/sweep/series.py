@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..dataset import units_of, versions
+from ..dataset import require_xarray, units_of, versions
 from ..fileio import atomic_path
 
 __all__ = ["SERIES_FORMATS", "SERIES_FILE", "save_series", "case_series_path", "combine_series", "load_series"]
@@ -56,7 +56,7 @@ def save_series(result, save_dir) -> None:
 
 def _from_old(path: Path, n_cases: int) -> dict:
     """Case index -> arrays of the cases already in an earlier ``series.nc`` (padding trimmed)."""
-    import xarray as xr   # lazy: optional dependency (snoworm[data])
+    xr = require_xarray()
     out = {}
     with xr.open_dataset(path, engine="scipy") as ds:
         ds = ds.load()
@@ -115,7 +115,7 @@ def _stack(per_case, n_cases, columns):
 def combine_series(out, axes, cases, zip_, columns, attrs) -> Path:
     """Gather every case's series into ``out/series.nc`` (see the module's docstring) and remove
     the per-case ``.npz`` files.  ``columns``: ``Result.columns`` (descriptions with units)."""
-    import xarray as xr   # lazy: optional dependency (snoworm[data])
+    xr = require_xarray()
     out = Path(out)
     n = len(cases)
     per_case = _gather(out, cases)
@@ -160,6 +160,6 @@ def combine_series(out, axes, cases, zip_, columns, attrs) -> Path:
 
 def load_series(path):
     """The ``series.nc`` of a sweep as an :class:`xarray.Dataset` (loaded into memory, file closed)."""
-    import xarray as xr   # lazy: optional dependency (snoworm[data])
+    xr = require_xarray()
     with xr.open_dataset(path, engine="scipy") as ds:
         return ds.load()

@@ -14,6 +14,7 @@ from pathlib import Path
 import yaml
 
 from .._version import __version__
+from ..dataset import require_pandas
 from ..fileio import atomic_write_text
 from ..schema import ScenarioError
 from ..tables import FULL, csv_line, csv_text, write_csv
@@ -87,7 +88,7 @@ class SweepTable:
         """The table as a :class:`pandas.DataFrame`, one row per case (sorted by case id), the
         columns of ``summary.csv`` (the swept keys under their dotted names).  Needs pandas
         (``pip install 'snoworm[data]'``)."""
-        import pandas as pd   # lazy: optional dependency (snoworm[data])
+        pd = require_pandas()
         df = pd.DataFrame([[r.get(c) for c in self.columns] for r in self.rows], columns=self.columns)
         df.attrs["keys"] = list(self.keys)
         return df
