@@ -21,11 +21,17 @@
   ``stall_speed_mps`` for ``stall_time_s`` while a wheel command is held.  **Truncated** at
   ``simulation.duration_s``.
 
-``gymnasium`` is imported when :class:`SnowormEnv` is first used (``pip install snoworm[gym]``).
+This module needs ``gymnasium`` (``pip install 'snoworm[gym]'``); nothing else in snoworm imports it.
 """
 from __future__ import annotations
 
 import numpy as np
+
+try:
+    import gymnasium
+    from gymnasium import spaces
+except ImportError as exc:  # pragma: no cover - depends on the installed extras
+    raise ImportError("snoworm.env needs gymnasium: pip install 'snoworm[gym]'") from exc
 
 from .outputs import output_series
 from .simulator import Simulator
@@ -36,22 +42,35 @@ __all__ = ["SnowormEnv", "OBSERVATION_FIELDS", "default_reward"]
 OBSERVATION_FIELDS = ("x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt",
                       "link_force_N", "link_length_m", "joint_extension_m")
 
-_CLASS = None
-
 
 def default_reward(prev_obs, obs, info, energy_weight=1e-3) -> float:
     """Progress of the chain's mean position [m] minus ``energy_weight`` times the motors' energy [J]."""
     return float(np.mean(obs.x_m) - np.mean(prev_obs.x_m)) - energy_weight * info["motor_energy_J"]
 
 
-class _EnvCore:
-    """The environment's logic; :func:`_env_class` mixes in ``gymnasium.Env``."""
+class SnowormEnv(gymnasium.Env):
+    """A scenario's chain as a Gymnasium environment (see the module docstring for spaces and reward).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The validated scenario; its mode gives only the initial state.
+    reward : callable, optional
+        ``reward(prev_obs, obs, info) -> float``; default :func:`default_reward`.
+    dt_s : float
+        How long each action is held [s].
+    action_keys : tuple of str
+        Command keys that make up the action vector.
+    energy_weight : float
+        Weight of the motors' electrical energy in the default reward [1/J per m].
+    stall_speed_mps, stall_time_s : float
+        Immobilisation test: mean speed below ``stall_speed_mps`` for ``stall_time_s``.
+    """
 
     metadata = {"render_modes": []}
 
     def __init__(self, scenario, reward=None, dt_s=0.1, action_keys=("wheel_speed_mps",), energy_weight=1e-3,
                  stall_speed_mps=0.01, stall_time_s=2.0):
-        from gymnasium import spaces  # lazy: optional extra (gym)
         if not dt_s > 0:
             raise ValueError(f"dt_s: the step length must be positive, got {dt_s!r}")
         self.sim = Simulator(scenario)
@@ -118,18 +137,3 @@ class _EnvCore:
         truncated = obs.t_s >= self.scenario.simulation.duration_s - 1e-9
         self._obs = obs
         return self._vector(obs), float(reward), bool(terminated), bool(truncated), info
-
-
-def _env_class():
-    """``SnowormEnv``: :class:`_EnvCore` with ``gymnasium.Env`` (built once, when first asked for)."""
-    global _CLASS
-    if _CLASS is None:
-        import gymnasium  # lazy: optional extra (gym)
-        _CLASS = type("SnowormEnv", (_EnvCore, gymnasium.Env), {"__module__": __name__, "__doc__": __doc__})
-    return _CLASS
-
-
-def __getattr__(name):
-    if name == "SnowormEnv":
-        return _env_class()
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -117,3 +117,16 @@ def test_controller_bad_command_exit_1_and_bad_class_exit_2(tmp_path):
     assert r.exit_code == 1 and "'brake'" in r.output and "t = 0 s" in r.output and not out.exists()
     r = run("run", p, "--out", out, "--set", "mode.controller=c.py:D")
     assert r.exit_code == 2 and "no class 'D'" in r.output and "Traceback" not in r.output
+def test_plot_format_and_sweep_series(tmp_path):
+    r = run("run", SCENARIOS / "pi3_equal.yaml", "--out", tmp_path / "r", "--set", "simulation.duration_s=1",
+            "--plot-format", "pdf")
+    assert r.exit_code == 0, r.output
+    pdfs = sorted(p.name for p in (tmp_path / "r").glob("*.pdf"))
+    assert pdfs == ["force_diagram.pdf", "forces.pdf", "positions.pdf", "speeds.pdf"]
+    assert not list((tmp_path / "r").glob("*.png"))
+    r = run("sweep", SCENARIOS / "tow6_uniform.yaml", "--set", "tow.force_N=0,100", "--set", "simulation.duration_s=1",
+            "--out", tmp_path / "s", "--series", "netcdf", "--plot-format", "svg")
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in (tmp_path / "s").iterdir()) == ["series.nc", "summary.csv", "sweep.json", "sweep.svg"]
+    r = run("run", SCENARIOS / "pi3_equal.yaml", "--out", tmp_path / "x", "--plot-format", "jpg")
+    assert r.exit_code == 2 and "'jpg' is not one of 'png', 'pdf', 'svg'" in r.output

@@ -20,6 +20,7 @@ from ..driver import SolverError, simulate
 from ..modes.controller import ControllerError
 from ..scenario import scenario_from_dict
 from ..schema import ScenarioError
+from .series import save_series
 
 __all__ = ["case_metrics", "run_case", "one_line", "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR",
            "LATE_FRACTION", "SLIP_FRACTION", "METRIC_COLUMNS", "STATUSES", "MAX_ERROR_CHARS"]
@@ -121,7 +122,8 @@ def run_case(task: dict) -> dict:
     ----------
     task : dict
         ``index``, ``raw`` (the scenario mapping with the case's overrides applied),
-        ``source``, ``base_dir`` and ``save_dir`` (None, or where to write the time series);
+        ``source``, ``base_dir`` and ``save_dir`` (None, or where to write the time series: a folder or
+        a ``.npz`` file, see :func:`~snoworm.sweep.series.save_series`);
         optionally ``scenario``, the :class:`~snoworm.scenario.Scenario` already validated from
         ``raw`` in this process (the batched executor's grouping), so it is not validated twice.
 
@@ -139,7 +141,7 @@ def run_case(task: dict) -> dict:
         res = simulate(sc)
         out.update(case_metrics(res))
         if task.get("save_dir"):
-            res.write(task["save_dir"], plot=False)
+            save_series(res, task["save_dir"])
         del res
     except ScenarioError as exc:
         out.update(status="invalid", error=one_line(exc))
