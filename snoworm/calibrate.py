@@ -34,14 +34,13 @@ import dataclasses
 import json
 import math
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 import yaml
 from scipy.optimize import least_squares
 
 from . import steady
-from .fileio import atomic_write_text
+from .fileio import atomic_write_text, check_output_folder, output_folder, relocate
 from .groundtruth import FieldData, compare_table2, format_table2, read_field_data, vehicle_model
 from .schema import ScenarioError, suggest
 from .sections import TerrainModelConfig
@@ -307,7 +306,7 @@ def calibration_json(res: CalibrationResult, source: str = "", parameter_set_nam
 
 
 def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyboy", model_file=None,
-                    torque_scale_Nm: float = 1.0, slip_scale: float = 0.01):
+                    torque_scale_Nm: float = 1.0, slip_scale: float = 0.01, overwrite: bool = False):
     """Read, validate, fit, then write ``terrain_model.yaml`` and ``calibration.json`` to ``out_dir``.
 
     Nothing is written if the input is invalid (every check runs before the first write).
@@ -319,8 +318,9 @@ def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyb
     data = read_field_data(field_path)
     seg, tp = vehicle_model(parameter_set_name, model_file)
     _check_fit(fit, len(data))
+    check_output_folder(out_dir, overwrite)      # before the fit, not after
     res = calibrate(data, fit, seg, tp, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale)
-    out = Path(out_dir)
-    paths = [atomic_write_text(out / "terrain_model.yaml", terrain_model_yaml(res, data.source)),
-             atomic_write_text(out / "calibration.json", calibration_json(res, data.source, parameter_set_name))]
-    return res, format_report(res), paths
+    with output_folder(out_dir, overwrite) as out:
+        paths = [atomic_write_text(out / "terrain_model.yaml", terrain_model_yaml(res, data.source)),
+                 atomic_write_text(out / "calibration.json", calibration_json(res, data.source, parameter_set_name))]
+    return res, format_report(res), relocate(paths, out, out_dir)

@@ -14,7 +14,7 @@ import numpy as np
 
 from ._version import __version__
 from .energy import energy_metrics
-from .fileio import atomic_write_text
+from .fileio import atomic_write_text, output_folder, relocate
 from .scenario import dump_scenario
 
 __all__ = ["Result", "SEGMENT_COLUMNS", "LINK_COLUMNS"]
@@ -193,23 +193,30 @@ class Result:
                                + [self.links[c].reshape(-1) for c in LINK_COLUMNS])
         return _csv(cols, data, int_cols=(1,))
 
-    def write(self, out_dir, plot: bool = True) -> list:
+    def write(self, out_dir, plot: bool = True, overwrite: bool = False) -> list:
         """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots).
 
-        Each file is written atomically (temporary file, then rename).  Returns the paths.
+        All or nothing (:func:`snoworm.fileio.output_folder`): the files are written into a
+        temporary sibling folder that replaces ``out_dir`` at the end, with a manifest; an earlier
+        snoworm folder there is replaced as a whole, a non-empty folder snoworm did not write is
+        refused unless ``overwrite``.  Returns the paths.
+
+        Raises
+        ------
+        snoworm.fileio.OutputError
+            Unusable ``out_dir`` or an I/O failure (nothing is written then).
         """
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        paths = [
-            atomic_write_text(out / "segments.csv", self.segments_csv()),
-            atomic_write_text(out / "links.csv", self.links_csv()),
-            atomic_write_text(out / "summary.json", json.dumps(self.summary(), indent=2) + "\n"),
-            atomic_write_text(out / "scenario.yaml", dump_scenario(self.scenario)),
-        ]
-        if plot:
-            from . import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
-            paths += plotting.plot_result(self, out)
-        return paths
+        with output_folder(out_dir, overwrite) as stage:
+            paths = [
+                atomic_write_text(stage / "segments.csv", self.segments_csv()),
+                atomic_write_text(stage / "links.csv", self.links_csv()),
+                atomic_write_text(stage / "summary.json", json.dumps(self.summary(), indent=2) + "\n"),
+                atomic_write_text(stage / "scenario.yaml", dump_scenario(self.scenario)),
+            ]
+            if plot:
+                from . import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+                paths += plotting.plot_result(self, stage)
+        return relocate(paths, stage, out_dir)
 
 
 def _csv(cols, data, int_cols=()):

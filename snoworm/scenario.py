@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import functools
+from importlib import resources
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,7 +26,7 @@ __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
     "TerrainModelConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig", "MODE_CONFIGS",
     "register_mode_config", "load_scenario", "scenario_from_dict", "dump_scenario", "apply_overrides",
-    "parse_set_option", "read_model_file", "read_yaml", "ScenarioError",
+    "parse_set_option", "read_model_file", "read_yaml", "ScenarioError", "shipped_scenarios", "scenario_path", "read_scenario_yaml",
 ]
 
 #: The scenario's ``mode.type`` -> its :class:`~snoworm.sections.ModeConfig` subclass.  Filled by
@@ -250,17 +251,68 @@ def read_yaml(path) -> dict:
     return yamlio.read_yaml(path)
 
 
+def _shipped_dir() -> Path:
+    return Path(str(resources.files("snoworm") / "scenarios"))
+
+
+def shipped_scenarios() -> dict:
+    """The scenarios shipped with snoworm: ``{name: (path, one-line description)}``, sorted by name."""
+    out = {}
+    for p in sorted(_shipped_dir().glob("*.yaml")):
+        try:
+            raw = read_yaml(p)
+        except ScenarioError:      # pragma: no cover - the shipped files are tested
+            continue
+        desc = raw.get("description", "") if isinstance(raw, dict) else ""
+        first = " ".join(str(desc).split())
+        out[p.stem] = (p, first.split(". ")[0].rstrip(".") + "." if first else "")
+    return out
+
+
+def scenario_path(name_or_path) -> Path:
+    """The file of a scenario given as a path or as the name of a shipped scenario.
+
+    A path that exists wins; otherwise a name such as ``inchworm6`` (or ``inchworm6.yaml``)
+    of :func:`shipped_scenarios` gives the shipped file; otherwise the path is returned as given
+    (reading it then reports the missing file, with the shipped names).
+    """
+    path = Path(name_or_path)
+    if path.exists():
+        return path
+    text = str(name_or_path)
+    name = text[:-5] if text.endswith(".yaml") else text
+    if "/" not in text and "\\" not in text:
+        shipped = _shipped_dir() / f"{name}.yaml"
+        if shipped.is_file():
+            return shipped
+    return path
+
+
+def read_scenario_yaml(name_or_path):
+    """(parsed YAML, the file) of a scenario path or shipped name (:func:`scenario_path`)."""
+    path = scenario_path(name_or_path)
+    try:
+        return read_yaml(path), path
+    except ScenarioError as exc:
+        if path.exists():
+            raise
+        names = ", ".join(shipped_scenarios())
+        raise ScenarioError(f"{exc} A shipped scenario is named without a path, one of: {names} "
+                            "(`snoworm scenarios` lists them).") from None
+
+
 def load_scenario(path, overrides=()) -> Scenario:
     """Load, override and validate a scenario file.
 
     Parameters
     ----------
     path : str or Path
-        YAML scenario file.
+        YAML scenario file, or the name of a shipped scenario (``"inchworm6"``, see
+        :func:`shipped_scenarios`); an existing path wins over a name.
     overrides : iterable of (str, object) or of "key=value" strings
         Dotted-key overrides applied before validation (the CLI's ``--set``).
     """
-    raw = read_yaml(path)
+    raw, path = read_scenario_yaml(path)
     ov = [parse_set_option(o) if isinstance(o, str) else o for o in overrides]
     if ov:
         if not isinstance(raw, dict):

@@ -65,7 +65,7 @@ def test_solver_failure_exit_1_nothing_written(tmp_path, monkeypatch):
     import importlib
     S = importlib.import_module("snoworm.driver")
 
-    def boom(sc):
+    def boom(sc, progress=None):
         raise S.SolverError("solve_ivp (LSODA) failed near t = 3 s: test")
     monkeypatch.setattr(S, "simulate", boom)
     out = tmp_path / "o"

@@ -12,13 +12,15 @@ import hashlib
 import json
 import os
 import sys
-import time
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..scenario import Scenario, apply_overrides, read_yaml, scenario_from_dict
+from ..scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
+from ..fileio import OutputError, check_output_folder, folder_lock, os_error_message, write_manifest
+from ..progress import Progress
 from ..schema import ScenarioError
 from ..tables import FULL, canonical_json, format_cell
 from .cases import build_cases
@@ -32,47 +34,27 @@ __all__ = ["run_sweep"]
 
 # ---------------------------------------------------------------------------------- progress
 class _Progress:
-    """A one-line progress report on a terminal: cases done, failures, time left."""
+    """Cases done, failures, time left: a bar on a terminal, a line per ~10 % otherwise
+    (:class:`snoworm.progress.Progress`)."""
 
     def __init__(self, total, already, stream, enabled):
-        self.total, self.already, self.stream, self.enabled = total, already, stream, enabled
-        self.done = self.failed = 0
-        self.t0 = time.perf_counter()
-        self._last = 0.0
+        self.already, self.done, self.failed = already, 0, 0
+        self.bar = Progress(total, "sweep", "cases", stream, mode="auto" if enabled else "off")
+        self.bar.value = float(already)
+
+    def _info(self):
+        return f"{self.failed} failed" + (f", {self.already} resumed" if self.already else "")
 
     def update(self, failed: bool, force=False):
         self.done += 1
         self.failed += int(failed)
-        self.show(force)
+        self.bar.set(self.already + self.done, info=self._info())
 
     def show(self, force=False):
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if not force and now - self._last < 0.1 and self.done + self.already < self.total:
-            return
-        self._last = now
-        n = self.already + self.done
-        width = 24
-        fill = int(width * n / max(self.total, 1))
-        el = now - self.t0
-        left = self.total - n
-        eta = f"~{_hms(el / self.done * left)} left" if self.done and left else ("done" if not left else "")
-        skip = f", {self.already} resumed" if self.already else ""
-        self.stream.write(f"\rsweep [{'#' * fill}{'.' * (width - fill)}] {n}/{self.total} cases{skip}, "
-                          f"{self.failed} failed, {_hms(el)} elapsed, {eta}   ")
-        self.stream.flush()
+        self.bar.set(self.already + self.done, info=self._info())
 
     def close(self):
-        if self.enabled:
-            self.show(force=True)
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def _hms(s):
-    s = int(round(s))
-    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60}:{s % 60:02d}"
+        self.bar.close(info=self._info())
 
 
 # ---------------------------------------------------------------------------------- driver
@@ -82,8 +64,7 @@ def _base(scenario):
         return scenario.to_dict(), scenario.name, None
     if isinstance(scenario, dict):
         return scenario, "scenario", None
-    path = Path(scenario)
-    raw = read_yaml(path)
+    raw, path = read_scenario_yaml(scenario)
     return raw, str(path), str(path.resolve().parent)
 
 
@@ -97,7 +78,7 @@ def _definition(raw, axes, zip_):
 
 def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
               save_cases: bool = False, progress=None, plot: bool = True, executor=None,
-              batch: int = 0) -> SweepTable:
+              batch: int = 0, overwrite: bool = False) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
     Parameters
@@ -109,7 +90,9 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         :class:`Axis` objects.  Several axes form a full grid (first axis slowest).
     out_dir : str or Path, optional
         Where ``sweep.json``, ``summary.csv`` and the plot go.  A re-run with the same
-        definition resumes; with another definition it is refused.  None: nothing is written.
+        definition resumes; with another definition it is refused (unless ``overwrite``).  None:
+        nothing is written.  The folder is locked while the sweep runs (a second sweep into it
+        raises :class:`snoworm.fileio.FolderLocked` naming the process holding it).
     jobs : int
         Local worker processes (1: run in this process).
     scheduler : str or distributed.Client, optional
@@ -119,7 +102,7 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
     save_cases : bool
         Write each case's time series to ``out_dir/cases/<case_id>/`` (needs ``out_dir``).
     progress : bool, optional
-        Progress line on stderr; default: only when stderr is a terminal.
+        Progress on stderr (default True): a bar on a terminal, one line per ~10 % otherwise.
     plot : bool
         Write ``sweep.png`` (one varying axis, or zipped axes) or ``heatmap.png`` (two).
     executor : object, optional
@@ -128,6 +111,9 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         With ``batch > 1`` (and no scheduler or executor): integrate up to ``batch`` cases of the
         same structure as one stacked system (:class:`~snoworm.sweep.executors.BatchExecutor`, ``jobs``
         processes); other cases run one by one.  Same metrics within the solver tolerance.
+    overwrite : bool
+        Start afresh in a folder holding another sweep (its files are removed), or write into a
+        non-empty folder snoworm did not write.
 
     Returns
     -------
@@ -143,14 +129,39 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
 
     plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs)
     out = Path(out_dir) if out_dir is not None else None
-    done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source) \
-        if out is not None else {}
-    if progress is None:
-        progress = sys.stderr.isatty()
-    bar = _Progress(len(plan.cases), len(done), sys.stderr, bool(progress))
+    if out is not None and not (out / "sweep.json").exists():
+        check_output_folder(out, overwrite)
     own = executor is None
-    if own:
+    if own:                         # before anything is written: an unreachable scheduler writes nothing
         executor = _make_executor(scheduler, batch, jobs)
+    with ExitStack() as stack:
+        done = {}
+        if out is not None:
+            try:
+                _mkdir(out)
+                stack.enter_context(folder_lock(out))
+                done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source,
+                                   overwrite=overwrite)
+                write_manifest(out, status="running")
+            except BaseException:
+                if own:
+                    executor.close()
+                raise
+        table = _run(plan, done, out, executor, own, progress, plot, zip_, save_cases)
+        if out is not None:
+            write_manifest(out, status="complete")
+        return table
+
+
+def _mkdir(out: Path):
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot write results: {os_error_message(exc, out)}") from None
+
+
+def _run(plan, done, out, executor, own, progress, plot, zip_, save_cases) -> SweepTable:
+    bar = _Progress(len(plan.cases), len(done), sys.stderr, progress is None or bool(progress))
     rows = dict(done)
     todo = [c for c in plan.cases if c.index not in done]
     _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, save_cases)
