@@ -8,6 +8,7 @@ from __future__ import annotations
 import functools
 import logging
 import os
+import shlex
 import signal
 import sys
 
@@ -47,8 +48,11 @@ def handle_errors(fn):
     def wrapper(*a, **kw):
         from .schema import ScenarioError  # lazy: start-up
         from .driver import SolverError  # lazy: start-up
+        from . import fileio  # lazy: start-up
         from .fileio import OutputError  # lazy: start-up
         old = _catch_sigterm()
+        argv = click.get_current_context().find_root().meta.get("snoworm.argv")
+        fileio.COMMAND = shlex.join(["snoworm", *argv]) if argv is not None else None   # for the manifests
         try:
             return fn(*a, **kw)
         except (ScenarioError, OutputError) as exc:
@@ -67,12 +71,21 @@ def handle_errors(fn):
             _fail(f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
                   "rerun with SNOWORM_DEBUG=1 for the traceback and report it.", EXIT_SOLVER)
         finally:
+            fileio.COMMAND = None
             if old is not None:
                 signal.signal(signal.SIGTERM, old)
     return wrapper
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Group(click.Group):
+    """The command group; keeps its command line (for the output folders' manifests)."""
+
+    def parse_args(self, ctx, args):
+        ctx.meta["snoworm.argv"] = list(args)
+        return super().parse_args(ctx, args)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="snoworm")
 @click.option("-v", "--verbose", is_flag=True, help="Also log solver fallbacks and retries to stderr.")
 def main(verbose=False):
@@ -82,12 +95,19 @@ def main(verbose=False):
     Start with `snoworm run inchworm6 --out out/`.
     """
     log = logging.getLogger("snoworm")
-    if not any(getattr(h, "_snoworm_cli", False) for h in log.handlers):
-        h = logging.StreamHandler()            # stderr
+    if not any(isinstance(h, _StderrHandler) for h in log.handlers):
+        h = _StderrHandler()
         h.setFormatter(logging.Formatter("snoworm: %(message)s"))
-        h._snoworm_cli = True
         log.addHandler(h)
     log.setLevel(logging.INFO if verbose else logging.WARNING)
+
+
+class _StderrHandler(logging.StreamHandler):
+    """Log records to the current ``sys.stderr`` (looked up at each record, not at start-up)."""
+
+    def emit(self, record):
+        self.stream = sys.stderr
+        super().emit(record)
 
 
 overwrite_option = click.option("--overwrite", is_flag=True,

@@ -124,7 +124,13 @@ def read_manifest(folder) -> dict | None:
     return data if isinstance(data, dict) and isinstance(data.get("files"), list) else None
 
 
+#: The command recorded in manifests when none is given (the CLI sets it to its own command line).
+COMMAND = None
+
+
 def _command_line() -> str:
+    if COMMAND is not None:
+        return COMMAND
     prog = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "python"
     if prog in ("__main__.py", "snoworm"):
         prog = "snoworm"
