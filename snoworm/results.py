@@ -174,6 +174,7 @@ class Result:
             "energy_metrics": metrics,
             "solver": dict(self.stats),
             "events": self.events,
+            "sources": self.scenario.sources,
         }
         s.update(self.mode_summary)
         return s
