@@ -174,7 +174,7 @@ class CalibrationResult:
 
 
 def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: float = 1.0,
-              slip_scale: float = 0.01) -> CalibrationResult:
+              slip_scale: float = 0.01, progress=None) -> CalibrationResult:
     """Fit terrain-model coefficients (and optionally every case's X_t) to steady field data.
 
     Parameters
@@ -190,6 +190,9 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
     torque_scale_Nm, slip_scale : float
         Residual scales: torque error in units of ``torque_scale_Nm``, slip error in units of
         ``slip_scale`` (default 1 N m and 1 percentage point).
+    progress : callable, optional
+        ``progress(evaluations, budget)`` after each model evaluation (the budget is the fit's
+        ``max_nfev``; a fit usually converges well before it).
 
     Raises
     ------
@@ -211,14 +214,20 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
     x0 = np.clip(np.array(x0, float), np.nextafter(np.array(lo), np.inf), np.nextafter(np.array(hi), -np.inf))
     meas = np.concatenate([data.torque_Nm / torque_scale_Nm, data.slip / slip_scale])
 
+    budget = 200 * (len(x0) + 1)
+    count = [0]
+
     def resid(theta):
         tpk, xt = _unpack(theta, names, tp, data.xt, n)
         s, T, _ = model_predictions(data, seg, tpk, xt)
+        count[0] += 1
+        if progress is not None:
+            progress(count[0], budget)
         return np.concatenate([T / torque_scale_Nm, s / slip_scale]) - meas
 
     r0 = resid(x0)
     sol = least_squares(resid, x0, bounds=(lo, hi), method="trf", jac="3-point", x_scale="jac",
-                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200 * (len(x0) + 1))
+                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=budget)
     tp_fit, xt_fit = _unpack(sol.x, names, tp, data.xt, n)
     n_res, n_par = r0.size, sol.x.size
     dof = n_res - n_par
@@ -306,7 +315,8 @@ def calibration_json(res: CalibrationResult, source: str = "", parameter_set_nam
 
 
 def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyboy", model_file=None,
-                    torque_scale_Nm: float = 1.0, slip_scale: float = 0.01, overwrite: bool = False):
+                    torque_scale_Nm: float = 1.0, slip_scale: float = 0.01, overwrite: bool = False,
+                    progress=None):
     """Read, validate, fit, then write ``terrain_model.yaml`` and ``calibration.json`` to ``out_dir``.
 
     Nothing is written if the input is invalid (every check runs before the first write).
@@ -319,7 +329,7 @@ def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyb
     seg, tp = vehicle_model(parameter_set_name, model_file)
     _check_fit(fit, len(data))
     check_output_folder(out_dir, overwrite)      # before the fit, not after
-    res = calibrate(data, fit, seg, tp, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale)
+    res = calibrate(data, fit, seg, tp, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, progress=progress)
     with output_folder(out_dir, overwrite) as out:
         paths = [atomic_write_text(out / "terrain_model.yaml", terrain_model_yaml(res, data.source)),
                  atomic_write_text(out / "calibration.json", calibration_json(res, data.source, parameter_set_name))]

@@ -259,8 +259,10 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
     """
     from .calibrate import run_calibration  # lazy: start-up
-    _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
-                                     torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, overwrite=overwrite)
+    with _progress(1, "calibrate", "model evaluations (budget)") as bar:
+        _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
+                                         torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, overwrite=overwrite,
+                                         progress=bar.set)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
