@@ -168,8 +168,8 @@ def folder_state(path) -> str:
 
 def _refusal(path) -> str:
     return (f"{path} is not empty and was not written by snoworm (it has no {MANIFEST} listing its files). "
-            "Give an empty or new --out folder, or pass --overwrite to write into it anyway "
-            "(same-named files are replaced, the others kept).")
+            "Give an empty or new --out folder, or pass --overwrite (overwrite=True in Python) to write into "
+            "it anyway (same-named files are replaced, the others kept).")
 
 
 def check_output_folder(path, overwrite: bool = False) -> str:
@@ -314,7 +314,7 @@ def output_folder(path, overwrite: bool = False, command: str | None = None):
         yield stage
         write_manifest(stage, command)
         state = check_output_folder(target, overwrite)           # again: it may have changed meanwhile
-        if in_place or state == "foreign" or _inside_cwd(target):
+        if in_place or state == "foreign" or target.is_symlink() or _inside_cwd(target):
             _commit_in_place(stage, target)
         else:
             _commit_swap(stage, target)

@@ -215,3 +215,14 @@ def test_manifest_json_is_plain_data(tmp_path):
     out = _write(tmp_path / "r", ["a"])
     doc = json.loads((out / MANIFEST).read_text())
     assert set(doc) >= {"snoworm_version", "command", "written_utc", "files"}
+
+
+def test_a_symlinked_output_folder_stays_a_link(tmp_path):
+    real = tmp_path / "scratch"
+    real.mkdir()
+    link = tmp_path / "out"
+    link.symlink_to(real)
+    _write(link, ["a.csv"])
+    _write(link, ["b.csv"])
+    assert link.is_symlink() and sorted(os.listdir(real)) == sorted(["b.csv", MANIFEST])
+    assert sorted(os.listdir(tmp_path)) == ["out", "scratch"]
