@@ -292,7 +292,8 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
                    "snoworm did not write.")
 @handle_errors
 def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, batch, overwrite):
-    """Run SCENARIO over a grid of values and tabulate the results in --out.
+    """Run SCENARIO (a YAML file or a shipped scenario's name) over a grid of values and tabulate
+    the results in --out.
 
     \b
     summary.csv has one row per case, appended as each case finishes (completion order):
@@ -357,7 +358,9 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, b
 @handle_errors
 def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, no_inching, inch_duration_s, jobs,
                  no_plot, overwrite):
-    """Which modes move SCENARIO's vehicle over X_t and tow: rolling, inching only, immobile.
+    """Which modes move SCENARIO's vehicle (a YAML file or a shipped name) over X_t and tow.
+
+    Regions: rolling, inching only, immobile.
 
     Rolling by the steady-state solver (each segment's share of the tow below its maximum
     drawbar); inching by short simulations of the inchworm gait of the scenario's supervisor or
