@@ -157,7 +157,7 @@ def folder_state(path) -> str:
         return "missing"
     if not path.is_dir():
         return "file"
-    entries = [e for e in os.listdir(path) if e != LOCK]
+    entries = [e for e in os.listdir(path) if e != LOCK and _STAGE not in e]
     if not entries:
         return "empty"
     man = read_manifest(path)

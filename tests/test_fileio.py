@@ -226,3 +226,18 @@ def test_a_symlinked_output_folder_stays_a_link(tmp_path):
     _write(link, ["b.csv"])
     assert link.is_symlink() and sorted(os.listdir(real)) == sorted(["b.csv", MANIFEST])
     assert sorted(os.listdir(tmp_path)) == ["out", "scratch"]
+
+
+def test_an_unwritable_parent_stages_inside_the_output_folder(tmp_path, monkeypatch):
+    out = tmp_path / "shared" / "mine"
+    out.mkdir(parents=True)
+    real = fileio.tempfile.mkdtemp
+
+    def no_siblings(prefix="", dir=None):
+        if os.path.samefile(dir, out.parent):
+            raise PermissionError(errno.EACCES, "Permission denied", str(out.parent))
+        return real(prefix=prefix, dir=dir)
+    monkeypatch.setattr(fileio.tempfile, "mkdtemp", no_siblings)
+    _write(out, ["a.csv"])
+    _write(out, ["b.csv"])
+    assert sorted(os.listdir(out)) == sorted(["b.csv", MANIFEST]) and os.listdir(out.parent) == ["mine"]
