@@ -253,3 +253,20 @@ def test_sigterm_ends_a_sweep_with_a_message_keeping_finished_rows(tmp_path):
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)     # resumes
     assert r.returncode == 0, r.stderr
     assert f"{len(lines) - 1} resumed" in r.stderr and "40 cases: 40 ok" in r.stdout
+
+
+def test_disk_full_while_appending_sweep_rows_is_exit_2_naming_the_file(tmp_path, monkeypatch):
+    from snoworm.sweep import run as sweep_run
+    real = os.write
+
+    def full(fd, data):
+        if data.startswith(b"000"):                                  # a row (case ids 0000, 0001)
+            raise OSError(28, "No space left on device")
+        return real(fd, data)
+    monkeypatch.setattr(sweep_run.os, "write", full)
+    out = tmp_path / "s"
+    r = _sweep(out)
+    assert r.exit_code == 2, r.output
+    assert "No space left on device" in r.output and str(out / "summary.csv") in r.output
+    assert "re-run the same command to resume" in r.output and "internal error" not in r.output
+    assert not (out / fileio.LOCK).exists()

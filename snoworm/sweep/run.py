@@ -134,6 +134,14 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
     own = executor is None
     if own:                         # before anything is written: an unreachable scheduler writes nothing
         executor = _make_executor(scheduler, batch, jobs)
+    try:
+        return _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases, overwrite)
+    except OSError as exc:            # writing sweep.json, the manifest or the plot
+        raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
+
+
+def _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases, overwrite) -> SweepTable:
+    """Run the sweep with ``out`` (or None) locked and prepared."""
     with ExitStack() as stack:
         done = {}
         if out is not None:
@@ -257,8 +265,13 @@ class _Recorder:
             row[f"final_link_force_{j}_N"] = links[j] if j < len(links) else None
         row["wall_time_s"] = result.get("wall_time_s")
         if self.fd is not None:
-            os.write(self.fd, self.table.csv_line(row).encode("utf-8"))
-            os.fsync(self.fd)
+            try:
+                os.write(self.fd, self.table.csv_line(row).encode("utf-8"))
+                os.fsync(self.fd)
+            except OSError as exc:
+                raise OutputError(f"cannot append to the summary: {os_error_message(exc, self.path)}; the "
+                                  f"{len(self.rows)} finished cases are kept, re-run the same command to "
+                                  "resume.") from None
         self.rows[c.index] = row
         self.bar.update(row["status"] != "ok")
 
@@ -295,7 +308,7 @@ def _run_cases(plan: _Plan, todo, executor, rec: _Recorder, out, save_cases):
                 rec.record(c, {"status": "invalid", "error": plan.invalid[c.index], "wall_time_s": 0.0})
         for result in executor.map_unordered(run_case, _tasks(plan, todo, out, save_cases)):
             rec.record(by_index[result["index"]], result)
-    except (KeyboardInterrupt, ScenarioError):
+    except (KeyboardInterrupt, ScenarioError, OutputError):
         raise
     except Exception as exc:  # the executor itself failed (a worker died, the cluster went away)
         n = len(rec.rows)
