@@ -9,6 +9,9 @@ simulate_batch(scenarios)           -> list of BatchMember (one stacked solve)
 Result.write(out_dir)               -> files (CSV, JSON, YAML, PNG, manifest), all or nothing;
                                        OutputError for an unusable folder
 Mode, ModeConfig, register_mode     -> add a mobility mode of your own
+Simulator(scenario)                 -> reset() / step(command, dt) -> Observation; result() -> Result
+mode: {type: controller, ...}       -> your own discrete-time controller (docs/controllers.md)
+snoworm.env.SnowormEnv              -> a Gymnasium environment (extra: gym)
 
 The layers and their modules are described in docs/architecture.md.
 """
@@ -21,7 +24,8 @@ from .modes import Mode, register_mode  # noqa: E402
 from .results import Result  # noqa: E402
 from .scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios  # noqa: E402
 from .sections import ModeConfig  # noqa: E402
+from .simulator import Observation, Simulator  # noqa: E402
 
 __all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "OutputError", "Result", "Scenario", "ScenarioError",
            "SolverError", "load_scenario", "register_mode", "scenario_from_dict", "shipped_scenarios", "simulate",
-           "simulate_batch"]
+           "simulate_batch", "Observation", "Simulator"]

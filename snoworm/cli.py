@@ -42,12 +42,13 @@ def _catch_sigterm():
 
 
 def handle_errors(fn):
-    """Turn ScenarioError and OutputError into exit 2 and SolverError into exit 1, each with a
-    one-paragraph message; SIGTERM is handled like Ctrl-C."""
+    """Turn ScenarioError and OutputError into exit 2, SolverError and ControllerError into exit 1,
+    each with a clear message; SIGTERM is handled like Ctrl-C."""
     @functools.wraps(fn)
     def wrapper(*a, **kw):
         from .schema import ScenarioError  # lazy: start-up
         from .driver import SolverError  # lazy: start-up
+        from .modes.controller import ControllerError  # lazy: start-up
         from . import fileio  # lazy: start-up
         from .fileio import OutputError  # lazy: start-up
         old = _catch_sigterm()
@@ -59,6 +60,8 @@ def handle_errors(fn):
             _fail(str(exc), EXIT_INPUT)
         except SolverError as exc:
             _fail(f"solver failure: {exc}", EXIT_SOLVER)
+        except ControllerError as exc:      # the user's controller raised or returned a bad command
+            _fail(str(exc), EXIT_SOLVER)
         except BrokenPipeError:  # output piped into e.g. `head`: not an error of ours
             sys.stderr.close()
             sys.exit(0)
@@ -297,7 +300,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, b
 
     \b
     summary.csv has one row per case, appended as each case finishes (completion order):
-      case_id, case_key, the swept values, status (ok, solver_failure, invalid, error), error,
+      case_id, case_key, the swept values, status (ok, solver_failure, invalid, error, controller_failure), error,
       n_segments, distance_m, mean_speed_mps, late_speed_mps (mean forward speed over the
       last 25 % of the run), mean_slip and max_slip (signed slip over the segments and the
       second half of the run), max_link_force_N (largest |force| over the run),

@@ -15,6 +15,7 @@ import numpy as np
 from ._version import __version__
 from .energy import energy_metrics
 from .fileio import atomic_write_text, output_folder, relocate
+from .outputs import output_series
 from .scenario import dump_scenario
 
 __all__ = ["Result", "SEGMENT_COLUMNS", "LINK_COLUMNS"]
@@ -85,39 +86,8 @@ class Result:
     @classmethod
     def from_pieces(cls, sc, model, mode, pieces, phases, stats):
         seg_parts, link_parts, ts = [], [], []
-        eta = model.seg.drivetrain_efficiency
-        L = model.layout
         for t, ys, ctl in pieces:
-            Y = model.unpack(ys)
-            dY, out = model.evaluate(Y, ctl, outputs=True)
-            R = model.seg.wheel_radius_m
-            nw = model.seg.wheels_per_axle
-            w = out["omega"]
-            Tm = out["motor_torque_Nm"]
-            Ft = out["traction_axle_N"].sum(-1)
-            Ftr = out["resistance_axle_N"].sum(-1)
-            seg = {
-                "x_m": Y[..., L.x], "v_mps": Y[..., L.v],
-                "wheel_speed_mps": (w * R[:, None]).mean(-1), "slip": out["slip"].mean(-1),
-                "traction_N": Ft, "resistance_N": Ftr, "net_force_N": Ft - Ftr,
-                "motor_torque_Nm": Tm.mean(-1), "speed_setpoint_mps": np.array(out["speed_sp_mps"], float),
-                "connector_net_N": out["link_net_N"], "xt": out["X"].mean(-1),
-                "motor_power_W": (Tm * w).sum(-1) * nw,
-                "terrain_dissipation_W": out["terrain_dissipation_W"],
-                "motor_electrical_power_W": (np.maximum(Tm * w, 0.0)).sum(-1) * nw / eta,
-            }
-            x = seg["x_m"]
-            lk = {"force_N": out["link_force_N"], "length_m": x[..., :-1] - x[..., 1:],
-                  "spring_force_N": out["link_spring_N"], "damper_power_W": out["link_damper_W"]}
-            if model.has_joints:
-                s = Y[..., :-1, L.s]
-                ds = dY[..., :-1, L.s]
-                lk["extension_m"] = s
-                # the actuator is in series with the link's spring-damper: it carries the link force
-                lk["joint_power_W"] = -out["link_force_N"] * ds
-            else:
-                lk["extension_m"] = np.zeros_like(lk["length_m"])
-                lk["joint_power_W"] = np.zeros_like(lk["length_m"])
+            seg, lk = output_series(model, ys, ctl)
             seg_parts.append(seg)
             link_parts.append(lk)
             ts.append(t)

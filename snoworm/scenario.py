@@ -7,6 +7,7 @@ key (unknown keys are rejected with suggestions) and returns a frozen :class:`Sc
 """
 from __future__ import annotations
 
+import contextvars
 import copy
 import functools
 from importlib import resources
@@ -26,7 +27,8 @@ __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
     "TerrainModelConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig", "MODE_CONFIGS",
     "register_mode_config", "load_scenario", "scenario_from_dict", "dump_scenario", "apply_overrides",
-    "parse_set_option", "read_model_file", "read_yaml", "ScenarioError", "shipped_scenarios", "scenario_path", "read_scenario_yaml",
+    "parse_set_option", "read_model_file", "read_yaml", "ScenarioError", "base_dir", "shipped_scenarios",
+    "scenario_path", "read_scenario_yaml",
 ]
 
 #: The scenario's ``mode.type`` -> its :class:`~snoworm.sections.ModeConfig` subclass.  Filled by
@@ -212,10 +214,28 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
         raw["terrain"]["model"] = _merge(model_defaults, raw["terrain"].get("model", {}))
     raw["name"] = _text(raw["name"], "name")
     raw["description"] = _text(raw.get("description", ""), "description")
-    sc = build(Scenario, raw, "")
+    token = _BASE_DIR.set(None if base_dir is None else Path(base_dir))
+    try:
+        sc = build(Scenario, raw, "")
+    finally:
+        _BASE_DIR.reset(token)
     object.__setattr__(sc, "_notes", notes)
     object.__setattr__(sc, "_entries", entries)
     return sc
+
+
+#: folder of the scenario file being validated (None: the working directory); see :func:`base_dir`
+_BASE_DIR = contextvars.ContextVar("snoworm_scenario_dir", default=None)
+
+
+def base_dir() -> Path:
+    """The folder that relative file paths in the scenario being validated are taken from.
+
+    The scenario file's folder while :func:`load_scenario` validates it, else the working
+    directory.  A config section resolving a file path (e.g. ``mode.controller``) calls it.
+    """
+    d = _BASE_DIR.get()
+    return Path.cwd() if d is None else d
 
 
 #: Source tags a value may carry (docs/model.md; params.py for the built-in sets).

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..driver import SolverError, simulate
+from ..modes.controller import ControllerError
 from ..scenario import scenario_from_dict
 from ..schema import ScenarioError
 
@@ -33,8 +34,9 @@ LATE_FRACTION = 0.25
 SLIP_FRACTION = 0.5
 
 #: Case statuses: ``ok``; ``solver_failure`` (SolverError); ``invalid`` (the case's scenario is
-#: rejected, ScenarioError); ``error`` (any other exception in the case, a bug: please report it).
-STATUSES = ("ok", "solver_failure", "invalid", "error")
+#: rejected, ScenarioError); ``error`` (any other exception in the case, a bug: please report it);
+#: ``controller_failure`` (the user's controller raised or returned a bad command, ControllerError).
+STATUSES = ("ok", "solver_failure", "invalid", "error", "controller_failure")
 
 #: Metric columns of ``summary.csv`` (the final link forces come between ``max_link_force_N``
 #: and ``energy_per_m_J``, one column ``final_link_force_<j>_N`` per link).
@@ -143,6 +145,8 @@ def run_case(task: dict) -> dict:
         out.update(status="invalid", error=one_line(exc))
     except SolverError as exc:
         out.update(status="solver_failure", error=one_line(exc))
+    except ControllerError as exc:
+        out.update(status="controller_failure", error=one_line(exc))
     except Exception as exc:  # noqa: BLE001 - a case must never stop the sweep
         tb = traceback.extract_tb(exc.__traceback__)
         where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
