@@ -53,3 +53,34 @@ def test_batched_runs_match_one_by_one(scenario_path):
         assert mb.status == "ok", mb.error
         assert_metrics_close(case_metrics(simulate(sc)), case_metrics(mb.result))
         assert mb.result.stats["batch_size"] == len(scs)
+
+
+def test_progress_reports_simulated_time_and_changes_nothing(scenario_path):
+    sc = load_scenario(scenario_path("inchworm2")).with_({"simulation.duration_s": 4.0})
+    seen = []
+    res = simulate(sc, progress=lambda t, total: seen.append((t, total)))
+    ref = simulate(sc)
+    assert len(seen) == res.stats["intervals"] > 1
+    assert [t for t, _ in seen] == sorted(t for t, _ in seen) and seen[-1] == (4.0, 4.0)
+    assert {tot for _, tot in seen} == {4.0}
+    assert res.stats["nfev"] == ref.stats["nfev"]
+    np.testing.assert_array_equal(res.segments["x_m"], ref.segments["x_m"])
+
+
+def test_solver_fallbacks_are_logged(monkeypatch, scenario_path, caplog):
+    import logging
+    from snoworm import driver
+    real, calls = driver.solve_ivp, []
+
+    def flaky(*a, **kw):
+        calls.append(kw["method"])
+        if len(calls) == 1:
+            raise ValueError("injected")
+        return real(*a, **kw)
+    monkeypatch.setattr(driver, "solve_ivp", flaky)
+    sc = load_scenario(scenario_path("frostyboy_case1")).with_({"simulation.duration_s": 1.0})
+    with caplog.at_level(logging.INFO, logger="snoworm"):
+        res = simulate(sc)
+    assert res.stats["retries"] == 1 and calls[:2] == ["LSODA", "BDF"]
+    msgs = [r.getMessage() for r in caplog.records if r.name == "snoworm"]
+    assert len(msgs) == 1 and "LSODA: injected" in msgs[0] and "retried with BDF" in msgs[0]
