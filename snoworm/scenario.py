@@ -20,7 +20,7 @@ from . import yamlio
 from .dynamics import ChainModel
 from .params import PARAMETER_SETS
 from .schema import Config, ScenarioError, build, dump, field, suggest
-from .sections import (LinkConfig, ModeConfig, PatchConfig, RandomTerrainConfig, SegmentConfig,
+from .sections import (LinkConfig, ModeConfig, ModeRegistry, PatchConfig, RandomTerrainConfig, SegmentConfig,
                        SimulationConfig, TerrainConfig, TerrainModelConfig, TowConfig, VehicleConfig)
 
 __all__ = [
@@ -32,8 +32,8 @@ __all__ = [
 ]
 
 #: The scenario's ``mode.type`` -> its :class:`~snoworm.sections.ModeConfig` subclass.  Filled by
-#: :func:`snoworm.modes.register_mode` (the built-in modes register when :mod:`snoworm` is imported).
-MODE_CONFIGS: dict = {}
+#: :func:`snoworm.modes.register_mode`; the built-in modes register when it is first read.
+MODE_CONFIGS = ModeRegistry("snoworm.modes")  # by name: the modes sit above this layer
 
 
 def register_mode_config(name: str, cls) -> None:

@@ -8,7 +8,9 @@ physical default.  The mode section is a :class:`ModeConfig`, declared by each m
 """
 from __future__ import annotations
 
+import importlib
 import math
+from collections.abc import MutableMapping
 from dataclasses import dataclass
 from typing import Optional
 
@@ -19,7 +21,8 @@ from .schema import Config, ScenarioError, build, dump, field, suggest
 from .terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
 
 __all__ = ["SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig",
-           "TerrainConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig"]
+           "TerrainConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig",
+           "ModeRegistry"]
 
 
 @dataclass(frozen=True)
@@ -304,3 +307,48 @@ class ModeConfig(Config):
         """A hashable description of the mode's intervals if it can run in a batched stack
         (event-free, the same intervals for every member with the same signature), else None."""
         return None
+
+
+class ModeRegistry(MutableMapping):
+    """A dict of mode ``type`` -> :class:`ModeConfig` subclass that imports the module registering
+    the built-in modes the first time it is read (``snoworm.scenario.MODE_CONFIGS``).
+
+    So ``import snoworm`` and the command line start without the modes (and SciPy), while a
+    scenario still finds every built-in mode.  Writing (registering a mode) does not load.
+
+    Parameters
+    ----------
+    module : str
+        Dotted name of the module whose import registers the built-in modes.
+    """
+
+    def __init__(self, module: str):
+        self._module, self._d, self._loaded = module, {}, False
+
+    def _load(self) -> dict:
+        if not self._loaded:
+            self._loaded = True       # before the import: the modes register into this mapping
+            try:
+                importlib.import_module(self._module)
+            except BaseException:
+                self._loaded = False
+                raise
+        return self._d
+
+    def __getitem__(self, key):
+        return self._load()[key]
+
+    def __iter__(self):
+        return iter(self._load())
+
+    def __len__(self):
+        return len(self._load())
+
+    def __setitem__(self, key, value):
+        self._d[key] = value
+
+    def __delitem__(self, key):
+        del self._d[key]
+
+    def __repr__(self):
+        return f"ModeRegistry({self._load()!r})"

@@ -56,3 +56,30 @@ def test_random_profile_reproducible_and_seeded():
 def test_terrain_validation_errors(terrain, match):
     with pytest.raises(ScenarioError, match=match):
         scenario_from_dict(_base(**terrain))
+
+
+# ------------------------------------------------------------------ the lazy mode registry
+def test_mode_registry_imports_its_module_on_the_first_read_only(tmp_path, monkeypatch):
+    import sys
+    import types
+
+    from snoworm.sections import ModeRegistry
+    reg = ModeRegistry("h6_fake_modes")
+    monkeypatch.setitem(sys.modules, "h6_registry_host", types.SimpleNamespace(reg=reg))
+    (tmp_path / "h6_fake_modes.py").write_text("import h6_registry_host\nh6_registry_host.reg['builtin'] = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "h6_fake_modes", raising=False)
+    reg["users"] = 2                                   # registering does not load
+    assert "h6_fake_modes" not in sys.modules
+    assert "builtin" in reg and reg["users"] == 2      # reading loads, once
+    assert "h6_fake_modes" in sys.modules and dict(reg) == {"users": 2, "builtin": 1}
+    del reg["users"]
+    assert list(reg) == ["builtin"] and len(reg) == 1
+
+
+def test_mode_registry_retries_a_failed_import():
+    from snoworm.sections import ModeRegistry
+    reg = ModeRegistry("h6_no_such_module")
+    for _ in range(2):                                 # not marked loaded after a failure
+        with pytest.raises(ModuleNotFoundError):
+            reg["x"]
