@@ -22,7 +22,7 @@ from .terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile,
 
 __all__ = ["SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig",
            "TerrainConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig",
-           "ModeRegistry"]
+           "BUILT_IN_MODES", "ModeRegistry"]
 
 
 @dataclass(frozen=True)
@@ -309,40 +309,46 @@ class ModeConfig(Config):
         return None
 
 
-class ModeRegistry(MutableMapping):
-    """A dict of mode ``type`` -> :class:`ModeConfig` subclass that imports the module registering
-    the built-in modes the first time it is read (``snoworm.scenario.MODE_CONFIGS``).
+#: The built-in modes: ``type`` -> the module whose import registers it (:mod:`snoworm.modes`).
+BUILT_IN_MODES = {"controller": "snoworm.modes.controller", "force_control": "snoworm.modes.force_control",
+                  "inchworm": "snoworm.modes.inchworm", "supervisor": "snoworm.modes.supervisor",
+                  "uniform": "snoworm.modes.uniform"}
 
-    So ``import snoworm`` and the command line start without the modes (and SciPy), while a
-    scenario still finds every built-in mode.  Writing (registering a mode) does not load.
+
+class ModeRegistry(MutableMapping):
+    """A dict of mode ``type`` -> class that imports a built-in mode's module the first time the
+    mode is looked up (all of them when the registry is listed).
+
+    ``snoworm.scenario.MODE_CONFIGS`` (config classes) and ``snoworm.modes.MODES`` (mode classes)
+    are two; ``register_mode`` fills both.  So ``import snoworm`` and the command line start
+    without the modes (and SciPy), a run imports only its own mode, and a scenario still finds
+    every built-in mode.  Writing (registering a mode) imports nothing.
 
     Parameters
     ----------
-    module : str
-        Dotted name of the module whose import registers the built-in modes.
+    built_in : dict
+        ``type`` -> dotted name of the module whose import registers that built-in mode.
     """
 
-    def __init__(self, module: str):
-        self._module, self._d, self._loaded = module, {}, False
+    def __init__(self, built_in: dict):
+        self._built_in, self._d = dict(built_in), {}
 
-    def _load(self) -> dict:
-        if not self._loaded:
-            self._loaded = True       # before the import: the modes register into this mapping
-            try:
-                importlib.import_module(self._module)
-            except BaseException:
-                self._loaded = False
-                raise
-        return self._d
+    def _load(self, key):
+        if key not in self._d and key in self._built_in:
+            importlib.import_module(self._built_in[key])
 
     def __getitem__(self, key):
-        return self._load()[key]
+        self._load(key)
+        return self._d[key]
 
     def __iter__(self):
-        return iter(self._load())
+        for key in self._built_in:
+            self._load(key)
+        # built-in modes first, in a fixed order, then the user's in registration order
+        return iter([k for k in self._built_in if k in self._d] + [k for k in self._d if k not in self._built_in])
 
     def __len__(self):
-        return len(self._load())
+        return len(list(iter(self)))
 
     def __setitem__(self, key, value):
         self._d[key] = value
@@ -351,4 +357,4 @@ class ModeRegistry(MutableMapping):
         del self._d[key]
 
     def __repr__(self):
-        return f"ModeRegistry({self._load()!r})"
+        return f"ModeRegistry({dict(self.items())!r})"

@@ -62,6 +62,14 @@ def test_a_scenario_finds_the_built_in_modes_without_importing_them_first():
     assert out.split() == ["False", "InchwormConfig", "True"]
 
 
+def test_a_run_imports_only_its_own_mode():
+    out = fresh("import sys\n"
+                "from snoworm import load_scenario, simulate\n"
+                f"simulate(load_scenario({str(SCENARIOS / 'tow6_uniform.yaml')!r}, [('simulation.duration_s', 1.0)]))\n"
+                "print(sorted(m for m in sys.modules if m.startswith('snoworm.modes.')))")
+    assert out.strip() == "['snoworm.modes.base', 'snoworm.modes.command', 'snoworm.modes.uniform']"
+
+
 def test_a_users_mode_registers_in_a_fresh_process():
     code = f"""
 import numpy as np

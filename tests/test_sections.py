@@ -59,27 +59,29 @@ def test_terrain_validation_errors(terrain, match):
 
 
 # ------------------------------------------------------------------ the lazy mode registry
-def test_mode_registry_imports_its_module_on_the_first_read_only(tmp_path, monkeypatch):
+def test_mode_registry_imports_a_built_in_modes_module_when_it_is_looked_up(tmp_path, monkeypatch):
     import sys
     import types
 
     from snoworm.sections import ModeRegistry
-    reg = ModeRegistry("h6_fake_modes")
+    reg = ModeRegistry({"first": "h6_fake_first", "second": "h6_fake_second"})
     monkeypatch.setitem(sys.modules, "h6_registry_host", types.SimpleNamespace(reg=reg))
-    (tmp_path / "h6_fake_modes.py").write_text("import h6_registry_host\nh6_registry_host.reg['builtin'] = 1\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    monkeypatch.delitem(sys.modules, "h6_fake_modes", raising=False)
-    reg["users"] = 2                                   # registering does not load
-    assert "h6_fake_modes" not in sys.modules
-    assert "builtin" in reg and reg["users"] == 2      # reading loads, once
-    assert "h6_fake_modes" in sys.modules and dict(reg) == {"users": 2, "builtin": 1}
+    for key in ("first", "second"):
+        (tmp_path / f"h6_fake_{key}.py").write_text(f"import h6_registry_host\nh6_registry_host.reg[{key!r}] = {key!r}\n")
+        monkeypatch.delitem(sys.modules, f"h6_fake_{key}", raising=False)
+    reg["users"] = "mine"                              # registering imports nothing
+    assert "h6_fake_first" not in sys.modules and "h6_fake_second" not in sys.modules
+    assert reg["first"] == "first" and "users" in reg and "unknown" not in reg
+    assert "h6_fake_first" in sys.modules and "h6_fake_second" not in sys.modules    # only the one looked up
+    assert list(reg) == ["first", "second", "users"] and len(reg) == 3    # listing imports all, built-ins first
     del reg["users"]
-    assert list(reg) == ["builtin"] and len(reg) == 1
+    assert dict(reg) == {"first": "first", "second": "second"}
 
 
-def test_mode_registry_retries_a_failed_import():
+def test_mode_registry_reports_a_failed_import_each_time():
     from snoworm.sections import ModeRegistry
-    reg = ModeRegistry("h6_no_such_module")
-    for _ in range(2):                                 # not marked loaded after a failure
+    reg = ModeRegistry({"x": "h6_no_such_module"})
+    for _ in range(2):
         with pytest.raises(ModuleNotFoundError):
             reg["x"]
