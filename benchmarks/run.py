@@ -236,18 +236,21 @@ def bench_startup(repeats, report):
         best = {k: np.inf for k in cases}
         for rnd in range(repeats + 1):
             for key, (cmd, _) in cases.items():
+                cmd = [f"{c}{rnd}" if c.startswith(tmp) else c for c in cmd]   # a new --out folder each round
                 t0 = time.perf_counter()
                 subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
                 if rnd:     # round 0 warms the disk cache and the bytecode
                     best[key] = min(best[key], time.perf_counter() - t0)
-    out = {k: {"wall_s": best[k], "command": " ".join(Path(c).name if i == 0 else c for i, c in enumerate(cmd))}
-           for k, (cmd, _) in cases.items()}
+    labels = {"help": "snoworm --help", "run": "snoworm run tow6_uniform.yaml --no-plot --out D",
+              "run_plots": "snoworm run tow6_uniform.yaml --out D (3 PNG plots)"}
+    out = {}
+    for key, (cmd, floor) in cases.items():
+        out[key] = {"wall_s": best[key], "command": labels.get(key) or f"python -c {cmd[-1]!r}"}
     for key, (_, floor) in cases.items():
         if floor:
-            out[key]["floor"] = floor
-            out[key]["ratio"] = best[key] / best[floor]
-            report(f"  {out[key]['command'][:60]:60s} {best[key]:6.3f} s  floor {best[floor]:6.3f} s "
-                   f"({out[floor]['command'][-45:]})  ratio {out[key]['ratio']:.2f}")
+            out[key].update(floor=floor, ratio=best[key] / best[floor])
+            report(f"  {out[key]['command']:50s} {best[key]:6.3f} s   floor {out[floor]['command']:50s} "
+                   f"{best[floor]:6.3f} s   ratio {out[key]['ratio']:.2f}")
     return out
 
 
