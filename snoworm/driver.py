@@ -19,6 +19,7 @@ from .controls import Controls
 from .dynamics import ChainModel
 from .modes import mode_class
 from .results import Result
+from .stepper import VodeStepper
 
 __all__ = ["SolverError", "Case", "assemble", "simulate", "simulate_batch", "batch_key", "BatchMember",
            "solver_options", "output_grid", "ATOL"]
@@ -57,7 +58,7 @@ def solver_options(model: ChainModel, sim, method=None) -> dict:
     opts = {"method": method, "rtol": sim.rtol, "atol": model.layout.per_state(ATOL) * sim.atol_scale}
     if sim.max_step_s is not None:
         opts["max_step"] = sim.max_step_s
-    if method == "LSODA":
+    if method in ("LSODA", "VODE"):
         opts["lband"], opts["uband"] = model.bandwidths()
         opts["jac"] = model.jacobian_banded
     elif method in ("BDF", "Radau"):
@@ -75,8 +76,32 @@ def output_grid(t0, t1, dt, include_start):
 
 
 def _fallbacks(method):
-    """The configured method first, then the implicit methods not yet tried."""
-    return [method] + [m for m in ("BDF", "Radau") if m != method]
+    """The configured method first, then the implicit methods not yet tried (VODE: LSODA first)."""
+    first = [method, "LSODA"] if method == "VODE" else [method]
+    return first + [m for m in ("BDF", "Radau") if m != method]
+
+
+def _vode_interval(model, ctl, t, t1, y, events, t_eval, opts):
+    """One interval on the run's :class:`~snoworm.stepper.VodeStepper` (kept in ``opts``), restarted at ``t``.
+
+    Returns ``(ts, ys, t_next, y_next, which, counts)`` like :func:`_solve_interval`, plus the
+    solver work of this interval.
+    """
+    st = opts.get("VODE stepper")
+    if st is None:
+        o = opts["VODE"]
+        st = opts["VODE stepper"] = VodeStepper(model.rhs, model.jacobian_banded, model.n_states, rtol=o["rtol"],
+                                                atol=o["atol"], lband=o["lband"], uband=o["uband"],
+                                                max_step=o.get("max_step"))
+    before = (st.nfev, st.njev)
+    events = [_with_controls(ev, ctl) for ev in events or ()]
+    st.ctl = ctl
+    st.restart(t, y)
+    try:
+        ts, ys, t_next, y_next, which = st.advance(t1, events, t_eval)
+    finally:
+        counts = {"nfev": st.nfev - before[0], "njev": st.njev - before[1]}
+    return ts, ys, t_next, y_next, which, counts
 
 
 def _terminal(ev):
@@ -88,6 +113,14 @@ def _terminal(ev):
     return f
 
 
+def _with_controls(ev, ctl):
+    """A solve_ivp event ``ev(t, y, ctl)`` as ``ev(t, y)`` with the same direction (for the stepper)."""
+    def f(t, y):
+        return ev(t, y, ctl)
+    f.direction = getattr(ev, "direction", 0)
+    return f
+
+
 def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts):
     """Integrate one interval with method fallbacks; ``(ts, ys, t_next, y_next, event_index)``.
 
@@ -95,8 +128,24 @@ def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opt
     """
     sol, failures = None, []
     for method in _fallbacks(sim.method):
+        if method == "VODE" and model.n_batch > 1:
+            continue                # stacked members: LSODA's max-norm error test (see simulate_batch)
         if method not in opts:
             opts[method] = solver_options(model, sim, method)
+        if method == "VODE":
+            try:
+                ts, ys, t_next, y_next, which, counts = _vode_interval(model, ctl, t, t1, y, events, t_eval, opts)
+            except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                failures.append(f"VODE: {exc}")
+                continue
+            stats["nfev"] += counts["nfev"]
+            stats["njev"] += counts["njev"]
+            stats["nlu"] += counts["njev"]
+            if np.all(np.isfinite(ys)):
+                _count_interval(stats, failures)
+                return ts, ys, t_next, y_next.copy(), which
+            failures.append(f"VODE: non-finite state (near t = {t_next:.6g} s)")
+            continue
         try:
             sol = solve_ivp(model.rhs, (t, t1), y, t_eval=t_eval, events=events or None, args=(ctl,),
                             **opts[method])
@@ -114,9 +163,7 @@ def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opt
     if sol is None:
         raise SolverError(f"every method failed at t = {t:.6g} s in interval '{label}': "
                           + "; ".join(failures) + ". Try a smaller simulation.rtol or max_step_s.")
-    if failures:                    # the interval succeeded after this many failed methods
-        stats["retries"] = stats.get("retries", 0) + len(failures)
-    stats["intervals"] += 1
+    _count_interval(stats, failures)
     ts = np.asarray(sol.t, float)
     ys = np.asarray(sol.y, float).T if ts.size else np.empty((0, y.size))
     if sol.status != 1:
@@ -125,6 +172,12 @@ def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opt
     y_hit = sol.y_events[which][0]
     keep = ts < t_hit
     return np.append(ts[keep], t_hit), np.vstack([ys[keep], y_hit]), float(t_hit), y_hit.copy(), which
+
+
+def _count_interval(stats, failures):
+    if failures:                    # the interval succeeded after this many failed methods
+        stats["retries"] = stats.get("retries", 0) + len(failures)
+    stats["intervals"] += 1
 
 
 def _integrate(model, modes, sim, name):
