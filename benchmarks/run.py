@@ -3,7 +3,7 @@
 Usage (from the repository root)::
 
     python benchmarks/run.py                 # full run, ~3-5 minutes on 2 cores
-    python benchmarks/run.py --quick         # smaller sweeps and fewer repeats, ~1 minute
+    python benchmarks/run.py --quick         # smaller sweeps, fewer repeats, whole processes once: ~2-3 minutes
     python benchmarks/run.py --out benchmarks/results.json
 
 Prints a table with every measurement and PASS/MISS against the targets, and writes the same
@@ -33,7 +33,7 @@ from snoworm.sweep import run_sweep  # noqa: E402
 
 SC = ROOT / "scenarios"
 TARGETS = {
-    "tow6_uniform_rtf": (">=", 200.0, "tow6_uniform real-time factor"),
+    "tow6_uniform_rtf": (">=", 400.0, "tow6_uniform real-time factor"),
     "inchworm6_rtf": (">=", 50.0, "inchworm6 real-time factor"),
     "steady_rel_err": ("<=", 1e-3, "steady states vs tight reference (max rel. error)"),
     "rhs_n48_over_n6": ("<=", 2.0, "RHS cost N=48 / N=6"),
@@ -41,6 +41,15 @@ TARGETS = {
     "sweep_batched_speedup": (">=", 10.0, "batched (best of 1 and 2 processes) / serial cases/s"),
     "batched_rel_err": ("<=", 1e-3, "batched vs one-by-one metrics (max rel. error)"),
     "sweep10k_peak_MB": ("<", 500.0, "10,000-case sweep peak memory [MB]"),
+    "paper_s": ("<=", 8.0, "`snoworm paper` whole process [s]"),
+    "mobility_map_s": ("<=", 8.0, "`snoworm mobility-map` traverse_patch 9 x 3, -j 2, whole process [s]"),
+}
+
+#: Whole-process commands timed by :func:`bench_processes` (``{out}``: a fresh temporary directory).
+PROCESSES = {
+    "paper_s": ["paper", "--out", "{out}"],
+    "mobility_map_s": ["mobility-map", str(SC / "traverse_patch.yaml"), "--xt", "0.2:1.0:9", "--tow", "0,100,200",
+                       "-j", "2", "--out", "{out}"],
 }
 
 
@@ -87,7 +96,8 @@ def bench_scenarios(repeats, report):
     for name in ("tow6_uniform", "inchworm6", "frostyboy_case3"):
         sc = load_scenario(SC / f"{name}.yaml")
         res, wall = run_timed(sc, repeats if name != "inchworm6" else max(1, repeats - 1))
-        ref = simulate(load_scenario(SC / f"{name}.yaml", [("simulation.rtol", 1e-9), ("simulation.atol_scale", 1e-3)]))
+        ref = simulate(load_scenario(SC / f"{name}.yaml", [("simulation.rtol", 1e-9), ("simulation.atol_scale", 1e-3),
+                                                           ("simulation.method", "LSODA")]))
         q, qr = steady_quantities(res), steady_quantities(ref)
         errs = {k: rel_err(q[k], qr[k]) for k in q}
         rows[name] = {"duration_s": sc.simulation.duration_s, "wall_s": wall, "rtf": sc.simulation.duration_s / wall,
@@ -177,6 +187,24 @@ def bench_memory(n_a, n_b, report):
     return out
 
 
+def bench_processes(repeats, report):
+    """Wall time of whole ``snoworm`` processes (start-up, imports, runs, files), best of ``repeats``."""
+    import tempfile
+    out = {}
+    for key, args in PROCESSES.items():
+        best = np.inf
+        for _ in range(repeats):
+            with tempfile.TemporaryDirectory() as tmp:
+                cmd = [sys.executable, "-m", "snoworm"] + [a.format(out=tmp) for a in args]
+                t0 = time.perf_counter()
+                subprocess.run(cmd, check=True, capture_output=True, cwd=ROOT)
+                best = min(best, time.perf_counter() - t0)
+        out[key] = best
+        report(f"  snoworm {' '.join(args[:1] + [a for a in args[1:] if not a.startswith('/') and a != '{out}' and a != '--out'])}: "
+               f"{best:6.2f} s")
+    return out
+
+
 def verdict(key, value):
     op, target, _ = TARGETS[key]
     ok = {">=": value >= target, "<=": value <= target, "<": value < target}[op]
@@ -207,6 +235,8 @@ def main(argv=None):
     res["sweep"] = bench_sweep(*((8, 5, 5) if args.quick else (20, 10, 5)), report)
     report("Sweep memory (frostyboy_case3 over terrain.xt x mode.speed_mps, batched 500, child process):")
     res["memory"] = bench_memory(*((40, 25) if args.quick else (100, 100)), report)
+    report("Whole processes (best of %d):" % (1 if args.quick else 2))
+    res["processes"] = bench_processes(1 if args.quick else 2, report)
 
     sc = res["scenarios"]
     values = {
@@ -220,6 +250,7 @@ def main(argv=None):
                                      res["sweep"]["batched, 2 processes"]["speedup"]),
         "batched_rel_err": res["sweep"]["batched_rel_err"],
         "sweep10k_peak_MB": res["memory"]["peak_MB"],
+        **res["processes"],
     }
     if res["memory"]["cases"] < 10_000:
         report(f"  (memory measured on {res['memory']['cases']} cases; rows are ~1 kB each, so 10,000 cases add "

@@ -215,6 +215,7 @@ class ChainModel:
         self._J = col(seg.wheel_inertia_kgm2)
         self._kp = col(seg.speed_kp_Nms_per_rad)
         self._ki = col(seg.speed_ki_Nm_per_rad)
+        self._ki_kp = self._ki / self._kp
         self._slope = col(seg.motor_slope_Nms_per_rad)
         self._wnl = col(seg.no_load_speed_radps)
         self._Tmax = col(seg.torque_limit_Nm)
@@ -260,8 +261,10 @@ class ChainModel:
         cached, d = self._ctl_cache
         if cached is ctl:
             return d
-        d = {"on": np.asarray(ctl.motor_on, float)[..., None],
-             "w_ref": (ctl.speed_sp_mps / self.seg.wheel_radius_m)[..., None]}
+        on = np.asarray(ctl.motor_on, float)[..., None]
+        d = {"on": on, "w_ref": (ctl.speed_sp_mps / self.seg.wheel_radius_m)[..., None],
+             # every motor running: the PI outputs need no masking (x * 1.0 == x, same result)
+             "on_mask": None if np.all(on == 1.0) else on}
         if self.has_joints and self.n > 1:
             d["neg_dir"] = -ctl.joint_dir
             d["neg_vt"] = -ctl.joint_vtarget_mps
@@ -386,7 +389,7 @@ class ChainModel:
         else:
             w_ref = cd["w_ref"]
         T_lo, T_hi = drivetrain.motor_envelope(w, self._slope, self._wnl, self._Tmax)
-        Tm, dI = control.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on"])
+        Tm, dI = control.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on_mask"], self._ki_kp)
         reaction = terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)
         dY[..., L.omega] = (Tm - reaction) / self._J
         dY[..., L.integral] = dI

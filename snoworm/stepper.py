@@ -15,7 +15,8 @@ terminal event, located by Brent's method on the same interpolant (as ``solve_iv
 Controls may change between two calls of :meth:`advance` **without a restart**: set
 :attr:`VodeStepper.ctl` and call :meth:`advance` again.  The multistep history then carries on
 across the switch; the error test sees the jump in the right-hand side and shortens the step
-as it needs.  :meth:`restart` discards the history (order 1, a new initial step), which is
+as it needs, and if VODE gives up on it (repeated error-test failures at a large jump), the
+stepper restarts at the switch by itself (:attr:`VodeStepper.recoveries`).  :meth:`restart` discards the history (order 1, a new initial step), which is
 what the interval driver does at every interval start, and what must happen after an event
 (the stepper has then already stepped beyond the event time).
 
@@ -34,7 +35,7 @@ from scipy.optimize import brentq
 __all__ = ["VodeStepper", "VodeError"]
 
 #: Positions in VODE's work arrays (DVODE's optional outputs, 0-based).
-_RW_TCRIT, _RW_HU, _RW_YH = 0, 10, 20
+_RW_TCRIT, _RW_H0, _RW_HU, _RW_YH = 0, 4, 10, 20
 _IW_NST, _IW_NFE, _IW_NJE, _IW_NQU = 10, 11, 12, 13
 _ITASK_ONE_STEP_TCRIT = 5
 #: Events are located to this absolute time [s] (``solve_ivp`` locates to 4 machine epsilons).
@@ -67,6 +68,10 @@ class VodeStepper:
         Largest step [s] (None: unlimited).
     ctl : object, optional
         Controls handed to ``fun`` and ``jac`` (see :attr:`ctl`).
+    max_order : int
+        Highest BDF order (1 to 5).
+    first_step : float, optional
+        Step size tried first after a restart [s] (None: VODE's own estimate).
 
     Attributes
     ----------
@@ -79,18 +84,25 @@ class VodeStepper:
         Start of the last step (None right after a restart).
     nfev, njev, nsteps : int
         Cumulative right-hand-side calls, Jacobians and steps since construction.
+    recoveries : int
+        Restarts made by :meth:`step` after a failure of a continued history.
     """
 
-    def __init__(self, fun, jac, n, *, rtol, atol, lband, uband, max_step=None, ctl=None):
+    def __init__(self, fun, jac, n, *, rtol, atol, lband, uband, max_step=None, ctl=None, max_order=5,
+                 first_step=None):
         self.ctl = ctl
+        self.first_step = first_step
         self.n = int(n)
         self._ode = ode(lambda t, y: fun(t, y, self.ctl), lambda t, y: jac(t, y, self.ctl))
         self._ode.set_integrator("vode", method="bdf", rtol=rtol, atol=atol, lband=lband, uband=uband,
-                                 nsteps=10**9, max_step=0.0 if max_step is None else max_step)
+                                 nsteps=10**9, order=max_order, max_step=0.0 if max_step is None else max_step)
         self._it = self._ode._integrator
         self._done = {"nfev": 0, "njev": 0, "nsteps": 0}
         self.t = self.t_old = None
         self.y = None
+        self._fresh = True
+        #: restarts after a failure with history from before a change of controls (see :meth:`step`)
+        self.recoveries = 0
 
     # ------------------------------------------------------------------ counters
     def _counts(self):
@@ -111,16 +123,34 @@ class VodeStepper:
             for k, v in self._counts().items():
                 self._done[k] += v
         self._ode.set_initial_value(np.array(y, float), float(t))
+        if self.first_step:
+            self._it.rwork[_RW_H0] = self.first_step
         self.t, self.t_old, self.y = float(t), None, np.array(y, float)
+        self._fresh = True
 
     def step(self, t_bound):
         """Take one step that does not pass ``t_bound``; returns the new time.
 
+        If VODE fails while its history reaches back before the last restart's point (after
+        :attr:`ctl` changed without a restart, say), it is restarted at the last accepted state
+        and the step is tried once more (counted in :attr:`recoveries`).
+
         Raises
         ------
         VodeError
-            If VODE fails (error test or corrector failures, too small a step).
+            If VODE fails from a fresh restart (error test or corrector failures, too small a
+            step), returns a non-finite state, or makes no progress.
         """
+        try:
+            return self._step(t_bound)
+        except VodeError:
+            if self._fresh:
+                raise
+        self.recoveries += 1
+        self.restart(self.t, self.y)
+        return self._step(t_bound)
+
+    def _step(self, t_bound):
         r, it = self._ode, self._it
         it.call_args[2] = _ITASK_ONE_STEP_TCRIT
         it.rwork[_RW_TCRIT] = t_bound
@@ -129,8 +159,11 @@ class VodeStepper:
             y, t = it.run(r.f, r.jac, r._y, r.t, t_bound, (), ())
         if not it.success:
             raise VodeError(f"VODE failed near t = {self.t:.6g} s (istate {it.istate})")
+        if not t > self.t or not np.all(np.isfinite(y)):
+            raise VodeError(f"VODE made no finite progress at t = {self.t:.6g} s")
         r._y, r.t = y, t
         self.t_old, self.t, self.y = self.t, float(t), y
+        self._fresh = False
         return self.t
 
     def dense(self, ts):
