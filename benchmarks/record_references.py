@@ -36,6 +36,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     out = DATA / ("reference_summaries.json" if a.which == "summaries" else "tight_reference.json")
     data = json.loads(out.read_text()) if out.exists() else {}
+    old = json.loads(json.dumps(data))
     names = a.only or sorted(p.stem for p in SC.glob("*.yaml"))
     for name in names:
         t0 = time.perf_counter()
@@ -45,6 +46,8 @@ def main(argv=None):
             res = simulate(load_scenario(SC / f"{name}.yaml", TIGHT_SETTINGS))
             data[name] = dict(tight_quantities(res), settings=[list(s) for s in TIGHT_SETTINGS],
                               nfev=res.stats["nfev"])
+        if name in old:              # keep the file's key order (small diffs)
+            data[name] = {k: data[name][k] for k in [*old[name], *data[name]] if k in data[name]}
         print(f"{name}: {time.perf_counter() - t0:.1f} s", flush=True)
     out.write_text(json.dumps(dict(sorted(data.items())), indent=1) + "\n")
     print(f"wrote {out}")
