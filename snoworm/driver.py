@@ -110,11 +110,15 @@ def _terminal(ev):
         return ev(t, y)
     f.terminal = True
     f.direction = getattr(ev, "direction", 0)
+    f.mode_event = ev
     return f
 
 
 def _with_controls(ev, ctl):
-    """A solve_ivp event ``ev(t, y, ctl)`` as ``ev(t, y)`` with the same direction (for the stepper)."""
+    """A solve_ivp event ``ev(t, y, ctl)`` as ``ev(t, y)`` with the same direction (for the stepper);
+    the mode's own event where ``ev`` wraps one (:func:`_terminal`)."""
+    if hasattr(ev, "mode_event"):
+        return ev.mode_event
     def f(t, y):
         return ev(t, y, ctl)
     f.direction = getattr(ev, "direction", 0)

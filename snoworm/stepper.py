@@ -26,8 +26,6 @@ max norm) for stacked batches, where each member must be held to its own toleran
 """
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 from scipy.integrate import ode
 from scipy.optimize import brentq
@@ -93,7 +91,8 @@ class VodeStepper:
         self.ctl = ctl
         self.first_step = first_step
         self.n = int(n)
-        self._ode = ode(lambda t, y: fun(t, y, self.ctl), lambda t, y: jac(t, y, self.ctl))
+        self._fun, self._jac = fun, jac
+        self._ode = ode(fun, jac)      # sets VODE up; steps call its runner with (ctl,) as the extra arguments
         self._ode.set_integrator("vode", method="bdf", rtol=rtol, atol=atol, lband=lband, uband=uband,
                                  nsteps=10**9, order=max_order, max_step=0.0 if max_step is None else max_step)
         self._it = self._ode._integrator
@@ -151,17 +150,18 @@ class VodeStepper:
         return self._step(t_bound)
 
     def _step(self, t_bound):
-        r, it = self._ode, self._it
-        it.call_args[2] = _ITASK_ONE_STEP_TCRIT
-        it.rwork[_RW_TCRIT] = t_bound
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")      # VODE's warning; the failure is raised below
-            y, t = it.run(r.f, r.jac, r._y, r.t, t_bound, (), ())
-        if not it.success:
-            raise VodeError(f"VODE failed near t = {self.t:.6g} s (istate {it.istate})")
-        if not t > self.t or not np.all(np.isfinite(y)):
+        it = self._it
+        rtol, atol, _, istate, rwork, iwork, mf = it.call_args
+        rwork[_RW_TCRIT] = t_bound
+        args = (self.ctl,)
+        # the runner of scipy's vode wrapper (what its run() calls), without the wrapper's warning
+        y, t, istate = it.runner(self._fun, self._jac, self.y, self.t, t_bound, rtol, atol, _ITASK_ONE_STEP_TCRIT,
+                                 istate, rwork, iwork, mf, args, args, it.state_doubles, it.state_ints)
+        if istate < 0:
+            raise VodeError(f"VODE failed near t = {self.t:.6g} s (istate {istate})")
+        it.call_args[3] = 2                 # continue (what run() does after a success)
+        if not (t > self.t and np.isfinite(y.sum())):      # one reduction: NaN or inf anywhere
             raise VodeError(f"VODE made no finite progress at t = {self.t:.6g} s")
-        r._y, r.t = y, t
         self.t_old, self.t, self.y = self.t, float(t), y
         self._fresh = False
         return self.t
