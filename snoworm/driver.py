@@ -93,14 +93,14 @@ def _vode_interval(model, ctl, t, t1, y, events, t_eval, opts):
         st = opts["VODE stepper"] = VodeStepper(model.rhs, model.jacobian_banded, model.n_states, rtol=o["rtol"],
                                                 atol=o["atol"], lband=o["lband"], uband=o["uband"],
                                                 max_step=o.get("max_step"))
-    before = (st.nfev, st.njev)
+    before = (st.nfev, st.njev, st.nlu)
     events = [_with_controls(ev, ctl) for ev in events or ()]
     st.ctl = ctl
     st.restart(t, y)
     try:
         ts, ys, t_next, y_next, which = st.advance(t1, events, t_eval)
     finally:
-        counts = {"nfev": st.nfev - before[0], "njev": st.njev - before[1]}
+        counts = {"nfev": st.nfev - before[0], "njev": st.njev - before[1], "nlu": st.nlu - before[2]}
     return ts, ys, t_next, y_next, which, counts
 
 
@@ -142,9 +142,8 @@ def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opt
             except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
                 failures.append(f"VODE: {exc}")
                 continue
-            stats["nfev"] += counts["nfev"]
-            stats["njev"] += counts["njev"]
-            stats["nlu"] += counts["njev"]
+            for k in ("nfev", "njev", "nlu"):
+                stats[k] += counts[k]
             if np.all(np.isfinite(ys)):
                 _count_interval(stats, failures)
                 return ts, ys, t_next, y_next.copy(), which

@@ -34,7 +34,7 @@ __all__ = ["VodeStepper", "VodeError"]
 
 #: Positions in VODE's work arrays (DVODE's optional outputs, 0-based).
 _RW_TCRIT, _RW_H0, _RW_HU, _RW_YH = 0, 4, 10, 20
-_IW_NST, _IW_NFE, _IW_NJE, _IW_NQU = 10, 11, 12, 13
+_IW_NST, _IW_NFE, _IW_NJE, _IW_NQU, _IW_NLU = 10, 11, 12, 13, 18
 _ITASK_ONE_STEP_TCRIT = 5
 #: Events are located to this absolute time [s] (``solve_ivp`` locates to 4 machine epsilons).
 EVENT_XTOL_S = 4 * np.finfo(float).eps
@@ -80,8 +80,8 @@ class VodeStepper:
         Where the integration stands (after the last step).
     t_old : float or None
         Start of the last step (None right after a restart).
-    nfev, njev, nsteps : int
-        Cumulative right-hand-side calls, Jacobians and steps since construction.
+    nfev, njev, nlu, nsteps : int
+        Cumulative right-hand-side calls, Jacobians, LU decompositions and steps since construction.
     recoveries : int
         Restarts made by :meth:`step` after a failure of a continued history.
     """
@@ -96,7 +96,7 @@ class VodeStepper:
         self._ode.set_integrator("vode", method="bdf", rtol=rtol, atol=atol, lband=lband, uband=uband,
                                  nsteps=10**9, order=max_order, max_step=0.0 if max_step is None else max_step)
         self._it = self._ode._integrator
-        self._done = {"nfev": 0, "njev": 0, "nsteps": 0}
+        self._done = {"nfev": 0, "njev": 0, "nlu": 0, "nsteps": 0}
         self.t = self.t_old = None
         self.y = None
         self._fresh = True
@@ -106,13 +106,14 @@ class VodeStepper:
     # ------------------------------------------------------------------ counters
     def _counts(self):
         iw = self._it.iwork
-        return {"nfev": int(iw[_IW_NFE]), "njev": int(iw[_IW_NJE]), "nsteps": int(iw[_IW_NST])}
+        return {"nfev": int(iw[_IW_NFE]), "njev": int(iw[_IW_NJE]), "nlu": int(iw[_IW_NLU]), "nsteps": int(iw[_IW_NST])}
 
     def _cum(self, key):
         return self._done[key] + (self._counts()[key] if self.t is not None else 0)
 
     nfev = property(lambda self: self._cum("nfev"))
     njev = property(lambda self: self._cum("njev"))
+    nlu = property(lambda self: self._cum("nlu"))
     nsteps = property(lambda self: self._cum("nsteps"))
 
     # ------------------------------------------------------------------ stepping

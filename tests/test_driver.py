@@ -101,3 +101,13 @@ def test_vode_every_method_failing_raises(monkeypatch, scenario_path):
     monkeypatch.setattr(S, "solve_ivp", boom)
     with pytest.raises(SolverError, match="VODE: no luck; LSODA: no luck; BDF: no luck; Radau: no luck"):
         _short_inchworm(scenario_path, "VODE")
+
+
+def test_batched_members_on_vode_are_stacked_on_lsoda(scenario_path):
+    """A stack keeps LSODA (max-norm error test per member) when the members ask for VODE."""
+    scs = [load_scenario(scenario_path("tow6_uniform"), [("terrain.xt", xt), ("simulation.duration_s", 3),
+                                                         ("simulation.method", "VODE")]) for xt in (0.6, 0.9)]
+    batched = simulate_batch(scs)
+    for sc, mb in zip(scs, batched):
+        assert mb.status == "ok" and mb.result.stats["batch_size"] == 2
+        assert_metrics_close(case_metrics(simulate(sc)), case_metrics(mb.result))

@@ -153,3 +153,10 @@ def test_max_order_and_first_step():
         st.step(0.5)
         orders.append(int(st._it.iwork[13]))
     assert max(orders) == 2
+
+
+def test_lu_count_is_reported():
+    st = _stepper()
+    st.restart(0.0, Y0)
+    st.advance(0.3)
+    assert st.nlu >= st.njev >= 1
