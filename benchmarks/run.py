@@ -226,7 +226,8 @@ def bench_controllers(repeats, report):
                               "intervals": res.stats["intervals"]}
     report(f"  tow6 20 s, 50 Hz Python controller: RTF {out['controller_tow6']['rtf']:6.1f}x  wall {wall:6.3f} s  "
            f"nfev {res.stats['nfev']}  intervals {res.stats['intervals']}")
-    base = load_scenario(SC / "tow6_uniform.yaml")
+    # on VODE, which the Simulator keeps across steps (no restart per step; LSODA restarts every step)
+    base = load_scenario(SC / "tow6_uniform.yaml", [("simulation.method", "VODE")])
     best = np.inf
     for _ in range(repeats):
         sim = Simulator(base)

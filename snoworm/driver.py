@@ -84,6 +84,11 @@ def _fallbacks(method):
 def _vode_interval(model, ctl, t, t1, y, events, t_eval, opts):
     """One interval on the run's :class:`~snoworm.stepper.VodeStepper` (kept in ``opts``), restarted at ``t``.
 
+    With ``opts["continue"]`` true (a caller that steps a run period by period, such as
+    :class:`~snoworm.simulator.Simulator`), the stepper is not restarted where the previous
+    interval ended at its end time exactly at ``(t, y)``: its history carries on across the change
+    of controls (the stepper restarts by itself if VODE then fails).
+
     Returns ``(ts, ys, t_next, y_next, which, counts)`` like :func:`_solve_interval`, plus the
     solver work of this interval.
     """
@@ -96,7 +101,8 @@ def _vode_interval(model, ctl, t, t1, y, events, t_eval, opts):
     before = (st.nfev, st.njev, st.nlu)
     events = [_with_controls(ev, ctl) for ev in events or ()]
     st.ctl = ctl
-    st.restart(t, y)
+    if not (opts.get("continue") and st.t == t and np.array_equal(st.y, y)):
+        st.restart(t, y)            # else: carry the history across the change of controls
     try:
         ts, ys, t_next, y_next, which = st.advance(t1, events, t_eval)
     finally:
@@ -230,7 +236,7 @@ def _integrate(model, modes, sim, name):
     y = np.concatenate([md.initial_state() for md in modes])
     pieces, phases = [[] for _ in range(B)], []
     stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0}
-    stuck, opts = 0, {}
+    stuck, opts = 0, {"continue": all(getattr(md, "continue_solver", False) for md in modes)}
     while t < T - 1e-12:
         ys_b = y.reshape(B, -1)
         ivs = [md.interval(t, ys_b[b]) for b, md in enumerate(modes)]

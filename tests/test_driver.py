@@ -111,3 +111,26 @@ def test_batched_members_on_vode_are_stacked_on_lsoda(scenario_path):
     for sc, mb in zip(scs, batched):
         assert mb.status == "ok" and mb.result.stats["batch_size"] == 2
         assert_metrics_close(case_metrics(simulate(sc)), case_metrics(mb.result))
+
+
+def test_vode_carries_its_history_across_simulator_steps(scenario_path):
+    """Simulator (opts["continue"]) on VODE: no restart per 10 ms step, same states, far less work."""
+    from snoworm.simulator import Simulator
+    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.method", "VODE"), ("simulation.duration_s", 3)])
+    runs = {}
+    for cont in (True, False):
+        sim = Simulator(sc)
+        sim.reset()
+        sim._opts["continue"] = cont
+        for k in range(300):
+            sim.step({"wheel_speed_mps": [1.8] * 6} if k == 50 else None, 0.01)
+        runs[cont] = sim.result()
+    assert runs[True].stats["nfev"] < runs[False].stats["nfev"] / 3
+    assert runs[True].stats.get("retries", 0) == 0
+    np.testing.assert_allclose(runs[True].links["force_N"][-1], runs[False].links["force_N"][-1], rtol=0, atol=0.05)
+    np.testing.assert_allclose(runs[True].segments["v_mps"][-1], runs[False].segments["v_mps"][-1], rtol=0, atol=1e-4)
+
+
+def test_only_the_controller_mode_continues_the_solver():
+    from snoworm.modes import MODES
+    assert {name for name, cls in MODES.items() if cls.continue_solver} == {"controller"}
