@@ -2,10 +2,12 @@
 
 Public API
 ----------
-load_scenario(path, overrides=())   -> Scenario (validated, frozen; ``Scenario.with_`` edits it)
-simulate(scenario)                  -> Result
+load_scenario(path, overrides=())   -> Scenario (validated, frozen; ``Scenario.with_`` edits it);
+                                       a path or a shipped scenario's name (``shipped_scenarios()``)
+simulate(scenario, progress=None)   -> Result
 simulate_batch(scenarios)           -> list of BatchMember (one stacked solve)
-Result.write(out_dir)               -> files (CSV, JSON, YAML, PNG/PDF/SVG plots)
+Result.write(out_dir)               -> files (CSV, JSON, YAML, PNG/PDF/SVG plots, manifest), all or
+                                       nothing; OutputError for an unusable folder
 load_result(run_dir)                -> Result read back from a run folder
 Result.to_pandas(), .to_xarray()    -> tidy DataFrames / an xarray Dataset (pip install 'snoworm[data]')
 Result.plot(kind, ax=None)          -> a matplotlib Figure (the backend is never changed)
@@ -21,13 +23,14 @@ from ._version import __version__  # noqa: E402
 
 from . import modes as modes  # noqa: E402  (registers the built-in modes)
 from .driver import BatchMember, SolverError, simulate, simulate_batch  # noqa: E402
+from .fileio import OutputError  # noqa: E402
 from .modes import Mode, register_mode  # noqa: E402
 from .results import Result, load_result  # noqa: E402
-from .scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict  # noqa: E402
+from .scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios  # noqa: E402
 from .sections import ModeConfig  # noqa: E402
 from .simulator import Observation, Simulator  # noqa: E402
 from .sweep import SweepTable, load_sweep, run_sweep  # noqa: E402
 
-__all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Observation", "Result", "Scenario", "ScenarioError",
-           "Simulator", "SolverError", "SweepTable", "load_result", "load_scenario", "load_sweep", "register_mode",
-           "run_sweep", "scenario_from_dict", "simulate", "simulate_batch"]
+__all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Observation", "OutputError", "Result", "Scenario",
+           "ScenarioError", "Simulator", "SolverError", "SweepTable", "load_result", "load_scenario", "load_sweep",
+           "register_mode", "run_sweep", "scenario_from_dict", "shipped_scenarios", "simulate", "simulate_batch"]

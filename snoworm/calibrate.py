@@ -34,14 +34,13 @@ import dataclasses
 import json
 import math
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 import yaml
 from scipy.optimize import least_squares
 
 from . import steady
-from .fileio import atomic_write_text
+from .fileio import atomic_write_text, check_output_folder, output_folder, relocate
 from .groundtruth import FieldData, compare_table2, format_table2, read_field_data, vehicle_model
 from .schema import ScenarioError, suggest
 from .sections import TerrainModelConfig
@@ -175,7 +174,7 @@ class CalibrationResult:
 
 
 def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: float = 1.0,
-              slip_scale: float = 0.01) -> CalibrationResult:
+              slip_scale: float = 0.01, progress=None) -> CalibrationResult:
     """Fit terrain-model coefficients (and optionally every case's X_t) to steady field data.
 
     Parameters
@@ -191,6 +190,9 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
     torque_scale_Nm, slip_scale : float
         Residual scales: torque error in units of ``torque_scale_Nm``, slip error in units of
         ``slip_scale`` (default 1 N m and 1 percentage point).
+    progress : callable, optional
+        ``progress(evaluations, budget)`` after each model evaluation (the budget is the fit's
+        ``max_nfev``; a fit usually converges well before it).
 
     Raises
     ------
@@ -212,14 +214,20 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
     x0 = np.clip(np.array(x0, float), np.nextafter(np.array(lo), np.inf), np.nextafter(np.array(hi), -np.inf))
     meas = np.concatenate([data.torque_Nm / torque_scale_Nm, data.slip / slip_scale])
 
+    budget = 200 * (len(x0) + 1)
+    count = [0]
+
     def resid(theta):
         tpk, xt = _unpack(theta, names, tp, data.xt, n)
         s, T, _ = model_predictions(data, seg, tpk, xt)
+        count[0] += 1
+        if progress is not None:
+            progress(count[0], budget)
         return np.concatenate([T / torque_scale_Nm, s / slip_scale]) - meas
 
     r0 = resid(x0)
     sol = least_squares(resid, x0, bounds=(lo, hi), method="trf", jac="3-point", x_scale="jac",
-                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200 * (len(x0) + 1))
+                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=budget)
     tp_fit, xt_fit = _unpack(sol.x, names, tp, data.xt, n)
     n_res, n_par = r0.size, sol.x.size
     dof = n_res - n_par
@@ -307,7 +315,8 @@ def calibration_json(res: CalibrationResult, source: str = "", parameter_set_nam
 
 
 def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyboy", model_file=None,
-                    torque_scale_Nm: float = 1.0, slip_scale: float = 0.01):
+                    torque_scale_Nm: float = 1.0, slip_scale: float = 0.01, overwrite: bool = False,
+                    progress=None):
     """Read, validate, fit, then write ``terrain_model.yaml`` and ``calibration.json`` to ``out_dir``.
 
     Nothing is written if the input is invalid (every check runs before the first write).
@@ -319,8 +328,9 @@ def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyb
     data = read_field_data(field_path)
     seg, tp = vehicle_model(parameter_set_name, model_file)
     _check_fit(fit, len(data))
-    res = calibrate(data, fit, seg, tp, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale)
-    out = Path(out_dir)
-    paths = [atomic_write_text(out / "terrain_model.yaml", terrain_model_yaml(res, data.source)),
-             atomic_write_text(out / "calibration.json", calibration_json(res, data.source, parameter_set_name))]
-    return res, format_report(res), paths
+    check_output_folder(out_dir, overwrite)      # before the fit, not after
+    res = calibrate(data, fit, seg, tp, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, progress=progress)
+    with output_folder(out_dir, overwrite) as out:
+        paths = [atomic_write_text(out / "terrain_model.yaml", terrain_model_yaml(res, data.source)),
+                 atomic_write_text(out / "calibration.json", calibration_json(res, data.source, parameter_set_name))]
+    return res, format_report(res), relocate(paths, out, out_dir)

@@ -6,7 +6,10 @@ one-paragraph message naming the field and the fix, never a traceback).
 from __future__ import annotations
 
 import functools
+import logging
 import os
+import shlex
+import signal
 import sys
 
 import click
@@ -22,16 +25,38 @@ def _fail(msg, code):
     sys.exit(code)
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, handled like Ctrl-C (finished files kept, partial ones removed)."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
+def _catch_sigterm():
+    """Install the SIGTERM handler (main thread only); returns the previous handler or None."""
+    try:
+        return signal.signal(signal.SIGTERM, _on_sigterm)
+    except (ValueError, AttributeError):   # not the main thread / no SIGTERM on this platform
+        return None
+
+
 def handle_errors(fn):
-    """Turn ScenarioError into exit 2, SolverError and ControllerError into exit 1, each with a clear message."""
+    """Turn ScenarioError and OutputError into exit 2, SolverError and ControllerError into exit 1,
+    each with a clear message; SIGTERM is handled like Ctrl-C."""
     @functools.wraps(fn)
     def wrapper(*a, **kw):
         from .schema import ScenarioError  # lazy: start-up
         from .driver import SolverError  # lazy: start-up
         from .modes.controller import ControllerError  # lazy: start-up
+        from . import fileio  # lazy: start-up
+        from .fileio import OutputError  # lazy: start-up
+        old = _catch_sigterm()
+        argv = click.get_current_context().find_root().meta.get("snoworm.argv")
+        fileio.COMMAND = shlex.join(["snoworm", *argv]) if argv is not None else None   # for the manifests
         try:
             return fn(*a, **kw)
-        except ScenarioError as exc:
+        except (ScenarioError, OutputError) as exc:
             _fail(str(exc), EXIT_INPUT)
         except SolverError as exc:
             _fail(f"solver failure: {exc}", EXIT_SOLVER)
@@ -40,24 +65,63 @@ def handle_errors(fn):
         except BrokenPipeError:  # output piped into e.g. `head`: not an error of ours
             sys.stderr.close()
             sys.exit(0)
-        except KeyboardInterrupt:
-            _fail("interrupted; files already finished were kept.", 130)
+        except KeyboardInterrupt as exc:
+            _fail("interrupted; nothing half-written was left (finished files of a sweep were kept).",
+                  143 if isinstance(exc, Terminated) else 130)
         except Exception as exc:  # a bug: one paragraph, the traceback on request
             if os.environ.get("SNOWORM_DEBUG"):
                 raise
             _fail(f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
                   "rerun with SNOWORM_DEBUG=1 for the traceback and report it.", EXIT_SOLVER)
+        finally:
+            fileio.COMMAND = None
+            if old is not None:
+                signal.signal(signal.SIGTERM, old)
     return wrapper
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Group(click.Group):
+    """The command group; keeps its command line (for the output folders' manifests)."""
+
+    def parse_args(self, ctx, args):
+        ctx.meta["snoworm.argv"] = list(args)
+        return super().parse_args(ctx, args)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="snoworm")
-def main():
+@click.option("-v", "--verbose", is_flag=True, help="Also log solver fallbacks and retries to stderr.")
+def main(verbose=False):
     """snoworm: simulate multi-segment wheeled rovers on snow (SnoWorm / FrostyBoy model).
 
-    Scenarios are YAML files (see scenarios/).  Start with
-    `snoworm run scenarios/inchworm6.yaml --out out/`.
+    Scenarios are YAML files or the names of the shipped ones (`snoworm scenarios` lists them).
+    Start with `snoworm run inchworm6 --out out/`.
     """
+    log = logging.getLogger("snoworm")
+    if not any(isinstance(h, _StderrHandler) for h in log.handlers):
+        h = _StderrHandler()
+        h.setFormatter(logging.Formatter("snoworm: %(message)s"))
+        log.addHandler(h)
+    log.setLevel(logging.INFO if verbose else logging.WARNING)
+
+
+class _StderrHandler(logging.StreamHandler):
+    """Log records to the current ``sys.stderr`` (looked up at each record, not at start-up)."""
+
+    def emit(self, record):
+        self.stream = sys.stderr
+        super().emit(record)
+
+
+overwrite_option = click.option("--overwrite", is_flag=True,
+                                help="Write into a non-empty --out folder that snoworm did not write (same-named "
+                                     "files are replaced, other files kept). An earlier snoworm output folder is "
+                                     "always replaced as a whole.")
+
+
+def _progress(total, desc, unit):
+    from .progress import Progress  # lazy: start-up
+    return Progress(total, desc, unit)
 
 
 set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
@@ -74,18 +138,24 @@ plot_format_option = click.option("--plot-format", type=click.Choice(["png", "pd
 @set_option
 @click.option("--no-plot", is_flag=True, help="Skip the plots.")
 @plot_format_option
+@overwrite_option
 @handle_errors
-def run(scenario, out_dir, sets, no_plot, plot_format):
-    """Run SCENARIO and write its results to --out.
+def run(scenario, out_dir, sets, no_plot, plot_format, overwrite):
+    """Run SCENARIO (a YAML file or a shipped scenario's name) and write its results to --out.
 
-    Nothing is written if the scenario is invalid (exit 2) or the solver fails (exit 1);
-    each file is written atomically.
+    All or nothing: the files go to a temporary folder beside --out that replaces it at the
+    end, with a manifest (.snoworm-manifest.json); nothing is written if the scenario is
+    invalid (exit 2), the solver fails (exit 1) or the run is interrupted.  Progress in
+    simulated time goes to stderr.
     """
     from .driver import simulate  # lazy: start-up
+    from .fileio import check_output_folder  # lazy: start-up
     from .scenario import load_scenario  # lazy: start-up
     sc = load_scenario(scenario, sets)
-    res = simulate(sc)
-    paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format)
+    check_output_folder(out_dir, overwrite)
+    with _progress(sc.simulation.duration_s, sc.name, "s simulated") as bar:
+        res = simulate(sc, progress=bar.set)
+    paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite)
     s = res.summary()
     click.echo(f"{sc.name}: {s['duration_s']:.1f} s simulated in {res.stats['wall_time_s']:.2f} s "
                f"({s['duration_s'] / max(res.stats['wall_time_s'], 1e-9):.0f}x real time), "
@@ -127,8 +197,9 @@ model_file_option = click.option("--model-file", type=click.Path(dir_okay=False)
 @model_file_option
 @click.option("--no-plot", is_flag=True, help="Skip table2.png.")
 @plot_format_option
+@overwrite_option
 @handle_errors
-def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plot_format):
+def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plot_format, overwrite):
     """Compare the steady-state model with field data (paper Table 2).
 
     Runs the steady-state model on every case at its measured wheel speed R_w*omega, drawbar
@@ -137,7 +208,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
     """
     from .groundtruth import run_groundtruth  # lazy: start-up
     _, text, paths = run_groundtruth(out_dir, data_path, parameter_set_name, model_file, plot=not no_plot,
-                                     plot_format=plot_format)
+                                     plot_format=plot_format, overwrite=overwrite)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -153,8 +224,9 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
               help="Number of slip values on [0, 1].")
 @click.option("--no-plot", is_flag=True, help="Skip terrain_curves.png.")
 @plot_format_option
+@overwrite_option
 @handle_errors
-def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_plot, plot_format):
+def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_plot, plot_format, overwrite):
     """Tractive, resistive and net force per wheel against slip (paper Figure 3).
 
     Normal load per wheel is the static one (a quarter of the segment weight); the resistance is
@@ -163,7 +235,7 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
     """
     from .groundtruth import run_terrain_curves  # lazy: start-up
     _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name, model_file, plot=not no_plot,
-                                        n_points=n_points, plot_format=plot_format)
+                                        n_points=n_points, plot_format=plot_format, overwrite=overwrite)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -182,8 +254,9 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
               help="Torque residual unit [N m]: residual = (model - measured) / this.")
 @click.option("--slip-scale", "slip_scale", type=float, default=0.01, show_default=True,
               help="Slip residual unit (fraction; 0.01 = one percentage point).")
+@overwrite_option
 @handle_errors
-def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_scale_Nm, slip_scale):
+def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_scale_Nm, slip_scale, overwrite):
     """Fit terrain-model coefficients to the steady cases of FIELD.csv (least squares).
 
     FIELD.csv has the columns case, surface, speed_mps, wheel_speed_mps, slip (a fraction),
@@ -194,8 +267,10 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
     """
     from .calibrate import run_calibration  # lazy: start-up
-    _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
-                                     torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale)
+    with _progress(1, "calibrate", "model evaluations (budget)") as bar:
+        _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
+                                         torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, overwrite=overwrite,
+                                         progress=bar.set)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -225,9 +300,13 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
 @click.option("--batch", default=0, show_default=True, type=click.IntRange(min=0), metavar="B",
               help="Integrate up to B cases of the same structure (uniform mode) as one stacked system "
                    "(several times the cases/s; 100-500 is a good B); other cases run one by one.")
+@click.option("--overwrite", is_flag=True,
+              help="Replace another sweep in --out (its files are removed), or write into a non-empty folder "
+                   "snoworm did not write.")
 @handle_errors
-def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no_plot, plot_format, batch):
-    """Run SCENARIO over a grid of values and tabulate the results in --out.
+def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no_plot, plot_format, batch, overwrite):
+    """Run SCENARIO (a YAML file or a shipped scenario's name) over a grid of values and tabulate
+    the results in --out.
 
     \b
     summary.csv has one row per case, appended as each case finishes (completion order):
@@ -241,21 +320,26 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no
     FrostyBoy: X_t below about 0.586).
 
     A failing case is recorded and the sweep goes on. Re-running the same command skips the
-    cases already in summary.csv; a different sweep in the same --out is refused (exit 2).
+    cases already in summary.csv; a different sweep in the same --out is refused (exit 2)
+    unless --overwrite. The folder is locked while the sweep runs: a second sweep into it exits
+    2 naming the process holding it. The scheduler is checked before anything is written.
+    Progress goes to stderr (a bar on a terminal, a line per ~10 % otherwise).
     Exit status: 0 when the sweep completes (even with failed cases), 2 on bad input, 1 if a
-    worker process or the Dask cluster fails, 130 when interrupted (re-run to resume).
+    worker process or the Dask cluster fails, 130 when interrupted (143 on SIGTERM; re-run to
+    resume).
     """
     from .sweep import SweepExecutionError, run_sweep  # lazy: start-up
     try:
         table = run_sweep(scenario, sets, out_dir=out_dir, jobs=jobs, scheduler=scheduler, zip_=zip_,
                           save_cases=save_cases, plot=not no_plot, batch=batch, series=series,
-                          plot_format=plot_format)
+                          plot_format=plot_format, overwrite=overwrite)
     except SweepExecutionError as exc:
         _fail(str(exc), EXIT_SOLVER)
-    except KeyboardInterrupt:
-        click.echo(f"interrupted: finished cases are in {out_dir}/summary.csv; run the same command "
+    except KeyboardInterrupt as exc:
+        how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        click.echo(f"{how}: finished cases are in {out_dir}/summary.csv; run the same command "
                    "again to resume.", err=True)
-        sys.exit(130)
+        sys.exit(143 if isinstance(exc, Terminated) else 130)
     bad = table.failures()
     imm = sum(bool(r["immobilised"]) for r in table.rows if r["status"] == "ok")
     click.echo(f"{len(table)} cases: {len(table) - len(bad)} ok, {len(bad)} failed, {imm} immobilised; "
@@ -285,19 +369,25 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no
               help="Worker processes for the inching runs.")
 @click.option("--no-plot", is_flag=True, help="Skip mobility_map.png.")
 @plot_format_option
+@overwrite_option
 @handle_errors
 def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, no_inching, inch_duration_s, jobs,
-                 no_plot, plot_format):
-    """Which modes move SCENARIO's vehicle over X_t and tow: rolling, inching only, immobile.
+                 no_plot, plot_format, overwrite):
+    """Which modes move SCENARIO's vehicle (a YAML file or a shipped name) over X_t and tow.
+
+    Regions: rolling, inching only, immobile.
 
     Rolling by the steady-state solver (each segment's share of the tow below its maximum
     drawbar); inching by short simulations of the inchworm gait of the scenario's supervisor or
-    inchworm mode.  Writes --out/mobility_map.csv and --out/mobility_map.png.
+    inchworm mode.  Writes --out/mobility_map.csv and --out/mobility_map.png.  Progress of
+    the inching runs goes to stderr.
     """
     from .mobility import run_mobility_map  # lazy: start-up
-    _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps=rolling_speed_mps,
-                                      inching=not no_inching, inch_duration_s=inch_duration_s, jobs=jobs,
-                                      plot=not no_plot, plot_format=plot_format)
+    with _progress(1, "mobility map", "inching runs") as bar:
+        _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets,
+                                          rolling_speed_mps=rolling_speed_mps, inching=not no_inching,
+                                          inch_duration_s=inch_duration_s, jobs=jobs, plot=not no_plot,
+                                          plot_format=plot_format, overwrite=overwrite, progress=bar.set)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -311,8 +401,9 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
                    "still checked.")
 @click.option("--strict", is_flag=True,
               help="Exit with status 1 if any claim fails (default: exit 0 and record failures in the report).")
+@overwrite_option
 @handle_errors
-def paper(out_dir, quick, strict):
+def paper(out_dir, quick, strict, overwrite):
     """Reproduce the paper: Figure 3, Table 2, Figures 5 to 11, in one command.
 
     Runs every scenario behind the paper's quantitative content, checks each of the paper's
@@ -323,7 +414,7 @@ def paper(out_dir, quick, strict):
     to stderr.  A failing claim is reported, not fatal: the exit status is 0 unless --strict.
     """
     from .paper import run_paper  # lazy: start-up
-    rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True))
+    rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True), overwrite=overwrite)
     n_ok = sum(c.holds for c in rep.claims)
     click.echo(f"{n_ok} of {len(rep.claims)} claims hold ({'quick' if quick else 'full'} mode, "
                f"{rep.wall_time_s:.1f} s); report: {os.path.join(out_dir, 'report.html')}")
@@ -332,6 +423,21 @@ def paper(out_dir, quick, strict):
             click.echo(f"FAILS: {c.id}: {c.statement}", err=True)
     if strict and n_ok < len(rep.claims):
         sys.exit(1)
+
+
+@main.command()
+@handle_errors
+def scenarios():
+    """List the shipped scenarios, one line each (name and description).
+
+    Run one by name from anywhere: `snoworm run inchworm6 --out out/` (a path that exists wins
+    over a name).
+    """
+    from .scenario import shipped_scenarios  # lazy: start-up
+    items = shipped_scenarios()
+    width = max(map(len, items), default=0)
+    for name, (_, desc) in items.items():
+        click.echo(f"{name:<{width}}  {desc}")
 
 
 if __name__ == "__main__":  # pragma: no cover

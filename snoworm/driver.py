@@ -9,6 +9,7 @@ solvers' messages.  A failed run never returns a partial result as if it were wh
 """
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass
 
@@ -28,6 +29,9 @@ __all__ = ["SolverError", "Case", "assemble", "simulate", "simulate_batch", "bat
 class SolverError(RuntimeError):
     """The ODE solver failed; the message carries the solver's own message and where it failed."""
 
+
+#: Solver fallbacks and retries are logged here (INFO).
+logger = logging.getLogger("snoworm")
 
 #: Absolute tolerance of each state field, multiplied by ``simulation.atol_scale``.
 ATOL = {"x_m": 1e-6, "v_mps": 1e-6, "omega_front": 1e-5, "omega_rear": 1e-5,
@@ -169,6 +173,9 @@ def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opt
         reached = sol.t[-1] if np.size(sol.t) else t
         failures.append(f"{method}: {sol.message} (near t = {reached:.6g} s)")
         sol = None
+    if failures:
+        logger.info("interval '%s' from t = %.6g s: %s%s", label, t, "; ".join(failures),
+                    "" if sol is None else f"; retried with {method}, which succeeded")
     if sol is None:
         raise SolverError(f"every method failed at t = {t:.6g} s in interval '{label}': "
                           + "; ".join(failures) + ". Try a smaller simulation.rtol or max_step_s.")
@@ -225,8 +232,10 @@ def solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts
     return _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts)
 
 
-def _integrate(model, modes, sim, name):
+def _integrate(model, modes, sim, name, progress=None):
     """THE interval loop: ``modes`` (one per member) drive ``model`` (stacked if several members).
+
+    ``progress(t_s, duration_s)`` is called after each interval, if given.
 
     Returns ``(pieces per member, phases, stats)``.  Raises :class:`SolverError`, or ValueError
     when the members of a stack ask for different intervals (they then run one by one).
@@ -262,11 +271,16 @@ def _integrate(model, modes, sim, name):
         t, y = t_next, y_next
         if which is not None:
             modes[0].on_event(t, y, which)
+        if progress is not None:
+            progress(t, T)
     return pieces, phases, stats
 
 
-def simulate(sc) -> Result:
+def simulate(sc, progress=None) -> Result:
     """Run a scenario and return its :class:`~snoworm.results.Result`.
+
+    ``progress``: optional callable ``progress(t_s, duration_s)``, called after each integration
+    interval with the simulated time reached (e.g. a :class:`snoworm.progress.Progress`).
 
     Raises
     ------
@@ -276,7 +290,7 @@ def simulate(sc) -> Result:
     """
     wall0 = time.perf_counter()
     case = assemble(sc)
-    pieces, phases, stats = _integrate(case.model, [case.mode], sc.simulation, sc.name)
+    pieces, phases, stats = _integrate(case.model, [case.mode], sc.simulation, sc.name, progress)
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
 
@@ -336,7 +350,8 @@ def simulate_batch(scenarios) -> list:
     try:
         big = ChainModel.stack([c.model for c in cases]) if len(cases) > 1 else cases[0].model
         pieces, phases, stats = _integrate(big, [c.mode for c in cases], scs[0].simulation, scs[0].name)
-    except (SolverError, ValueError):
+    except (SolverError, ValueError) as exc:
+        logger.info("stacked run of %d scenarios failed (%s); running them one by one", len(scs), exc)
         return [_alone(sc) for sc in scs]
     wall = (time.perf_counter() - wall0) / len(scs)
     return [BatchMember(c.scenario, Result.from_pieces(c.scenario, c.model, c.mode, pieces[b], [dict(p) for p in phases],

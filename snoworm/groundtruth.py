@@ -28,6 +28,7 @@ from . import steady, terrain
 from .params import PARAMETER_SETS, parameter_set
 from .scenario import SegmentConfig, TerrainModelConfig, read_model_file
 from .schema import ScenarioError, build, dump, suggest
+from .fileio import output_folder, relocate
 from .tables import csv_text, write_csv
 from .terrain import TerrainParams
 
@@ -278,7 +279,7 @@ def format_table2(rows) -> str:
 
 
 def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostyboy", model_file=None,
-                    plot: bool = True, plot_format: str = "png"):
+                    plot: bool = True, plot_format: str = "png", overwrite: bool = False):
     """Compare the model with field data and write ``table2.csv`` (and ``table2.png``, or the
     ``plot_format``: png, pdf, svg).
 
@@ -296,12 +297,12 @@ def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostybo
     text = f"field data: {data.source}\nmodel: parameter set {parameter_set_name}" + \
         (f" with terrain model {model_file}" if model_file else "") + \
         f" (d = {tp.peak_exponent_d:g}, torque balance '{tp.torque_balance}')\n" + format_table2(rows)
-    out = Path(out_dir)
-    paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows)]
-    if plot:
-        from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-        paths.append(plotting.save(plotting.plot_table2(rows), out / "table2.png", plot_format))
-    return rows, text, paths
+    with output_folder(out_dir, overwrite) as out:
+        paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows)]
+        if plot:
+            from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
+            paths.append(plotting.save(plotting.plot_table2(rows), out / "table2.png", plot_format))
+    return rows, text, relocate(paths, out, out_dir)
 
 
 # ---------------------------------------------------------------------------------- Figure 3
@@ -402,7 +403,7 @@ def format_zero_crossings(c: TerrainCurves) -> str:
 
 
 def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", model_file=None, plot: bool = True,
-                       n_points: int = 1001, plot_format: str = "png"):
+                       n_points: int = 1001, plot_format: str = "png", overwrite: bool = False):
     """Compute Figure 3's curves and write ``terrain_curves.csv`` (and ``terrain_curves.png``, or
     the ``plot_format``: png, pdf, svg).
 
@@ -412,9 +413,9 @@ def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", mode
     """
     seg, tp = vehicle_model(parameter_set_name, model_file)
     c = terrain_curves(xts, seg, tp, n_points)
-    out = Path(out_dir)
-    paths = [write_csv(out / "terrain_curves.csv", CURVE_COLUMNS, _curve_rows(c))]
-    if plot:
-        from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-        paths.append(plotting.save(plotting.plot_terrain_curves(c), out / "terrain_curves.png", plot_format))
-    return c, format_zero_crossings(c), paths
+    with output_folder(out_dir, overwrite) as out:
+        paths = [write_csv(out / "terrain_curves.csv", CURVE_COLUMNS, _curve_rows(c))]
+        if plot:
+            from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
+            paths.append(plotting.save(plotting.plot_terrain_curves(c), out / "terrain_curves.png", plot_format))
+    return c, format_zero_crossings(c), relocate(paths, out, out_dir)

@@ -25,13 +25,12 @@ run in ``jobs`` worker processes.
 from __future__ import annotations
 
 import time
-from pathlib import Path
-
 import numpy as np
 
 from . import steady
 from .driver import SolverError, simulate
 from .energy import energy_metrics
+from .fileio import check_output_folder, output_folder, relocate
 from .parallel import ProcessExecutor
 from .scenario import load_scenario, scenario_from_dict
 from .modes import InchwormMode
@@ -149,8 +148,31 @@ def _inch_run(args):
             "inching_note": ""}
 
 
+def _indexed_inch_run(item):
+    j, task = item
+    return j, _inch_run(task)
+
+
+def _inch_all(tasks, jobs, progress):
+    """The inching runs' outcomes, in the order of ``tasks`` (``jobs`` processes)."""
+    outs = [None] * len(tasks)
+    if jobs > 1:
+        with ProcessExecutor(jobs) as pool:
+            done = pool.map_unordered(_indexed_inch_run, enumerate(tasks))
+            for n, (j, o) in enumerate(done, 1):
+                outs[j] = o
+                if progress is not None:
+                    progress(n, len(tasks))
+        return outs
+    for j, tk in enumerate(tasks):
+        outs[j] = _inch_run(tk)
+        if progress is not None:
+            progress(j + 1, len(tasks))
+    return outs
+
+
 def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True, inch_duration_s: float = 8.0,
-                 inch_min_speed_mps: float = 0.02, jobs: int = 1) -> dict:
+                 inch_min_speed_mps: float = 0.02, jobs: int = 1, progress=None) -> dict:
     """Mobility map of a scenario's vehicle over ``xts`` x ``tows``.
 
     Parameters
@@ -169,6 +191,8 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
         Mean chain speed above which inching counts as moving [m/s].
     jobs : int
         Worker processes for the inching runs.
+    progress : callable, optional
+        ``progress(done, total)`` after each inching cell (e.g. a :class:`snoworm.progress.Progress`).
 
     Returns
     -------
@@ -187,12 +211,7 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
             rows.append({"xt": x, "tow_N": f, **rolling_cell(sc, x, f, wheel_speed_mps)})
     if inching:
         tasks = [(inching_scenario(sc, r["xt"], r["tow_N"], inch_duration_s), inch_min_speed_mps) for r in rows]
-        if jobs > 1:
-            with ProcessExecutor(jobs) as pool:
-                outs = pool.map(_inch_run, tasks)
-        else:
-            outs = [_inch_run(tk) for tk in tasks]
-        for r, o in zip(rows, outs):
+        for r, o in zip(rows, _inch_all(tasks, jobs, progress)):
             r.update(o)
     for r in rows:
         inch_ok = bool(r.get("inching", False))
@@ -229,18 +248,26 @@ def map_csv(result: dict) -> str:
 
 
 def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, rolling_speed_mps=None,
-                     inching=True, inch_duration_s=8.0, jobs=1, plot=True, plot_format="png"):
+                     inching=True, inch_duration_s=8.0, jobs=1, plot=True, plot_format="png", overwrite=False,
+                     progress=None):
     """Load a scenario, compute its map, write ``mobility_map.csv`` (and the plot, a ``plot_format`` file:
-    png, pdf or svg); return (map, text, paths)."""
+    png, pdf or svg); return (map, text, paths).
+
+    The output folder is checked before the map is computed and written all or nothing
+    (:func:`snoworm.fileio.output_folder`).
+    """
     sc = load_scenario(scenario_path, sets)
     v = rolling_speed_of(sc) if rolling_speed_mps is None else float(rolling_speed_mps)
-    res = mobility_map(sc, parse_grid(xt_spec, "--xt"), parse_list(tow_spec, "--tow"), wheel_speed_mps=v,
-                       inching=inching, inch_duration_s=inch_duration_s, jobs=jobs)
-    out = Path(out_dir)
-    paths = [write_csv(out / "mobility_map.csv", MAP_COLUMNS, res["rows"], MAP_FORMAT)]
-    if plot:
-        from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-        paths.append(plotting.save(plotting.plot_mobility_map(res), out / "mobility_map.png", plot_format))
+    xts, tows = parse_grid(xt_spec, "--xt"), parse_list(tow_spec, "--tow")
+    check_output_folder(out_dir, overwrite)
+    res = mobility_map(sc, xts, tows, wheel_speed_mps=v, inching=inching, inch_duration_s=inch_duration_s,
+                       jobs=jobs, progress=progress)
+    with output_folder(out_dir, overwrite) as out:
+        paths = [write_csv(out / "mobility_map.csv", MAP_COLUMNS, res["rows"], MAP_FORMAT)]
+        if plot:
+            from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
+            paths.append(plotting.save(plotting.plot_mobility_map(res), out / "mobility_map.png", plot_format))
+    paths = relocate(paths, out, out_dir)
     lines = [f"{sc.name}: mobility map, {len(res['xts'])} X_t x {len(res['tows'])} tow values, "
              f"{res['wall_time_s']:.1f} s"]
     for f in res["tows"]:

@@ -15,7 +15,7 @@ import numpy as np
 from . import dataset
 from ._version import __version__
 from .energy import energy_metrics
-from .fileio import atomic_write_text
+from .fileio import atomic_write_text, output_folder, relocate
 from .outputs import output_series
 from .scenario import dump_scenario, load_scenario
 
@@ -145,6 +145,7 @@ class Result:
             "energy_metrics": metrics,
             "solver": dict(self.stats),
             "events": self.events,
+            "sources": self.scenario.sources,
         }
         s.update(self.mode_summary)
         return s
@@ -198,31 +199,37 @@ class Result:
                                + [self.links[c].reshape(-1) for c in LINK_COLUMNS])
         return _csv(cols, data, int_cols=(1,))
 
-    def write(self, out_dir, plot: bool = True, plot_format: str = "png") -> list:
+    def write(self, out_dir, plot: bool = True, plot_format: str = "png", overwrite: bool = False) -> list:
         """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots,
         ``plot_format`` files: png at 200 dpi, pdf or svg).
 
-        Each file is written atomically (temporary file, then rename).  Returns the paths.
-        :func:`load_result` reads the folder back.
+        All or nothing (:func:`snoworm.fileio.output_folder`): the files are written into a
+        temporary sibling folder that replaces ``out_dir`` at the end, with a manifest; an earlier
+        snoworm folder there is replaced as a whole, a non-empty folder snoworm did not write is
+        refused unless ``overwrite``.  Returns the paths.  :func:`load_result` reads the folder back.
+
+        Raises
+        ------
+        snoworm.fileio.OutputError
+            Unusable ``out_dir`` or an I/O failure (nothing is written then).
         """
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        paths = [
-            atomic_write_text(out / "segments.csv", self.segments_csv()),
-            atomic_write_text(out / "links.csv", self.links_csv()),
-            atomic_write_text(out / "summary.json", json.dumps(self.summary(), indent=2) + "\n"),
-            atomic_write_text(out / "scenario.yaml", dump_scenario(self.scenario)),
-        ]
-        if plot:
-            from . import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
-            paths += plotting.plot_result(self, out, plot_format)
-        return paths
+        with output_folder(out_dir, overwrite) as stage:
+            paths = [
+                atomic_write_text(stage / "segments.csv", self.segments_csv()),
+                atomic_write_text(stage / "links.csv", self.links_csv()),
+                atomic_write_text(stage / "summary.json", json.dumps(self.summary(), indent=2) + "\n"),
+                atomic_write_text(stage / "scenario.yaml", dump_scenario(self.scenario)),
+            ]
+            if plot:
+                from . import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+                paths += plotting.plot_result(self, stage, plot_format)
+        return relocate(paths, stage, out_dir)
 
 
 #: Keys of ``summary.json`` that are not the mode's own (the rest is ``Result.mode_summary``).
 _SUMMARY_KEYS = ("scenario", "snoworm_version", "segments", "duration_s", "distance_m", "mean_speed_mps",
                  "final_link_forces_N", "final_net_forces_N", "final_slip", "final_speed_mps", "max_abs_link_force_N",
-                 "energy", "energy_per_metre_J_per_m", "energy_metrics", "solver", "events")
+                 "energy", "energy_per_metre_J_per_m", "energy_metrics", "solver", "events", "sources")
 
 
 def _read_table(path, index, columns, n_t_hint=None):

@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextvars
 import copy
 import functools
+from importlib import resources
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,7 +18,7 @@ import yaml
 
 from . import yamlio
 from .dynamics import ChainModel
-from .params import PARAMETER_SETS, parameter_set
+from .params import PARAMETER_SETS
 from .schema import Config, ScenarioError, build, dump, field, suggest
 from .sections import (LinkConfig, ModeConfig, PatchConfig, RandomTerrainConfig, SegmentConfig,
                        SimulationConfig, TerrainConfig, TerrainModelConfig, TowConfig, VehicleConfig)
@@ -26,7 +27,8 @@ __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
     "TerrainModelConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig", "MODE_CONFIGS",
     "register_mode_config", "load_scenario", "scenario_from_dict", "dump_scenario", "apply_overrides",
-    "parse_set_option", "read_model_file", "read_yaml", "ScenarioError", "base_dir",
+    "parse_set_option", "read_model_file", "read_yaml", "ScenarioError", "base_dir", "shipped_scenarios",
+    "scenario_path", "read_scenario_yaml",
 ]
 
 #: The scenario's ``mode.type`` -> its :class:`~snoworm.sections.ModeConfig` subclass.  Filled by
@@ -92,6 +94,28 @@ class Scenario(Config):
         """The mode's plan (:meth:`ModeConfig.prepare`), computed once per scenario."""
         return self.mode.prepare(self)
 
+    @functools.cached_property
+    def sources(self) -> dict:
+        """The source tag of every physical value, ``{dotted key: tag}`` (e.g. ``"vehicle.segment.mass_kg":
+        "[Lines] incl. wheels"``): the parameter set's tag, the scenario's ``sources:`` note, or
+        ``[user] scenario`` for a value the scenario changed."""
+        entries = self.__dict__.get("_entries")
+        if entries is None:
+            entries = parameter_entries(self.vehicle.parameter_set)[0]
+        notes = self.__dict__.get("_notes", {})
+        values = {"segment": dump(self.vehicle.segment), "links": dump(self.vehicle.links),
+                  "terrain_model": dump(self.terrain.model)}
+        out = {}
+        for sec, prefix in _SECTIONS.items():
+            for k, (v, tag) in entries[sec].items():
+                key = f"{prefix}.{k}"
+                out[key] = notes.get(key) or (tag if values[sec].get(k) == v else "[user] scenario")
+        for j, ov in sorted(self.vehicle.segment_overrides.items()):
+            for k in ov or {}:
+                key = f"vehicle.segment_overrides.{j}.{k}"
+                out[key] = notes.get(key, "[user] scenario")
+        return out
+
     def to_dict(self) -> dict:
         """Plain data of the resolved scenario, every value filled in (what ``scenario.yaml`` holds)."""
         data = {"name": self.name, "description": self.description, "vehicle": dump(self.vehicle),
@@ -103,6 +127,8 @@ class Scenario(Config):
                 t.pop(key)
         if data["simulation"]["max_step_s"] is None:
             data["simulation"].pop("max_step_s")
+        if self.__dict__.get("_notes"):
+            data["sources"] = dict(self.__dict__["_notes"])
         return data
 
     def with_(self, changes=None, **kw) -> "Scenario":
@@ -115,7 +141,7 @@ class Scenario(Config):
         return scenario_from_dict(apply_overrides(self.to_dict(), items), self.name)
 
 
-_TOP_KEYS = ("name", "description", "vehicle", "terrain", "tow", "mode", "simulation")
+_TOP_KEYS = ("name", "description", "vehicle", "terrain", "tow", "mode", "simulation", "sources")
 
 
 def _merge(defaults: dict, given):
@@ -171,29 +197,31 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
     veh = raw["vehicle"]
     if not isinstance(veh, dict):
         raise ScenarioError(f"vehicle: expected a mapping, got {veh!r}.")
-    ps_name = veh.get("parameter_set")
-    if ps_name is None:
-        raise ScenarioError("vehicle.parameter_set: is required but missing. Name the set of physical values "
-                            f"to start from, one of: {', '.join(PARAMETER_SETS)}.")
-    if ps_name not in PARAMETER_SETS:
-        raise ScenarioError(f"vehicle.parameter_set: unknown set {ps_name!r}.{suggest(ps_name, PARAMETER_SETS)} "
-                            f"Known sets: {', '.join(PARAMETER_SETS)}.")
-    ps = parameter_set(ps_name)
+    entries, veh["parameter_set"] = parameter_entries(veh.get("parameter_set"), base_dir)
+    ps = {sec: {k: v for k, (v, _) in items.items()} for sec, items in entries.items()}
+    notes = _source_notes(raw.pop("sources", None) or {})
     veh["segment"] = _merge(ps["segment"], veh.get("segment", {}))
     veh["links"] = _merge(ps["links"], veh.get("links", {}))
     if isinstance(raw["terrain"], dict):
         model_defaults = ps["terrain_model"]
         mfile = raw["terrain"].pop("model_file", None)
         if mfile is not None:
-            model_defaults = _merge(model_defaults, read_model_file(mfile, base_dir))
+            from_file = read_model_file(mfile, base_dir)
+            model_defaults = _merge(model_defaults, from_file)
+            if isinstance(from_file, dict):
+                for k in from_file:
+                    notes.setdefault(f"terrain.model.{k}", f"[user] terrain.model_file {mfile}")
         raw["terrain"]["model"] = _merge(model_defaults, raw["terrain"].get("model", {}))
     raw["name"] = _text(raw["name"], "name")
     raw["description"] = _text(raw.get("description", ""), "description")
     token = _BASE_DIR.set(None if base_dir is None else Path(base_dir))
     try:
-        return build(Scenario, raw, "")
+        sc = build(Scenario, raw, "")
     finally:
         _BASE_DIR.reset(token)
+    object.__setattr__(sc, "_notes", notes)
+    object.__setattr__(sc, "_entries", entries)
+    return sc
 
 
 #: folder of the scenario file being validated (None: the working directory); see :func:`base_dir`
@@ -208,6 +236,92 @@ def base_dir() -> Path:
     """
     d = _BASE_DIR.get()
     return Path.cwd() if d is None else d
+
+
+#: Source tags a value may carry (docs/model.md; params.py for the built-in sets).
+SOURCE_TAGS = ("[paper]", "[field data]", "[fitted]", "[assumed]", "[user]", "[Lines]", "[derived]")
+#: Sections of a parameter set and their dotted prefixes in a scenario.
+_SECTIONS = {"segment": "vehicle.segment", "links": "vehicle.links", "terrain_model": "terrain.model"}
+
+
+def _tag(value, where):
+    if not isinstance(value, str) or not value.startswith(SOURCE_TAGS):
+        raise ScenarioError(f"{where}: a source must start with one of {', '.join(SOURCE_TAGS)}, e.g. "
+                            f"'[field data] weighed 2026-01'; got {yamlio.quote(value)}.")
+    return value
+
+
+def _source_notes(notes) -> dict:
+    """The scenario's ``sources:`` block ({dotted key: tag}), checked."""
+    if not isinstance(notes, dict):
+        raise ScenarioError(f"sources: expected a mapping of dotted keys to source tags, got {yamlio.quote(notes)}.")
+    return {str(k): _tag(v, f"sources.{k}") for k, v in notes.items()}
+
+
+def parameter_entries(ps_name, base_dir=None):
+    """``({section: {key: (value, source)}}, name to record)`` of a named set or a parameter-set file.
+
+    ``ps_name`` is a name of :data:`~snoworm.params.PARAMETER_SETS` or a path to a YAML file of the
+    user's own vehicle (relative to the scenario file; see :func:`read_parameter_file`).
+    """
+    if ps_name is None:
+        raise ScenarioError("vehicle.parameter_set: is required but missing. Name the set of physical values "
+                            f"to start from, one of: {', '.join(PARAMETER_SETS)}, or a YAML parameter-set file.")
+    if isinstance(ps_name, str) and ps_name in PARAMETER_SETS:
+        return copy.deepcopy(PARAMETER_SETS[ps_name]), ps_name
+    if isinstance(ps_name, str) and (ps_name.endswith((".yaml", ".yml")) or "/" in ps_name):
+        path = Path(ps_name)
+        if not path.is_absolute() and base_dir is not None:
+            path = Path(base_dir) / path
+        return read_parameter_file(path), str(path.resolve())
+    raise ScenarioError(f"vehicle.parameter_set: unknown set {yamlio.quote(ps_name)}.{suggest(str(ps_name), PARAMETER_SETS)} "
+                        f"Known sets: {', '.join(PARAMETER_SETS)}; or give a YAML parameter-set file (path ending .yaml).")
+
+
+def read_parameter_file(path) -> dict:
+    """A parameter-set file of the user's own vehicle -> ``{section: {key: (value, source)}}``.
+
+    The file holds ``segment``, ``links`` and ``terrain_model`` mappings with the keys of the
+    built-in sets; each value is a number (source ``[user] <file>``) or ``{value: ..., source:
+    "[field data] ..."}``.  ``base: frostyboy`` starts from a named set (its values keep their
+    sources); without it every key must be given (no silent defaults).
+    """
+    where = f"vehicle.parameter_set: {path}"
+    try:
+        data = read_yaml(path)
+    except ScenarioError as exc:
+        raise ScenarioError(f"vehicle.parameter_set: {exc}") from None
+    if not isinstance(data, dict):
+        raise ScenarioError(f"{where} must hold a mapping with segment, links and terrain_model sections.")
+    ref = PARAMETER_SETS["frostyboy"]
+    for key in data:
+        if key not in ("name", "description", "base", *ref):
+            raise ScenarioError(f"{where}: unknown key {yamlio.quote(key)}.{suggest(str(key), [*ref, 'base', 'name'])} "
+                                f"Known keys: name, description, base, {', '.join(ref)}.")
+    base = data.get("base")
+    if base is not None and base not in PARAMETER_SETS:
+        raise ScenarioError(f"{where}: base: unknown set {yamlio.quote(base)}. Known sets: {', '.join(PARAMETER_SETS)}.")
+    out = copy.deepcopy(PARAMETER_SETS[base]) if base else {sec: {} for sec in ref}
+    for sec in ref:
+        given = data.get(sec) or {}
+        if not isinstance(given, dict):
+            raise ScenarioError(f"{where}: {sec}: expected a mapping of values, got {yamlio.quote(given)}.")
+        for k, v in given.items():
+            if k not in ref[sec]:
+                raise ScenarioError(f"{where}: {sec}.{k}: unknown key.{suggest(str(k), ref[sec])} "
+                                    f"Known keys: {', '.join(ref[sec])}.")
+            if isinstance(v, dict):
+                if set(v) - {"value", "source"} or "value" not in v:
+                    raise ScenarioError(f"{where}: {sec}.{k}: give a value, or a mapping {{value: ..., source: "
+                                        f"'[tag] note'}}; got {yamlio.quote(v)}.")
+                out[sec][k] = (v["value"], _tag(v.get("source", f"[user] {Path(path).name}"), f"{where}: {sec}.{k}.source"))
+            else:
+                out[sec][k] = (v, f"[user] {Path(path).name}")
+        missing = [k for k in ref[sec] if k not in out[sec]]
+        if missing:
+            raise ScenarioError(f"{where}: {sec}: missing {', '.join(missing)}. Give every value of the vehicle, or "
+                                "start from a named set with 'base: frostyboy'.")
+    return out
 
 
 def _text(v, path):
@@ -250,6 +364,8 @@ def apply_overrides(raw: dict, overrides) -> dict:
         if isinstance(node, dict) and leaf.isdigit() and int(leaf) in node:
             leaf = int(leaf)
         node[leaf] = value
+        if isinstance(raw.get("sources"), dict) and parts[0] != "sources":
+            raw["sources"].pop(key, None)          # a changed value's note no longer applies
         # a constant xt replaces a profile or random profile and vice versa (patches stay on a new xt)
         if parts[0] == "terrain" and len(parts) == 2 and parts[1] in ("xt", "profile", "random"):
             for other in ("xt", "profile", "random"):
@@ -269,17 +385,68 @@ def read_yaml(path) -> dict:
     return yamlio.read_yaml(path)
 
 
+def _shipped_dir() -> Path:
+    return Path(str(resources.files("snoworm") / "scenarios"))
+
+
+def shipped_scenarios() -> dict:
+    """The scenarios shipped with snoworm: ``{name: (path, one-line description)}``, sorted by name."""
+    out = {}
+    for p in sorted(_shipped_dir().glob("*.yaml")):
+        try:
+            raw = read_yaml(p)
+        except ScenarioError:      # pragma: no cover - the shipped files are tested
+            continue
+        desc = raw.get("description", "") if isinstance(raw, dict) else ""
+        first = " ".join(str(desc).split())
+        out[p.stem] = (p, first.split(". ")[0].rstrip(".") + "." if first else "")
+    return out
+
+
+def scenario_path(name_or_path) -> Path:
+    """The file of a scenario given as a path or as the name of a shipped scenario.
+
+    A path that exists wins; otherwise a name such as ``inchworm6`` (or ``inchworm6.yaml``)
+    of :func:`shipped_scenarios` gives the shipped file; otherwise the path is returned as given
+    (reading it then reports the missing file, with the shipped names).
+    """
+    path = Path(name_or_path)
+    if path.exists():
+        return path
+    text = str(name_or_path)
+    name = text[:-5] if text.endswith(".yaml") else text
+    if "/" not in text and "\\" not in text:
+        shipped = _shipped_dir() / f"{name}.yaml"
+        if shipped.is_file():
+            return shipped
+    return path
+
+
+def read_scenario_yaml(name_or_path):
+    """(parsed YAML, the file) of a scenario path or shipped name (:func:`scenario_path`)."""
+    path = scenario_path(name_or_path)
+    try:
+        return read_yaml(path), path
+    except ScenarioError as exc:
+        if path.exists():
+            raise
+        names = ", ".join(shipped_scenarios())
+        raise ScenarioError(f"{exc} A shipped scenario is named without a path, one of: {names} "
+                            "(`snoworm scenarios` lists them).") from None
+
+
 def load_scenario(path, overrides=()) -> Scenario:
     """Load, override and validate a scenario file.
 
     Parameters
     ----------
     path : str or Path
-        YAML scenario file.
+        YAML scenario file, or the name of a shipped scenario (``"inchworm6"``, see
+        :func:`shipped_scenarios`); an existing path wins over a name.
     overrides : iterable of (str, object) or of "key=value" strings
         Dotted-key overrides applied before validation (the CLI's ``--set``).
     """
-    raw = read_yaml(path)
+    raw, path = read_scenario_yaml(path)
     ov = [parse_set_option(o) if isinstance(o, str) else o for o in overrides]
     if ov:
         if not isinstance(raw, dict):
@@ -289,5 +456,9 @@ def load_scenario(path, overrides=()) -> Scenario:
 
 
 def dump_scenario(sc: Scenario) -> str:
-    """The resolved scenario as YAML text, every value filled in (re-runnable)."""
-    return yaml.safe_dump(sc.to_dict(), sort_keys=False)
+    """The resolved scenario as YAML text, every value filled in (re-runnable), followed by the
+    source of every physical value as comments (:attr:`Scenario.sources`)."""
+    lines = ["", "# Sources of the physical values (parameter set "
+             f"{sc.vehicle.parameter_set}; [user] scenario: changed by the scenario):"]
+    lines += [f"#   {k}: {v}" for k, v in sc.sources.items()]
+    return yaml.safe_dump(sc.to_dict(), sort_keys=False) + "\n".join(lines) + "\n"

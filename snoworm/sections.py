@@ -15,7 +15,6 @@ from typing import Optional
 import numpy as np
 
 from .dynamics import LinkArrays, SegmentArrays
-from .params import PARAMETER_SETS
 from .schema import Config, ScenarioError, build, dump, field, suggest
 from .terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
 
@@ -202,7 +201,8 @@ class VehicleConfig(Config):
     """The chain of segments."""
 
     _section = "vehicle"
-    parameter_set: str = field(choices=tuple(PARAMETER_SETS), doc="named set of physical values")
+    parameter_set: str = field(doc="named set of physical values (one of PARAMETER_SETS), or the path of a YAML "
+                                   "parameter-set file of the user's own vehicle")
     segments: int = field(ge=1, doc="number of segments N (segment 0 leads)")
     segment: SegmentConfig = field(doc="parameters shared by every segment")
     links: LinkConfig = field(doc="inter-segment links")

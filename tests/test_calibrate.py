@@ -121,3 +121,20 @@ def test_cli_calibrate_bad_input(tmp_path, text, fit, needle):
     assert needle in r.output
     assert "Traceback" not in r.output
     assert not out.exists()
+
+
+def test_progress_counts_model_evaluations_within_the_budget(data, frostyboy):
+    seen = []
+    res = cal.calibrate(data, ["tau0", "tau1"], *frostyboy, progress=lambda n, budget: seen.append((n, budget)))
+    assert [n for n, _ in seen] == list(range(1, len(seen) + 1))
+    assert {b for _, b in seen} == {600}                       # 200 * (2 parameters + 1)
+    assert len(seen) >= res.nfev
+
+
+def test_cli_calibrate_refuses_a_foreign_folder_before_fitting(tmp_path, monkeypatch):
+    out = tmp_path / "c"
+    out.mkdir()
+    (out / "notes.txt").write_text("x")
+    monkeypatch.setattr(cal, "calibrate", lambda *a, **k: pytest.fail("fitted before checking --out"))
+    r = CliRunner().invoke(main, ["calibrate", str(gt.default_data_path()), "--fit", "tau0", "--out", str(out)])
+    assert r.exit_code == 2 and str(out) in r.output and "--overwrite" in r.output

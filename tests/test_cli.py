@@ -65,7 +65,7 @@ def test_solver_failure_exit_1_nothing_written(tmp_path, monkeypatch):
     import importlib
     S = importlib.import_module("snoworm.driver")
 
-    def boom(sc):
+    def boom(sc, progress=None):
         raise S.SolverError("solve_ivp (LSODA) failed near t = 3 s: test")
     monkeypatch.setattr(S, "simulate", boom)
     out = tmp_path / "o"
@@ -127,6 +127,7 @@ def test_plot_format_and_sweep_series(tmp_path):
     r = run("sweep", SCENARIOS / "tow6_uniform.yaml", "--set", "tow.force_N=0,100", "--set", "simulation.duration_s=1",
             "--out", tmp_path / "s", "--series", "netcdf", "--plot-format", "svg")
     assert r.exit_code == 0, r.output
-    assert sorted(p.name for p in (tmp_path / "s").iterdir()) == ["series.nc", "summary.csv", "sweep.json", "sweep.svg"]
+    assert sorted(p.name for p in (tmp_path / "s").iterdir()) == [".snoworm-manifest.json", "series.nc", "summary.csv", "sweep.json",
+                                                                "sweep.svg"]
     r = run("run", SCENARIOS / "pi3_equal.yaml", "--out", tmp_path / "x", "--plot-format", "jpg")
     assert r.exit_code == 2 and "'jpg' is not one of 'png', 'pdf', 'svg'" in r.output

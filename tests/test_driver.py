@@ -134,3 +134,34 @@ def test_vode_carries_its_history_across_simulator_steps(scenario_path):
 def test_only_the_controller_mode_continues_the_solver():
     from snoworm.modes import MODES
     assert {name for name, cls in MODES.items() if cls.continue_solver} == {"controller"}
+
+
+def test_progress_reports_simulated_time_and_changes_nothing(scenario_path):
+    sc = load_scenario(scenario_path("inchworm2")).with_({"simulation.duration_s": 4.0})
+    seen = []
+    res = simulate(sc, progress=lambda t, total: seen.append((t, total)))
+    ref = simulate(sc)
+    assert len(seen) == res.stats["intervals"] > 1
+    assert [t for t, _ in seen] == sorted(t for t, _ in seen) and seen[-1] == (4.0, 4.0)
+    assert {tot for _, tot in seen} == {4.0}
+    assert res.stats["nfev"] == ref.stats["nfev"]
+    np.testing.assert_array_equal(res.segments["x_m"], ref.segments["x_m"])
+
+
+def test_solver_fallbacks_are_logged(monkeypatch, scenario_path, caplog):
+    import logging
+    from snoworm import driver
+    real, calls = driver.solve_ivp, []
+
+    def flaky(*a, **kw):
+        calls.append(kw["method"])
+        if len(calls) == 1:
+            raise ValueError("injected")
+        return real(*a, **kw)
+    monkeypatch.setattr(driver, "solve_ivp", flaky)
+    sc = load_scenario(scenario_path("frostyboy_case1")).with_({"simulation.duration_s": 1.0})
+    with caplog.at_level(logging.INFO, logger="snoworm"):
+        res = simulate(sc)
+    assert res.stats["retries"] == 1 and calls[:2] == ["LSODA", "BDF"]
+    msgs = [r.getMessage() for r in caplog.records if r.name == "snoworm"]
+    assert len(msgs) == 1 and "LSODA: injected" in msgs[0] and "retried with BDF" in msgs[0]

@@ -43,3 +43,22 @@ def test_cli_mobility_map_bad_grid(scenario_path, tmp_path):
     r = CliRunner().invoke(main, ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.2:1.0",
                                   "--out", str(tmp_path)])
     assert r.exit_code == 2 and "START:STOP:COUNT" in r.output
+
+
+def test_progress_counts_the_inching_runs(scenario_path):
+    sc = load_scenario(scenario_path("traverse_patch"))
+    seen = []
+    m = mobility_map(sc, [0.3, 0.9], [0.0], wheel_speed_mps=1.8, inch_duration_s=1.0,
+                     progress=lambda n, total: seen.append((n, total)))
+    assert seen == [(1, 2), (2, 2)] and len(m["rows"]) == 2
+
+
+def test_cli_mobility_map_replaces_its_folder_and_refuses_a_foreign_one(scenario_path, tmp_path):
+    out = tmp_path / "m"
+    args = ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.9", "--no-inching", "--out", str(out)]
+    assert CliRunner().invoke(main, args).exit_code == 0
+    assert CliRunner().invoke(main, args + ["--no-plot"]).exit_code == 0
+    assert sorted(p.name for p in out.iterdir()) == [".snoworm-manifest.json", "mobility_map.csv"]
+    (out / "mine.txt").write_text("x")
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 2 and "--overwrite" in r.output

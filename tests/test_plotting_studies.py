@@ -52,7 +52,7 @@ def test_heatmap_on_the_users_axes():
 
 
 def test_groundtruth_figures_in_the_chosen_format(tmp_path):
-    _, _, paths = run_groundtruth(tmp_path, plot_format="svg")
-    _, _, paths2 = run_terrain_curves([1.0, 0.5], tmp_path, n_points=51, plot_format="pdf")
+    _, _, paths = run_groundtruth(tmp_path / "gt", plot_format="svg")     # each run owns its folder
+    _, _, paths2 = run_terrain_curves([1.0, 0.5], tmp_path / "tc", n_points=51, plot_format="pdf")
     assert [p.name for p in paths + paths2] == ["table2.csv", "table2.svg", "terrain_curves.csv", "terrain_curves.pdf"]
     assert b"<svg" in paths[1].read_bytes() and paths2[1].read_bytes()[:5] == b"%PDF-"

@@ -137,3 +137,90 @@ def test_mode_configs_registry_holds_the_built_in_modes():
     assert {"uniform", "force_control", "inchworm", "supervisor"} <= set(MODE_CONFIGS)
     sc = load_scenario(SCENARIOS / "inchworm6.yaml")
     assert type(sc.mode) is MODE_CONFIGS["inchworm"]
+
+
+# ------------------------------------------------------------------ shipped names, vehicles as files, sources
+import json  # noqa: E402
+
+from click.testing import CliRunner  # noqa: E402
+
+from snoworm.params import PARAMETER_SETS  # noqa: E402
+from snoworm.scenario import parameter_entries, scenario_path, shipped_scenarios  # noqa: E402
+
+
+def test_shipped_scenarios_by_name_from_anywhere(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert sorted(shipped_scenarios()) == sorted(p.stem for p in SCENARIOS.glob("*.yaml"))
+    assert all(d.endswith(".") and "\n" not in d for _, d in shipped_scenarios().values())
+    assert load_scenario("inchworm6").name == "inchworm6"
+    assert scenario_path("inchworm6.yaml").resolve() == (SCENARIOS / "inchworm6.yaml").resolve()
+    with pytest.raises(ScenarioError, match="snoworm scenarios"):
+        load_scenario("no_such_scenario")
+
+
+def _vehicle_file(tmp_path, text):
+    (tmp_path / "rover.yaml").write_text(text)
+    sc = yaml.safe_load((SCENARIOS / "tow6_uniform.yaml").read_text())
+    sc["vehicle"]["parameter_set"] = "rover.yaml"
+    (tmp_path / "sc.yaml").write_text(yaml.safe_dump(sc))
+    return tmp_path / "sc.yaml"
+
+
+def test_a_vehicle_file_based_on_a_named_set_carries_every_source(tmp_path):
+    path = _vehicle_file(tmp_path, "name: my_rover\nbase: frostyboy\nsegment:\n"
+                                   "  mass_kg: {value: 120.0, source: '[field data] weighed 2026-01'}\n"
+                                   "  wheel_radius_m: 0.3\n")
+    sc = load_scenario(path)
+    assert sc.vehicle.segment.mass_kg == 120.0 and sc.vehicle.segment.wheel_radius_m == 0.3
+    src = sc.sources
+    assert src["vehicle.segment.mass_kg"] == "[field data] weighed 2026-01"
+    assert src["vehicle.segment.wheel_radius_m"] == "[user] rover.yaml"
+    assert src["terrain.model.b_tF"] == PARAMETER_SETS["frostyboy"]["terrain_model"]["b_tF"][1]
+    n_values = sum(len(v) for v in PARAMETER_SETS["frostyboy"].values())
+    assert len(src) == n_values
+    # the written scenario.yaml loads back with the same values and sources; summary.json has them
+    res_dir = tmp_path / "out"
+    r = CliRunner().invoke(__import__("snoworm.cli", fromlist=["main"]).main,
+                           ["run", str(path), "--out", str(res_dir), "--no-plot", "--set", "simulation.duration_s=1"])
+    assert r.exit_code == 0, r.output
+    text = (res_dir / "scenario.yaml").read_text()
+    assert "#   vehicle.segment.mass_kg: [field data] weighed 2026-01" in text
+    again = load_scenario(res_dir / "scenario.yaml")
+    assert again.sources == src and again.vehicle.segment == sc.vehicle.segment
+    assert json.loads((res_dir / "summary.json").read_text())["sources"] == src
+
+
+def test_scenario_values_and_sources_notes_are_tagged(tmp_path):
+    sc = load_scenario(SCENARIOS / "tow6_weak_segment.yaml")
+    assert sc.sources["vehicle.segment_overrides.2.torque_limit_Nm"] == "[user] scenario"
+    assert sc.sources["vehicle.segment.mass_kg"] == "[Lines] incl. wheels"
+    noted = sc.with_({"sources": {"vehicle.segment.mass_kg": "[field data] scale"}})
+    assert noted.sources["vehicle.segment.mass_kg"] == "[field data] scale"
+    changed = noted.with_({"vehicle.segment.mass_kg": 95.0})      # the note no longer applies
+    assert changed.sources["vehicle.segment.mass_kg"] == "[user] scenario"
+    with pytest.raises(ScenarioError, match=r"sources.vehicle.segment.mass_kg: a source must start with"):
+        sc.with_({"sources": {"vehicle.segment.mass_kg": "weighed"}})
+
+
+@pytest.mark.parametrize("text, words", [
+    ("segment:\n  mass_kg: 100\n", "missing wheel_radius_m"),                      # no base: every value
+    ("base: frostyboy\nsegment:\n  mas_kg: 100\n", "Did you mean 'mass_kg'"),
+    ("base: frostyboi\n", "base: unknown set"),
+    ("base: frostyboy\nsegment: [1, 2]\n", "expected a mapping"),
+    ("base: frostyboy\nsegment:\n  mass_kg: {value: 1, source: guessed}\n", "a source must start with"),
+    ("base: frostyboy\nsegment:\n  mass_kg: -5\n", "vehicle.segment.mass_kg"),
+    ("- 1\n", "must hold a mapping"),
+    ("base: frostyboy\nwheels: 4\n", "unknown key 'wheels'"),
+])
+def test_bad_vehicle_files_are_bad_input(tmp_path, text, words):
+    path = _vehicle_file(tmp_path, text)
+    with pytest.raises(ScenarioError, match="parameter_set|mass_kg") as err:
+        load_scenario(path)
+    assert words in str(err.value)
+    r = CliRunner().invoke(__import__("snoworm.cli", fromlist=["main"]).main, ["validate", str(path)])
+    assert r.exit_code == 2 and "Traceback" not in r.output
+
+
+def test_a_missing_vehicle_file_names_it(tmp_path):
+    with pytest.raises(ScenarioError, match="vehicle.parameter_set: .*nope.yaml: no such file"):
+        parameter_entries("nope.yaml", tmp_path)

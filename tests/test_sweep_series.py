@@ -20,7 +20,8 @@ def _direct(xt, tow):
 @pytest.mark.parametrize("batch", [0, 4])
 def test_grid_series_in_one_file(tmp_path, batch):
     table = run_sweep(TOW6, SETS, out_dir=tmp_path, plot=False, series="netcdf", batch=batch)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["series.nc", "summary.csv", "sweep.json"]  # no cases/
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".snoworm-manifest.json", "series.nc", "summary.csv",
+                                                                "sweep.json"]  # no cases/
     ds = table.series()
     assert ds["v_mps"].dims == ("terrain.xt", "tow.force_N", "simulation.duration_s", "time", "segment")
     assert ds["force_N"].dims[-1] == "link" and ds["force_N"].attrs["units"] == "N"

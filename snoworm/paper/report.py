@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .._version import __version__
 from ..driver import SolverError
-from ..fileio import atomic_write_text
+from ..fileio import atomic_write_text, output_folder, relocate
 from ..schema import ScenarioError
 from .claims import Context, Section, make_claim
 from .fig3_table2 import item_fig3, item_table2
@@ -86,14 +86,25 @@ def evaluate(items=None, quick=False, model=None, scenario_overrides=None, out_d
     return out
 
 
-def run_paper(out_dir, quick=False, progress=None) -> PaperReport:
+def run_paper(out_dir, quick=False, progress=None, overwrite=False) -> PaperReport:
     """Run every item, write the figures, ``report.md``, ``report.html`` and ``claims.json`` into ``out_dir``.
+
+    All or nothing (:func:`snoworm.fileio.output_folder`): the figures and the report go to a
+    temporary sibling folder that replaces ``out_dir`` when everything is written.
 
     Returns
     -------
     PaperReport
     """
-    out = Path(out_dir)
+    with output_folder(out_dir, overwrite) as out:
+        rep = _run_into(out, quick, progress)
+    rep.paths = relocate(rep.paths, out, out_dir)
+    for sec in rep.sections:
+        sec.figures = relocate(sec.figures, out, out_dir)
+    return rep
+
+
+def _run_into(out: Path, quick, progress) -> PaperReport:
     t0 = time.perf_counter()
     sections = evaluate(None, quick, out_dir=out, progress=progress)
     rep = PaperReport(sections, bool(quick), time.perf_counter() - t0)

@@ -12,7 +12,7 @@ import hashlib
 import json
 import os
 import sys
-import time
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,7 +20,9 @@ import numpy as np
 
 from ..dataset import require_xarray
 from ..results import LINK_COLUMNS, SEGMENT_COLUMNS
-from ..scenario import Scenario, apply_overrides, read_yaml, scenario_from_dict
+from ..scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
+from ..fileio import OutputError, check_output_folder, folder_lock, os_error_message, write_manifest
+from ..progress import Progress
 from ..schema import ScenarioError
 from ..tables import FULL, canonical_json, format_cell
 from .cases import build_cases
@@ -35,47 +37,27 @@ __all__ = ["run_sweep"]
 
 # ---------------------------------------------------------------------------------- progress
 class _Progress:
-    """A one-line progress report on a terminal: cases done, failures, time left."""
+    """Cases done, failures, time left: a bar on a terminal, a line per ~10 % otherwise
+    (:class:`snoworm.progress.Progress`)."""
 
     def __init__(self, total, already, stream, enabled):
-        self.total, self.already, self.stream, self.enabled = total, already, stream, enabled
-        self.done = self.failed = 0
-        self.t0 = time.perf_counter()
-        self._last = 0.0
+        self.already, self.done, self.failed = already, 0, 0
+        self.bar = Progress(total, "sweep", "cases", stream, mode="auto" if enabled else "off")
+        self.bar.value = float(already)
+
+    def _info(self):
+        return f"{self.failed} failed" + (f", {self.already} resumed" if self.already else "")
 
     def update(self, failed: bool, force=False):
         self.done += 1
         self.failed += int(failed)
-        self.show(force)
+        self.bar.set(self.already + self.done, info=self._info())
 
     def show(self, force=False):
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if not force and now - self._last < 0.1 and self.done + self.already < self.total:
-            return
-        self._last = now
-        n = self.already + self.done
-        width = 24
-        fill = int(width * n / max(self.total, 1))
-        el = now - self.t0
-        left = self.total - n
-        eta = f"~{_hms(el / self.done * left)} left" if self.done and left else ("done" if not left else "")
-        skip = f", {self.already} resumed" if self.already else ""
-        self.stream.write(f"\rsweep [{'#' * fill}{'.' * (width - fill)}] {n}/{self.total} cases{skip}, "
-                          f"{self.failed} failed, {_hms(el)} elapsed, {eta}   ")
-        self.stream.flush()
+        self.bar.set(self.already + self.done, info=self._info())
 
     def close(self):
-        if self.enabled:
-            self.show(force=True)
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def _hms(s):
-    s = int(round(s))
-    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60}:{s % 60:02d}"
+        self.bar.close(info=self._info())
 
 
 # ---------------------------------------------------------------------------------- driver
@@ -85,8 +67,7 @@ def _base(scenario):
         return scenario.to_dict(), scenario.name, None
     if isinstance(scenario, dict):
         return scenario, "scenario", None
-    path = Path(scenario)
-    raw = read_yaml(path)
+    raw, path = read_scenario_yaml(scenario)
     return raw, str(path), str(path.resolve().parent)
 
 
@@ -100,7 +81,8 @@ def _definition(raw, axes, zip_):
 
 def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
               save_cases: bool = False, progress=None, plot: bool = True, executor=None,
-              batch: int = 0, series: str = "folders", plot_format: str = "png") -> SweepTable:
+              batch: int = 0, series: str = "folders", plot_format: str = "png",
+              overwrite: bool = False) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
     Parameters
@@ -112,7 +94,9 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         :class:`Axis` objects.  Several axes form a full grid (first axis slowest).
     out_dir : str or Path, optional
         Where ``sweep.json``, ``summary.csv`` and the plot go.  A re-run with the same
-        definition resumes; with another definition it is refused.  None: nothing is written.
+        definition resumes; with another definition it is refused (unless ``overwrite``).  None:
+        nothing is written.  The folder is locked while the sweep runs (a second sweep into it
+        raises :class:`snoworm.fileio.FolderLocked` naming the process holding it).
     jobs : int
         Local worker processes (1: run in this process).
     scheduler : str or distributed.Client, optional
@@ -126,7 +110,7 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         one file ``out_dir/series.nc`` (dims: swept keys x time x segment/link, see
         :mod:`snoworm.sweep.series`; needs xarray).  ``netcdf`` implies ``save_cases``.
     progress : bool, optional
-        Progress line on stderr; default: only when stderr is a terminal.
+        Progress on stderr (default True): a bar on a terminal, one line per ~10 % otherwise.
     plot : bool
         Write ``sweep.png`` (one varying axis, or zipped axes) or ``heatmap.png`` (two).
     plot_format : {"png", "pdf", "svg"}
@@ -137,6 +121,9 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         With ``batch > 1`` (and no scheduler or executor): integrate up to ``batch`` cases of the
         same structure as one stacked system (:class:`~snoworm.sweep.executors.BatchExecutor`, ``jobs``
         processes); other cases run one by one.  Same metrics within the solver tolerance.
+    overwrite : bool
+        Start afresh in a folder holding another sweep (its files are removed), or write into a
+        non-empty folder snoworm did not write.
 
     Returns
     -------
@@ -160,19 +147,53 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
                                 "(or keep the default --series folders).") from None
     plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs)
     out = Path(out_dir) if out_dir is not None else None
-    done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source) \
-        if out is not None else {}
-    if progress is None:
-        progress = sys.stderr.isatty()
-    bar = _Progress(len(plan.cases), len(done), sys.stderr, bool(progress))
+    if out is not None and not (out / "sweep.json").exists():
+        check_output_folder(out, overwrite)
     own = executor is None
-    if own:
+    if own:                         # before anything is written: an unreachable scheduler writes nothing
         executor = _make_executor(scheduler, batch, jobs)
+    try:
+        return _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases and series, overwrite,
+                          plot_format)
+    except OSError as exc:            # writing sweep.json, the manifest or the plot
+        raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
+
+
+def _in_folder(plan, out, executor, own, progress, plot, zip_, keep_series, overwrite, plot_format) -> SweepTable:
+    """Run the sweep with ``out`` (or None) locked and prepared; ``keep_series``: False or the series format."""
+    with ExitStack() as stack:
+        done = {}
+        if out is not None:
+            try:
+                _mkdir(out)
+                stack.enter_context(folder_lock(out))
+                done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source,
+                                   overwrite=overwrite)
+                write_manifest(out, status="running")
+            except BaseException:
+                if own:
+                    executor.close()
+                raise
+        table = _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_format)
+        if out is not None:
+            write_manifest(out, status="complete")
+        return table
+
+
+def _mkdir(out: Path):
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot write results: {os_error_message(exc, out)}") from None
+
+
+def _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_format) -> SweepTable:
+    bar = _Progress(len(plan.cases), len(done), sys.stderr, progress is None or bool(progress))
     rows = dict(done)
     todo = [c for c in plan.cases if c.index not in done]
-    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, save_cases and series)
+    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, keep_series)
     table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys, out_dir=out)
-    if series == "netcdf":
+    if keep_series == "netcdf":
         combine_series(out, plan.axes, plan.cases, zip_, {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS},
                        {"scenario": plan.source, "sweep_definition": json.dumps(plan.definition)})
     if out is not None and plot:
@@ -266,8 +287,13 @@ class _Recorder:
             row[f"final_link_force_{j}_N"] = links[j] if j < len(links) else None
         row["wall_time_s"] = result.get("wall_time_s")
         if self.fd is not None:
-            os.write(self.fd, self.table.csv_line(row).encode("utf-8"))
-            os.fsync(self.fd)
+            try:
+                os.write(self.fd, self.table.csv_line(row).encode("utf-8"))
+                os.fsync(self.fd)
+            except OSError as exc:
+                raise OutputError(f"cannot append to the summary: {os_error_message(exc, self.path)}; the "
+                                  f"{len(self.rows)} finished cases are kept, re-run the same command to "
+                                  "resume.") from None
         self.rows[c.index] = row
         self.bar.update(row["status"] != "ok")
 
@@ -306,7 +332,7 @@ def _run_cases(plan: _Plan, todo, executor, rec: _Recorder, out, keep_series):
                 rec.record(c, {"status": "invalid", "error": plan.invalid[c.index], "wall_time_s": 0.0})
         for result in executor.map_unordered(run_case, _tasks(plan, todo, out, keep_series)):
             rec.record(by_index[result["index"]], result)
-    except (KeyboardInterrupt, ScenarioError):
+    except (KeyboardInterrupt, ScenarioError, OutputError):
         raise
     except Exception as exc:  # the executor itself failed (a worker died, the cluster went away)
         n = len(rec.rows)

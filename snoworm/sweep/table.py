@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
 from pathlib import Path
 
 import yaml
 
 from .._version import __version__
 from ..dataset import require_pandas
-from ..fileio import atomic_write_text
+from ..fileio import MANIFEST, atomic_write_text, folder_state, read_manifest
 from ..schema import ScenarioError
 from ..tables import FULL, csv_line, csv_text, write_csv
 from .metrics import METRIC_COLUMNS
@@ -173,10 +174,34 @@ def read_summary(path: Path, keys=None):
     return header, rows, dropped
 
 
-def prepare_dir(out: Path, definition, columns, cases, axes, source) -> dict:
-    """Create or check ``out``; return the rows already finished, by case index."""
+def _clear(out: Path):
+    """Remove an earlier snoworm folder's files (its manifest's, a sweep's files and case folders)."""
+    man = read_manifest(out) or {}
+    names = set(man.get("files", [])) | {"summary.csv", "sweep.json", "sweep.png", "heatmap.png", MANIFEST}
+    for rel in names:
+        p = out / rel
+        if isinstance(rel, str) and ".." not in Path(rel).parts and p.is_file():
+            p.unlink()
+    shutil.rmtree(out / "cases", ignore_errors=True)
+
+
+def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: bool = False) -> dict:
+    """Create or check ``out``; return the rows already finished, by case index.
+
+    A folder written by another snoworm command is cleared first; one holding another sweep is
+    refused, or cleared if ``overwrite``.
+    """
     out.mkdir(parents=True, exist_ok=True)
     spath, dpath = out / "summary.csv", out / "sweep.json"
+    if not dpath.exists() and folder_state(out) == "snoworm":
+        _clear(out)
+    if dpath.exists() and overwrite:
+        try:
+            same = json.loads(dpath.read_text(encoding="utf-8")).get("definition") == definition
+        except (OSError, ValueError, AttributeError):
+            same = False
+        if not same:
+            _clear(out)
     if dpath.exists():
         try:
             old = json.loads(dpath.read_text(encoding="utf-8"))
@@ -185,8 +210,8 @@ def prepare_dir(out: Path, definition, columns, cases, axes, source) -> dict:
         if old.get("definition") != definition:
             what = [k for k in definition if old.get("definition", {}).get(k) != definition[k]]
             raise ScenarioError(f"{out} holds another sweep (its {', '.join(what) or 'definition'} differs from "
-                                f"this one, see {dpath}). Re-run the original command to resume it, or give a "
-                                "new --out directory.")
+                                f"this one, see {dpath}). Re-run the original command to resume it, give a "
+                                "new --out directory, or pass --overwrite to replace it.")
     elif spath.exists():
         raise ScenarioError(f"{spath} exists but {dpath} does not, so the sweep it belongs to is unknown. "
                             "Give a new --out directory (or delete the old one).")
