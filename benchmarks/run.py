@@ -3,7 +3,7 @@
 Usage (from the repository root)::
 
     python benchmarks/run.py                 # full run, ~3-5 minutes on 2 cores
-    python benchmarks/run.py --quick         # smaller sweeps and fewer repeats, ~1 minute
+    python benchmarks/run.py --quick         # smaller sweeps, fewer repeats, whole processes once: ~2-3 minutes
     python benchmarks/run.py --out benchmarks/results.json
 
 Prints a table with every measurement and PASS/MISS against the targets, and writes the same
@@ -33,7 +33,7 @@ from snoworm.sweep import run_sweep  # noqa: E402
 
 SC = ROOT / "scenarios"
 TARGETS = {
-    "tow6_uniform_rtf": (">=", 200.0, "tow6_uniform real-time factor"),
+    "tow6_uniform_rtf": (">=", 400.0, "tow6_uniform real-time factor"),
     "inchworm6_rtf": (">=", 50.0, "inchworm6 real-time factor"),
     "steady_rel_err": ("<=", 1e-3, "steady states vs tight reference (max rel. error)"),
     "rhs_n48_over_n6": ("<=", 2.0, "RHS cost N=48 / N=6"),
@@ -43,6 +43,15 @@ TARGETS = {
     "sweep10k_peak_MB": ("<", 500.0, "10,000-case sweep peak memory [MB]"),
     "controller_tow6_rtf": (">=", 20.0, "tow6 20 s, 50 Hz Python controller real-time factor"),
     "simulator_step_rtf": (">=", 10.0, "Simulator.step dt = 10 ms (tow6, 20 s) real-time factor"),
+    "paper_s": ("<=", 8.0, "`snoworm paper` whole process [s]"),
+    "mobility_map_s": ("<=", 8.0, "`snoworm mobility-map` traverse_patch 9 x 3, -j 2, whole process [s]"),
+}
+
+#: Whole-process commands timed by :func:`bench_processes` (``{out}``: a fresh temporary directory).
+PROCESSES = {
+    "paper_s": ["paper", "--out", "{out}"],
+    "mobility_map_s": ["mobility-map", str(SC / "traverse_patch.yaml"), "--xt", "0.2:1.0:9", "--tow", "0,100,200",
+                       "-j", "2", "--out", "{out}"],
 }
 
 
@@ -89,7 +98,8 @@ def bench_scenarios(repeats, report):
     for name in ("tow6_uniform", "inchworm6", "frostyboy_case3"):
         sc = load_scenario(SC / f"{name}.yaml")
         res, wall = run_timed(sc, repeats if name != "inchworm6" else max(1, repeats - 1))
-        ref = simulate(load_scenario(SC / f"{name}.yaml", [("simulation.rtol", 1e-9), ("simulation.atol_scale", 1e-3)]))
+        ref = simulate(load_scenario(SC / f"{name}.yaml", [("simulation.rtol", 1e-9), ("simulation.atol_scale", 1e-3),
+                                                           ("simulation.method", "LSODA")]))
         q, qr = steady_quantities(res), steady_quantities(ref)
         errs = {k: rel_err(q[k], qr[k]) for k in q}
         rows[name] = {"duration_s": sc.simulation.duration_s, "wall_s": wall, "rtf": sc.simulation.duration_s / wall,
@@ -98,6 +108,16 @@ def bench_scenarios(repeats, report):
         report(f"  {name:16s} RTF {rows[name]['rtf']:7.1f}x  wall {wall:6.3f} s  nfev {res.stats['nfev']:6d}  "
                f"njev {res.stats['njev']:5d}  RHS {rows[name]['rhs_us']:6.1f} us  "
                f"max rel. err vs rtol 1e-9: {max(errs.values()):.2e} ({', '.join(f'{k} {v:.1e}' for k, v in errs.items())})")
+    # the same run on the previous solver settings (LSODA, rtol 1e-4, atol_scale 10), for the ratio
+    sc = load_scenario(SC / "inchworm6.yaml", [("simulation.method", "LSODA"), ("simulation.rtol", 1e-4),
+                                               ("simulation.atol_scale", 10)])
+    res, wall = run_timed(sc, max(1, repeats - 1))
+    rows["inchworm6 (LSODA)"] = {"duration_s": sc.simulation.duration_s, "wall_s": wall,
+                                 "rtf": sc.simulation.duration_s / wall, "nfev": res.stats["nfev"],
+                                 "njev": res.stats["njev"]}
+    report(f"  inchworm6 on LSODA (rtol 1e-4, atol_scale 10, the previous settings): RTF {sc.simulation.duration_s / wall:.1f}x  "
+           f"wall {wall:6.3f} s  nfev {res.stats['nfev']}  njev {res.stats['njev']}  -> VODE is "
+           f"{wall / rows['inchworm6']['wall_s']:.2f}x faster in this run")
     return rows
 
 
@@ -179,6 +199,24 @@ def bench_memory(n_a, n_b, report):
     return out
 
 
+def bench_processes(repeats, report):
+    """Wall time of whole ``snoworm`` processes (start-up, imports, runs, files), best of ``repeats``."""
+    import tempfile
+    out = {}
+    for key, args in PROCESSES.items():
+        best = np.inf
+        for _ in range(repeats):
+            with tempfile.TemporaryDirectory() as tmp:
+                cmd = [str(Path(sys.executable).parent / "snoworm")] + [a.format(out=tmp) for a in args]
+                t0 = time.perf_counter()
+                subprocess.run(cmd, check=True, capture_output=True, cwd=ROOT)
+                best = min(best, time.perf_counter() - t0)
+        out[key] = best
+        report(f"  snoworm {' '.join(args[:1] + [a for a in args[1:] if not a.startswith('/') and a != '{out}' and a != '--out'])}: "
+               f"{best:6.2f} s")
+    return out
+
+
 def bench_controllers(repeats, report):
     """Issue 14: a scenario driven by a Python controller, and the step-by-step Simulator."""
     out = {}
@@ -188,7 +226,8 @@ def bench_controllers(repeats, report):
                               "intervals": res.stats["intervals"]}
     report(f"  tow6 20 s, 50 Hz Python controller: RTF {out['controller_tow6']['rtf']:6.1f}x  wall {wall:6.3f} s  "
            f"nfev {res.stats['nfev']}  intervals {res.stats['intervals']}")
-    base = load_scenario(SC / "tow6_uniform.yaml")
+    # on VODE, which the Simulator keeps across steps (no restart per step; LSODA restarts every step)
+    base = load_scenario(SC / "tow6_uniform.yaml", [("simulation.method", "VODE")])
     best = np.inf
     for _ in range(repeats):
         sim = Simulator(base)
@@ -290,6 +329,8 @@ def main(argv=None):
     res["sweep"] = bench_sweep(*((8, 5, 5) if args.quick else (20, 10, 5)), report)
     report("Sweep memory (frostyboy_case3 over terrain.xt x mode.speed_mps, batched 500, child process):")
     res["memory"] = bench_memory(*((40, 25) if args.quick else (100, 100)), report)
+    report("Whole processes (best of %d):" % (1 if args.quick else 2))
+    res["processes"] = bench_processes(1 if args.quick else 2, report)
     report("Controllers (issue 14: solver restarted at every control period / step):")
     res["controllers"] = bench_controllers(repeats, report)
     report("Start-up (issue 16: whole processes against their import floors, interleaved, best of "
@@ -300,7 +341,7 @@ def main(argv=None):
     values = {
         "tow6_uniform_rtf": sc["tow6_uniform"]["rtf"],
         "inchworm6_rtf": sc["inchworm6"]["rtf"],
-        "steady_rel_err": max(max(r["rel_err_vs_tight"].values()) for r in sc.values()),
+        "steady_rel_err": max(max(r["rel_err_vs_tight"].values()) for r in sc.values() if "rel_err_vs_tight" in r),
         "rhs_n48_over_n6": res["scaling"][48]["rhs_us"] / res["scaling"][6]["rhs_us"],
         "sweep_2proc_speedup": res["sweep"]["2 processes"]["speedup"],
         # the batched path on the machine's cores: stacked chunks in one process or in two
@@ -308,6 +349,7 @@ def main(argv=None):
                                      res["sweep"]["batched, 2 processes"]["speedup"]),
         "batched_rel_err": res["sweep"]["batched_rel_err"],
         "sweep10k_peak_MB": res["memory"]["peak_MB"],
+        **res["processes"],
         "controller_tow6_rtf": res["controllers"]["controller_tow6"]["rtf"],
         "simulator_step_rtf": res["controllers"]["simulator_step"]["rtf"],
     }

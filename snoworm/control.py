@@ -17,7 +17,7 @@ __all__ = ["K_LENGTH", "speed_pi", "direct_torque", "link_force_pi", "servo_gain
 K_LENGTH = 20.0
 
 
-def speed_pi(omega_ref, omega, integral_Nm, kp, ki, T_lo, T_hi, on):
+def speed_pi(omega_ref, omega, integral_Nm, kp, ki, T_lo, T_hi, on, ki_over_kp=None):
     """Wheel-speed PI controller with back-calculation anti-windup.
 
     ``u = kp (w_ref - w) + I``; the applied torque is ``u`` clipped to the motor envelope, and
@@ -38,8 +38,10 @@ def speed_pi(omega_ref, omega, integral_Nm, kp, ki, T_lo, T_hi, on):
         Integral gain [N m/rad].
     T_lo, T_hi : array_like
         Motor envelope (:func:`snoworm.drivetrain.motor_envelope`).
-    on : array_like
-        1 where the motor runs, 0 where it is off.
+    on : array_like or None
+        1 where the motor runs, 0 where it is off; None: every motor runs (no masking).
+    ki_over_kp : array_like, optional
+        ``ki / kp`` precomputed (the chain kernel passes it; computed here if omitted).
 
     Returns
     -------
@@ -49,7 +51,9 @@ def speed_pi(omega_ref, omega, integral_Nm, kp, ki, T_lo, T_hi, on):
     e = omega_ref - omega
     u = kp * e + integral_Nm
     T = np.minimum(np.maximum(u, T_lo), T_hi)
-    dI = ki * e + (ki / kp) * (T - u)
+    dI = ki * e + (ki / kp if ki_over_kp is None else ki_over_kp) * (T - u)
+    if on is None:
+        return T, dI
     return T * on, dI * on
 
 

@@ -20,6 +20,7 @@ from .controls import Controls
 from .dynamics import ChainModel
 from .modes import mode_class
 from .results import Result
+from .stepper import VodeStepper
 
 __all__ = ["SolverError", "Case", "assemble", "simulate", "simulate_batch", "batch_key", "BatchMember",
            "solver_options", "output_grid", "ATOL", "solve_interval"]
@@ -61,7 +62,7 @@ def solver_options(model: ChainModel, sim, method=None) -> dict:
     opts = {"method": method, "rtol": sim.rtol, "atol": model.layout.per_state(ATOL) * sim.atol_scale}
     if sim.max_step_s is not None:
         opts["max_step"] = sim.max_step_s
-    if method == "LSODA":
+    if method in ("LSODA", "VODE"):
         opts["lband"], opts["uband"] = model.bandwidths()
         opts["jac"] = model.jacobian_banded
     elif method in ("BDF", "Radau"):
@@ -79,8 +80,38 @@ def output_grid(t0, t1, dt, include_start):
 
 
 def _fallbacks(method):
-    """The configured method first, then the implicit methods not yet tried."""
-    return [method] + [m for m in ("BDF", "Radau") if m != method]
+    """The configured method first, then the implicit methods not yet tried (VODE: LSODA first)."""
+    first = [method, "LSODA"] if method == "VODE" else [method]
+    return first + [m for m in ("BDF", "Radau") if m != method]
+
+
+def _vode_interval(model, ctl, t, t1, y, events, t_eval, opts):
+    """One interval on the run's :class:`~snoworm.stepper.VodeStepper` (kept in ``opts``), restarted at ``t``.
+
+    With ``opts["continue"]`` true (a caller that steps a run period by period, such as
+    :class:`~snoworm.simulator.Simulator`), the stepper is not restarted where the previous
+    interval ended at its end time exactly at ``(t, y)``: its history carries on across the change
+    of controls (the stepper restarts by itself if VODE then fails).
+
+    Returns ``(ts, ys, t_next, y_next, which, counts)`` like :func:`_solve_interval`, plus the
+    solver work of this interval.
+    """
+    st = opts.get("VODE stepper")
+    if st is None:
+        o = opts["VODE"]
+        st = opts["VODE stepper"] = VodeStepper(model.rhs, model.jacobian_banded, model.n_states, rtol=o["rtol"],
+                                                atol=o["atol"], lband=o["lband"], uband=o["uband"],
+                                                max_step=o.get("max_step"))
+    before = (st.nfev, st.njev, st.nlu)
+    events = [_with_controls(ev, ctl) for ev in events or ()]
+    st.ctl = ctl
+    if not (opts.get("continue") and st.t == t and np.array_equal(st.y, y)):
+        st.restart(t, y)            # else: carry the history across the change of controls
+    try:
+        ts, ys, t_next, y_next, which = st.advance(t1, events, t_eval)
+    finally:
+        counts = {"nfev": st.nfev - before[0], "njev": st.njev - before[1], "nlu": st.nlu - before[2]}
+    return ts, ys, t_next, y_next, which, counts
 
 
 def _terminal(ev):
@@ -88,6 +119,18 @@ def _terminal(ev):
     def f(t, y, _ctl):
         return ev(t, y)
     f.terminal = True
+    f.direction = getattr(ev, "direction", 0)
+    f.mode_event = ev
+    return f
+
+
+def _with_controls(ev, ctl):
+    """A solve_ivp event ``ev(t, y, ctl)`` as ``ev(t, y)`` with the same direction (for the stepper);
+    the mode's own event where ``ev`` wraps one (:func:`_terminal`)."""
+    if hasattr(ev, "mode_event"):
+        return ev.mode_event
+    def f(t, y):
+        return ev(t, y, ctl)
     f.direction = getattr(ev, "direction", 0)
     return f
 
@@ -99,8 +142,23 @@ def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opt
     """
     sol, failures = None, []
     for method in _fallbacks(sim.method):
+        if method == "VODE" and model.n_batch > 1:
+            continue                # stacked members: LSODA's max-norm error test (see simulate_batch)
         if method not in opts:
             opts[method] = solver_options(model, sim, method)
+        if method == "VODE":
+            try:
+                ts, ys, t_next, y_next, which, counts = _vode_interval(model, ctl, t, t1, y, events, t_eval, opts)
+            except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                failures.append(f"VODE: {exc}")
+                continue
+            for k in ("nfev", "njev", "nlu"):
+                stats[k] += counts[k]
+            if np.all(np.isfinite(ys)):
+                _count_interval(stats, failures)
+                return ts, ys, t_next, y_next.copy(), which
+            failures.append(f"VODE: non-finite state (near t = {t_next:.6g} s)")
+            continue
         try:
             sol = solve_ivp(model.rhs, (t, t1), y, t_eval=t_eval, events=events or None, args=(ctl,),
                             **opts[method])
@@ -121,9 +179,7 @@ def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opt
     if sol is None:
         raise SolverError(f"every method failed at t = {t:.6g} s in interval '{label}': "
                           + "; ".join(failures) + ". Try a smaller simulation.rtol or max_step_s.")
-    if failures:                    # the interval succeeded after this many failed methods
-        stats["retries"] = stats.get("retries", 0) + len(failures)
-    stats["intervals"] += 1
+    _count_interval(stats, failures)
     ts = np.asarray(sol.t, float)
     ys = np.asarray(sol.y, float).T if ts.size else np.empty((0, y.size))
     if sol.status != 1:
@@ -132,6 +188,12 @@ def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opt
     y_hit = sol.y_events[which][0]
     keep = ts < t_hit
     return np.append(ts[keep], t_hit), np.vstack([ys[keep], y_hit]), float(t_hit), y_hit.copy(), which
+
+
+def _count_interval(stats, failures):
+    if failures:                    # the interval succeeded after this many failed methods
+        stats["retries"] = stats.get("retries", 0) + len(failures)
+    stats["intervals"] += 1
 
 
 def solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts):
@@ -183,7 +245,7 @@ def _integrate(model, modes, sim, name, progress=None):
     y = np.concatenate([md.initial_state() for md in modes])
     pieces, phases = [[] for _ in range(B)], []
     stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0}
-    stuck, opts = 0, {}
+    stuck, opts = 0, {"continue": all(getattr(md, "continue_solver", False) for md in modes)}
     while t < T - 1e-12:
         ys_b = y.reshape(B, -1)
         ivs = [md.interval(t, ys_b[b]) for b, md in enumerate(modes)]

@@ -213,8 +213,8 @@ class ChainModel:
         self.wheels_per_axle = seg.wheels_per_axle.astype(float)
         self._R = col(seg.wheel_radius_m)
         self._J = col(seg.wheel_inertia_kgm2)
-        self._kp = col(seg.speed_kp_Nms_per_rad)
-        self._ki = col(seg.speed_ki_Nm_per_rad)
+        self._kp, self._ki = col(seg.speed_kp_Nms_per_rad), col(seg.speed_ki_Nm_per_rad)
+        self._ki_kp = self._ki / self._kp         # precomputed for control.speed_pi (same value)
         self._slope = col(seg.motor_slope_Nms_per_rad)
         self._wnl = col(seg.no_load_speed_radps)
         self._Tmax = col(seg.torque_limit_Nm)
@@ -260,8 +260,9 @@ class ChainModel:
         cached, d = self._ctl_cache
         if cached is ctl:
             return d
-        d = {"on": np.asarray(ctl.motor_on, float)[..., None],
-             "w_ref": (ctl.speed_sp_mps / self.seg.wheel_radius_m)[..., None],
+        on = np.asarray(ctl.motor_on, float)[..., None]       # on_mask None: all on, no masking (same result)
+        d = {"on": on, "w_ref": (ctl.speed_sp_mps / self.seg.wheel_radius_m)[..., None],
+             "on_mask": None if np.all(on == 1.0) else on,
              "torque": (np.asarray(ctl.torque_active) > 0)[..., None] if np.any(ctl.torque_active) else None,
              "torque_cmd": np.asarray(ctl.torque_cmd_Nm, float)[..., None]}
         if self.has_joints and self.n > 1:
@@ -388,7 +389,7 @@ class ChainModel:
         else:
             w_ref = cd["w_ref"]
         T_lo, T_hi = drivetrain.motor_envelope(w, self._slope, self._wnl, self._Tmax)
-        Tm, dI = control.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on"])
+        Tm, dI = control.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on_mask"], self._ki_kp)
         if cd["torque"] is not None:           # direct torque commands (a controller's wheel_torque_Nm)
             Tm, dI = control.direct_torque(cd["torque_cmd"], T_lo, T_hi, cd["torque"], Tm, dI)
         reaction = terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)

@@ -255,7 +255,8 @@ class SimulationConfig(Config):
     _section = "simulation"
     duration_s: float = field(gt=0, unit="s", doc="simulated time")
     output_dt_s: float = field(0.05, gt=0, unit="s", doc="output sampling interval")
-    method: str = field("LSODA", choices=("LSODA", "BDF", "Radau", "RK45", "DOP853"), doc="solve_ivp method")
+    method: str = field("LSODA", choices=("LSODA", "VODE", "BDF", "Radau", "RK45", "DOP853"),
+                        doc="solve_ivp method; VODE: ODEPACK VODE (BDF) stepped by snoworm.stepper (inching gaits)")
     rtol: float = field(1e-5, gt=0, lt=1, doc="relative tolerance")
     atol_scale: float = field(1.0, gt=0, doc="multiplies the per-component absolute tolerances")
     max_step_s: Optional[float] = field(None, gt=0, unit="s", doc="largest solver step (none: unlimited)")

@@ -60,7 +60,7 @@ class Simulator:
         self.commands = CommandState(self.model)
         self._pieces, self._phases = [], []
         self._stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "wall_time_s": 0.0}
-        self._opts = {}
+        self._opts = {"continue": True}     # VODE (simulation.method) carries its history across steps
         self.last_step = None
         return self.observation()
 

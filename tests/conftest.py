@@ -1,4 +1,5 @@
 """Shared test helpers."""
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,13 @@ from snoworm.scenario import apply_overrides, read_yaml, scenario_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
+
+
+@functools.lru_cache(maxsize=None)
+def shipped_result(name):
+    """A shipped scenario run once per test session at its own settings (shared by the
+    reference, tight-reference and solver-budget tests; callers must not modify it)."""
+    return simulate(load_scenario(SCENARIOS / f"{name}.yaml"))
 
 
 @pytest.fixture

@@ -11,8 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from snoworm import load_scenario, simulate
-from tests.conftest import SCENARIOS
+from tests.conftest import SCENARIOS, shipped_result
 
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_summaries.json").read_text())
 SHIPPED = sorted(p.stem for p in SCENARIOS.glob("*.yaml"))
@@ -40,7 +39,7 @@ def test_every_shipped_scenario_has_a_reference():
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in SHIPPED])
 def test_summary_matches_reference(name):
     ref = REFERENCE[name]
-    got = summary_of(simulate(load_scenario(SCENARIOS / f"{name}.yaml")))
+    got = summary_of(shipped_result(name))
     for key in EXACT:
         assert got[key] == ref[key], f"{name}: {key} {got[key]} != reference {ref[key]}"
     for key in FLOATS:

@@ -58,6 +58,11 @@ class Mode:
         The ``mode.type`` this mode answers to.
     config_class : type
         Its :class:`~snoworm.sections.ModeConfig` subclass.
+    continue_solver : bool
+        Whether the solver may carry its history across the boundary between two intervals
+        that meet at an interval's end time (``simulation.method: VODE`` only; default False:
+        it restarts at every interval start).  Worth it where intervals are short control
+        periods, as in the ``controller`` mode.
 
     Parameters
     ----------
@@ -81,6 +86,7 @@ class Mode:
 
     name = ""
     config_class = ModeConfig
+    continue_solver = False
 
     def __init__(self, cfg, scenario, model):
         self.cfg = cfg

@@ -152,6 +152,7 @@ class ControllerMode(Mode):
 
     name = "controller"
     config_class = ControllerConfig
+    continue_solver = True          # short periods: VODE keeps its history across them
 
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)
