@@ -244,9 +244,9 @@ def bench_controllers(repeats, report):
 # ---------------------------------------------------------------- start-up (issue 16): whole processes
 #: whole-process ratio targets: command / its import floor, both timed in the same run
 STARTUP_TARGETS = {
-    "startup_help_ratio": ("<=", 1.3, "`snoworm --help` / `import numpy, yaml, click`"),
-    "startup_run_ratio": ("<=", 1.2, "`snoworm run tow6_uniform --no-plot` / `import scipy.integrate`"),
-    "startup_run_plots_ratio": ("<=", 1.4, "the same with plots / `import scipy.integrate, matplotlib.pyplot`"),
+    "startup_help_ratio": ("<=", 1.3, "`snoworm --help` / import numpy, yaml, click"),
+    "startup_run_ratio": ("<=", 1.2, "`snoworm run --no-plot` / import scipy.integrate"),
+    "startup_run_plots_ratio": ("<=", 1.4, "`snoworm run` with plots / + matplotlib.pyplot"),
 }
 TARGETS.update(STARTUP_TARGETS)
 
