@@ -60,7 +60,7 @@ if TYPE_CHECKING:  # for type checkers and editors; at run time the names come f
 def __getattr__(name: str):
     """Import a public name's module on first access (``snoworm.simulate``, ``from snoworm import
     Result``) and keep the name, so later lookups are plain attribute reads."""
-    if name == "modes":         # the mode registry (registers the built-in modes when imported)
+    if name == "modes":         # the modes package (its registries import a built-in mode when looked up)
         return importlib.import_module(".modes", __name__)
     try:
         module = _EXPORTS[name]
