@@ -34,6 +34,9 @@ def handle_errors(fn):
             _fail(str(exc), EXIT_INPUT)
         except SolverError as exc:
             _fail(f"solver failure: {exc}", EXIT_SOLVER)
+        except RecursionError:  # a structure nested beyond Python's stack: bad input, not a bug
+            _fail("the input is nested too deeply to read (a scenario needs only a few levels); flatten it.",
+                  EXIT_INPUT)
         except BrokenPipeError:  # output piped into e.g. `head`: not an error of ours
             sys.stderr.close()
             sys.exit(0)
@@ -45,6 +48,14 @@ def handle_errors(fn):
             _fail(f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
                   "rerun with SNOWORM_DEBUG=1 for the traceback and report it.", EXIT_SOLVER)
     return wrapper
+
+
+def _check_out(ctx, param, value):
+    """``--out`` must name a directory: an empty path would write into the current folder."""
+    if value is not None and not str(value).strip():
+        raise click.BadParameter("must name a directory, got an empty path (it would write into the current "
+                                 "folder). Give e.g. --out results/.")
+    return value
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -64,7 +75,7 @@ set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
 
 @main.command()
 @click.argument("scenario", type=click.Path(dir_okay=False))
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for segments.csv, links.csv, summary.json, scenario.yaml and the plots.")
 @set_option
 @click.option("--no-plot", is_flag=True, help="Skip the PNG plots.")
@@ -115,7 +126,7 @@ model_file_option = click.option("--model-file", type=click.Path(dir_okay=False)
 @main.command()
 @click.option("--data", "data_path", type=click.Path(dir_okay=False), default=None,
               help="Field-data CSV (default: the shipped FrostyBoy 2020 data, paper Table 2).")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for table2.csv and table2.png.")
 @param_set_option
 @model_file_option
@@ -137,7 +148,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot):
 @main.command("terrain-curves")
 @click.option("--xt", "xts", type=float, multiple=True, required=True,
               help="Terrain coefficient X_t (repeatable), e.g. --xt 1 --xt 0.5 for paper Figure 3.")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for terrain_curves.csv and terrain_curves.png.")
 @param_set_option
 @model_file_option
@@ -164,7 +175,7 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
 @click.option("--fit", "fit", multiple=True, required=True, metavar="NAME",
               help="Parameter to fit (repeatable): b_tF, b_trF, A, peak_exponent_d, tau0, tau1, "
                    "or xt (fits every case's X_t).")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for terrain_model.yaml and calibration.json.")
 @param_set_option
 @click.option("--model-file", type=click.Path(dir_okay=False), default=None,
@@ -196,7 +207,7 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
               help="A swept scenario key and its values: a list (tow.force_N=0,100,200) or an inclusive "
                    "range START:STOP:COUNT (terrain.xt=0.3:1.0:15 gives 15 values). Repeat for a grid "
                    "(first key slowest); a single value just overrides the key.")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for sweep.json, summary.csv and sweep.png / heatmap.png. Re-running the same "
                    "command resumes an interrupted sweep there.")
 @click.option("-j", "--jobs", default=1, show_default=True, type=click.IntRange(min=1),
@@ -258,7 +269,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, b
 @click.option("--xt", "xt_spec", default="0.2:1.0:9", show_default=True,
               help="Terrain coefficients: START:STOP:COUNT or a comma-separated list.")
 @click.option("--tow", "tow_spec", default="0", show_default=True, help="Tow forces [N], comma-separated.")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for mobility_map.csv and mobility_map.png.")
 @set_option
 @click.option("--rolling-speed", "rolling_speed_mps", type=float, default=None,
@@ -288,7 +299,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
 # ---------------------------------------------------------------- paper reproduction (snoworm/paper/)
 
 @main.command()
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for the figures, report.md, report.html (self-contained) and claims.json.")
 @click.option("--quick", is_flag=True,
               help="Shorter inchworm runs (10 s simulated instead of 30 s) for CI; every figure's claims are "

@@ -17,8 +17,8 @@ import yaml
 from . import yamlio
 from .dynamics import ChainModel
 from .params import PARAMETER_SETS, parameter_set
-from .schema import Config, ScenarioError, build, dump, field, suggest
-from .sections import (LinkConfig, ModeConfig, PatchConfig, RandomTerrainConfig, SegmentConfig,
+from .schema import Config, ScenarioError, build, dump, field, quote, suggest
+from .sections import (MAX_OUTPUT_SAMPLES, LinkConfig, ModeConfig, PatchConfig, RandomTerrainConfig, SegmentConfig,
                        SimulationConfig, TerrainConfig, TerrainModelConfig, TowConfig, VehicleConfig)
 
 __all__ = [
@@ -44,12 +44,15 @@ def build_mode_config(raw, path="mode") -> ModeConfig:
     """Validate a ``mode`` mapping against the config class registered for its ``type``."""
     reg = MODE_CONFIGS
     if not isinstance(raw, dict):
-        raise ScenarioError(f"{path}: expected a mapping with a 'type' key ({', '.join(reg)}), got {raw!r}.")
+        raise ScenarioError(f"{path}: expected a mapping with a 'type' key ({', '.join(reg)}), got {quote(raw)}.")
     kind = raw.get("type")
     if kind is None:
         raise ScenarioError(f"{path}.type: is required but missing. Choose one of: {', '.join(reg)}.")
+    if not isinstance(kind, str):
+        raise ScenarioError(f"{path}.type: expected the name of a mode ({', '.join(reg)}), got "
+                            f"{type(kind).__name__} {quote(kind)}.")
     if kind not in reg:
-        raise ScenarioError(f"{path}.type: unknown mode {kind!r}.{suggest(kind, reg)} Known modes: {', '.join(reg)}.")
+        raise ScenarioError(f"{path}.type: unknown mode {quote(kind)}.{suggest(kind, reg)} Known modes: {', '.join(reg)}.")
     return build(reg[kind], raw, path)
 
 
@@ -76,6 +79,12 @@ class Scenario(Config):
         if not isinstance(mode, ModeConfig):
             mode = build_mode_config(mode)
             object.__setattr__(self, "mode", mode)
+        sim = self.simulation
+        n_out = (sim.duration_s / sim.output_dt_s + 1) * self.vehicle.segments
+        if n_out > MAX_OUTPUT_SAMPLES:
+            raise ScenarioError(f"simulation.output_dt_s: {sim.duration_s:g} s sampled every {sim.output_dt_s:g} s "
+                                f"for {self.vehicle.segments} segments gives {n_out:.3g} output samples, over the "
+                                f"{MAX_OUTPUT_SAMPLES:.0e} allowed (memory). Raise output_dt_s or shorten duration_s.")
         mode.check_vehicle(self.vehicle, "mode")
         mode.check_scenario(self, "mode")      # checks needing terrain and tow (e.g. force control)
 
@@ -100,8 +109,9 @@ class Scenario(Config):
         for key in ("xt", "profile", "patches", "random"):
             if t[key] is None:
                 t.pop(key)
-        if data["simulation"]["max_step_s"] is None:
-            data["simulation"].pop("max_step_s")
+        for key in ("max_step_s", "max_wall_s"):
+            if data["simulation"][key] is None:
+                data["simulation"].pop(key)
         return data
 
     def with_(self, changes=None, **kw) -> "Scenario":
@@ -132,7 +142,7 @@ def read_model_file(mfile, base_dir):
     a relative path is taken relative to the scenario file.
     """
     if not isinstance(mfile, str):
-        raise ScenarioError(f"terrain.model_file: expected a file path, got {mfile!r}.")
+        raise ScenarioError(f"terrain.model_file: expected a file path, got {quote(mfile)}.")
     path = Path(mfile)
     if not path.is_absolute() and base_dir is not None:
         path = Path(base_dir) / path
@@ -169,13 +179,16 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
                                 "(see scenarios/tow6_uniform.yaml for an example).")
     veh = raw["vehicle"]
     if not isinstance(veh, dict):
-        raise ScenarioError(f"vehicle: expected a mapping, got {veh!r}.")
+        raise ScenarioError(f"vehicle: expected a mapping, got {quote(veh)}.")
     ps_name = veh.get("parameter_set")
     if ps_name is None:
         raise ScenarioError("vehicle.parameter_set: is required but missing. Name the set of physical values "
                             f"to start from, one of: {', '.join(PARAMETER_SETS)}.")
+    if not isinstance(ps_name, str):
+        raise ScenarioError(f"vehicle.parameter_set: expected the name of a set ({', '.join(PARAMETER_SETS)}), got "
+                            f"{type(ps_name).__name__} {quote(ps_name)}.")
     if ps_name not in PARAMETER_SETS:
-        raise ScenarioError(f"vehicle.parameter_set: unknown set {ps_name!r}.{suggest(ps_name, PARAMETER_SETS)} "
+        raise ScenarioError(f"vehicle.parameter_set: unknown set {quote(ps_name)}.{suggest(ps_name, PARAMETER_SETS)} "
                             f"Known sets: {', '.join(PARAMETER_SETS)}.")
     ps = parameter_set(ps_name)
     veh["segment"] = _merge(ps["segment"], veh.get("segment", {}))
@@ -193,18 +206,18 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
 
 def _text(v, path):
     if not isinstance(v, str):
-        raise ScenarioError(f"{path}: expected text, got {v!r}.")
+        raise ScenarioError(f"{path}: expected text, got {quote(v)}.")
     return v
 
 
 def parse_set_option(item: str):
     """Split ``dotted.key=value`` (value parsed as YAML) into ``(key, value)``."""
     if "=" not in item:
-        raise ScenarioError(f"--set {item!r}: expected KEY=VALUE with a dotted scenario key, e.g. terrain.xt=0.5.")
+        raise ScenarioError(f"--set {quote(item)}: expected KEY=VALUE with a dotted scenario key, e.g. terrain.xt=0.5.")
     key, _, text = item.partition("=")
     key = key.strip()
     if not key or any(not p for p in key.split(".")):
-        raise ScenarioError(f"--set {item!r}: the key must be a dotted path such as tow.force_N.")
+        raise ScenarioError(f"--set {quote(item)}: the key must be a dotted path such as tow.force_N.")
     try:
         value = yamlio.load_yaml_text(text, f"--set {key}")
     except ScenarioError as exc:
