@@ -10,6 +10,7 @@ solvers' messages.  A failed run never returns a partial result as if it were wh
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,7 +21,7 @@ from .dynamics import ChainModel
 from .modes import mode_class
 from .results import Result
 
-__all__ = ["SolverError", "Case", "assemble", "simulate", "simulate_batch", "batch_key", "BatchMember",
+__all__ = ["SolverError", "WORK_BASE_NFEV", "WORK_NFEV_PER_S", "SPEED_SANITY_FACTOR", "Case", "assemble", "simulate", "simulate_batch", "batch_key", "BatchMember",
            "solver_options", "output_grid", "ATOL"]
 
 
@@ -167,6 +168,90 @@ def _integrate(model, modes, sim, name):
     return pieces, phases, stats
 
 
+# ---------------------------------------------------------------- work limit and sanity (issue 15)
+# Kept apart from the interval driver: a counting proxy of the model handed to it, and checks of
+# its output.  Neither changes a number of a run that stays within the limits.
+
+#: Right-hand-side evaluations a run may use: this base (start-up transients) ...
+WORK_BASE_NFEV = 20_000
+#: ... plus this many per simulated second reached (shipped scenarios need under 1 000, their
+#: rtol 1e-9 reference runs under 4 000: traverse_patch 3 765, inchworm6 2 346).
+WORK_NFEV_PER_S = 20_000
+#: A run whose ground or wheel-rim speed exceeds this multiple of the fastest no-load wheel speed
+#: R_w * omega_nl (plus the fastest joint rate) has left the physics: a solver failure.
+SPEED_SANITY_FACTOR = 5.0
+
+
+class _Metered:
+    """The model as the solver sees it: ``rhs`` counts its calls against the work limit
+    (:data:`WORK_BASE_NFEV` + :data:`WORK_NFEV_PER_S` per simulated second reached) and checks
+    ``simulation.max_wall_s``; every other attribute is the model's own."""
+
+    def __init__(self, model, sim, name):
+        self._model, self._sim, self._name = model, sim, name
+        self._n, self._t_max, self._wall0 = 0, 0.0, time.perf_counter()
+
+    def __getattr__(self, attr):
+        return getattr(self._model, attr)
+
+    def rhs(self, t, y, *args):
+        """The model's right-hand side, counted."""
+        self._n += 1
+        self._t_max = max(self._t_max, float(t))
+        if self._n > WORK_BASE_NFEV + WORK_NFEV_PER_S * self._t_max:
+            raise SolverError(
+                f"work limit: {self._n} right-hand-side evaluations by t = {self._t_max:.6g} s of {self._name!r} "
+                f"(limit {WORK_BASE_NFEV} + {WORK_NFEV_PER_S} per simulated second). The system is too stiff or "
+                "too fast to integrate: lower the large gains, stiffnesses, forces or speeds of the scenario, or "
+                "raise simulation.max_step_s / atol_scale if they are tiny.")
+        if self._sim.max_wall_s is not None and self._n % 256 == 0:
+            wall = time.perf_counter() - self._wall0
+            if wall > self._sim.max_wall_s:
+                raise SolverError(f"simulation.max_wall_s: {wall:.1f} s of wall time spent by t = {self._t_max:.6g} s "
+                                  f"of {self._name!r} (limit {self._sim.max_wall_s:g} s). Shorten the run, relax "
+                                  "simulation.rtol or raise max_wall_s.")
+        return self._model.rhs(t, y, *args)
+
+
+def _check_sane(model, pieces, name):
+    """Raise SolverError if a member's states are non-finite or its speeds far beyond the no-load speed."""
+    lay = model.layout
+    vnl = float(np.max(np.asarray(model.seg.wheel_radius_m) * np.asarray(model.seg.no_load_speed_radps)))
+    rate = float(np.max(model.links.rate_max_mps, initial=0.0))
+    limit = SPEED_SANITY_FACTOR * vnl + rate
+    R = np.max(np.asarray(model.seg.wheel_radius_m))
+    for piece in pieces:
+        for ts, ys, _ in piece:
+            Y = ys.reshape(ts.size, lay.n, lay.n_s)
+            if not np.all(np.isfinite(Y)):
+                raise SolverError(f"non-finite state in {name!r} near t = {ts[0]:.6g} s; the run is meaningless. "
+                                  "Check the scenario's extreme values.")
+            v = max(float(np.max(np.abs(Y[..., lay.v]), initial=0.0)),
+                    float(np.max(np.abs(Y[..., lay.omega]), initial=0.0)) * R)
+            if v > limit:
+                k = int(np.argmax(np.max(np.abs(Y[..., lay.v]), axis=1)))
+                raise SolverError(f"speed {v:.3g} m/s in {name!r} near t = {ts[k]:.6g} s, beyond {limit:.3g} m/s "
+                                  f"({SPEED_SANITY_FACTOR:g} x the no-load wheel speed R_w*omega_nl = {vnl:.3g} m/s): "
+                                  "the chain has run away. Check forces, gains and speeds for extreme values.")
+
+
+def _guarded_integrate(model, modes, sim, name):
+    """:func:`_integrate` under the work limit, with numpy/scipy warnings kept quiet, solver
+    breakdowns (singular matrices, ...) as :class:`SolverError` and the results checked for sanity."""
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            pieces, phases, stats = _integrate(_Metered(model, sim, name), modes, sim, name)
+        except (SolverError, ValueError):
+            raise
+        except (RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            raise SolverError(f"the solver broke down in {name!r} ({type(exc).__name__}: {str(exc)[:200]}). "
+                              "The scenario is too stiff or has extreme values; check its gains, stiffnesses "
+                              "and forces, or try a smaller simulation.rtol.") from None
+    _check_sane(model, pieces, name)
+    return pieces, phases, stats
+
+
 def simulate(sc) -> Result:
     """Run a scenario and return its :class:`~snoworm.results.Result`.
 
@@ -178,7 +263,7 @@ def simulate(sc) -> Result:
     """
     wall0 = time.perf_counter()
     case = assemble(sc)
-    pieces, phases, stats = _integrate(case.model, [case.mode], sc.simulation, sc.name)
+    pieces, phases, stats = _guarded_integrate(case.model, [case.mode], sc.simulation, sc.name)
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
 
@@ -237,7 +322,7 @@ def simulate_batch(scenarios) -> list:
     cases = [assemble(sc) for sc in scs]
     try:
         big = ChainModel.stack([c.model for c in cases]) if len(cases) > 1 else cases[0].model
-        pieces, phases, stats = _integrate(big, [c.mode for c in cases], scs[0].simulation, scs[0].name)
+        pieces, phases, stats = _guarded_integrate(big, [c.mode for c in cases], scs[0].simulation, scs[0].name)
     except (SolverError, ValueError):
         return [_alone(sc) for sc in scs]
     wall = (time.perf_counter() - wall0) / len(scs)
