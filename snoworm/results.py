@@ -6,6 +6,7 @@ pass of the same force kernel the right-hand side uses (:meth:`ChainModel.evalua
 from __future__ import annotations
 
 import io
+import math
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -184,14 +185,14 @@ class Result:
         cols = ["t_s", "segment"] + list(SEGMENT_COLUMNS)
         data = np.column_stack([np.repeat(self.t, n), np.tile(np.arange(n), n_t)]
                                + [self.segments[c].reshape(-1) for c in SEGMENT_COLUMNS])
-        return _csv(cols, data, int_cols=(1,))
+        return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
 
     def links_csv(self) -> str:
         n_t, n = self.links["force_N"].shape
         cols = ["t_s", "link"] + list(LINK_COLUMNS)
         data = np.column_stack([np.repeat(self.t, n), np.tile(np.arange(n), n_t)]
                                + [self.links[c].reshape(-1) for c in LINK_COLUMNS])
-        return _csv(cols, data, int_cols=(1,))
+        return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
 
     def write(self, out_dir, plot: bool = True) -> list:
         """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots).
@@ -212,11 +213,17 @@ class Result:
         return paths
 
 
-def _csv(cols, data, int_cols=()):
+def time_decimals(output_dt_s: float) -> int:
+    """Decimals of ``t_s`` in the CSVs: 4, or enough that times ``output_dt_s`` apart print apart
+    (one digit below the sampling interval's leading digit; at most 12)."""
+    return int(min(12, max(4, 1 - math.floor(math.log10(output_dt_s)))))
+
+
+def _csv(cols, data, int_cols=(), t_decimals=4):
     buf = io.StringIO()
     buf.write(",".join(cols) + "\n")
     fmt = ["%.6g"] * data.shape[1]
-    fmt[0] = "%.4f"
+    fmt[0] = f"%.{t_decimals}f"
     for c in int_cols:
         fmt[c] = "%d"
     np.savetxt(buf, data, fmt=fmt, delimiter=",")

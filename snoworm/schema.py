@@ -137,7 +137,8 @@ def _check_number(path, value, md, kind):
         if abs(value) > 1e300:      # beyond any bound; float() of it would overflow
             _fail(path, f"must be a finite number{_describe(md)}, got an integer of {len(str(abs(value)))} digits.")
     elif not math.isfinite(float(value)):
-        _fail(path, f"must be a finite number{_describe(md)}, got {float(value)!r}.")
+        dom = f" in {domain_text(md)}" if domain_text(md) else ""
+        _fail(path, f"must be a finite number{dom}{_describe(md)}, got {float(value)!r}.")
     if kind is int:
         if float(value) != int(value):
             _fail(path, f"expected a whole number{_describe(md)}, got {value!r}.")

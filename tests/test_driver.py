@@ -53,3 +53,47 @@ def test_batched_runs_match_one_by_one(scenario_path):
         assert mb.status == "ok", mb.error
         assert_metrics_close(case_metrics(simulate(sc)), case_metrics(mb.result))
         assert mb.result.stats["batch_size"] == len(scs)
+
+
+# ------------------------------------------------------------------ work limit and sanity (issue 15)
+
+def test_work_limit_ends_a_too_stiff_run(monkeypatch, scenario_path):
+    """A max_step_s of 1e-7 s needs 1e7 steps per second: the work limit stops it early."""
+    import snoworm.driver as D
+    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.max_step_s", 1e-7)])
+    monkeypatch.setattr(D, "WORK_BASE_NFEV", 2_000)
+    calls = []
+    real = sc.chain_model.rhs
+    monkeypatch.setattr(sc.chain_model, "rhs", lambda *a: calls.append(1) or real(*a))
+    with pytest.raises(SolverError, match=r"work limit: \d+ right-hand-side evaluations by t = .* too stiff"):
+        simulate(sc)
+    assert len(calls) <= 2_000 + D.WORK_NFEV_PER_S * 2e-4        # stopped within the budget
+
+
+def test_work_limit_leaves_shipped_runs_alone(scenario_path):
+    """The budget is far above what a shipped scenario needs (nfev per simulated second)."""
+    from snoworm.driver import WORK_BASE_NFEV, WORK_NFEV_PER_S
+    res = simulate(load_scenario(scenario_path("inchworm2")))
+    assert res.stats["nfev"] < 0.1 * (WORK_BASE_NFEV + WORK_NFEV_PER_S * 20)
+
+
+def test_max_wall_s_ends_the_run(monkeypatch, scenario_path):
+    import snoworm.driver as D
+    sc = load_scenario(scenario_path("inchworm2"), [("simulation.max_wall_s", 1e-6)])
+    with pytest.raises(SolverError, match=r"simulation\.max_wall_s: .* \(limit 1e-06 s\)"):
+        simulate(sc)
+
+
+def test_runaway_chain_is_a_solver_failure(scenario_path):
+    """A 1 MN tow drags the chain backward at ~2 km/s: beyond 5 x the no-load speed, not a result."""
+    sc = load_scenario(scenario_path("tow6_uniform"), [("tow.force_N", 1e6), ("simulation.duration_s", 3)])
+    with pytest.raises(SolverError, match=r"speed .* m/s .* beyond 24\.8 m/s .* run away"):
+        simulate(sc)
+
+
+def test_singular_matrix_is_a_solver_failure(scenario_path):
+    """A wheel of (almost) no inertia makes the Newton matrix singular: SolverError, not a crash."""
+    sc = load_scenario(scenario_path("tow6_uniform"), [("vehicle.segment.wheel_inertia_kgm2", 1e-300),
+                                                       ("simulation.duration_s", 3)])
+    with pytest.raises(SolverError):
+        simulate(sc)
