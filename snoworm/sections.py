@@ -266,7 +266,7 @@ class SimulationConfig(Config):
     """Numerical settings (no physics here)."""
 
     _section = "simulation"
-    duration_s: float = field(gt=0, le=BIG_TIME_S, why="About 28 hours of simulated time.", unit="s", doc="simulated time")
+    duration_s: float = field(ge=1e-3, le=BIG_TIME_S, why="From a millisecond to about 28 hours of simulated time.", unit="s", doc="simulated time")
     output_dt_s: float = field(0.05, gt=0, le=BIG_TIME_S, why=_FINITE, unit="s", doc="output sampling interval")
     method: str = field("LSODA", choices=("LSODA", "BDF", "Radau", "RK45", "DOP853"), doc="solve_ivp method")
     rtol: float = field(1e-5, gt=0, lt=1, doc="relative tolerance")
