@@ -19,8 +19,9 @@ from .params import PARAMETER_SETS
 from .schema import Config, ScenarioError, build, check_field, dump, field, quote, suggest
 from .terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
 
-__all__ = ["XT_DOMAIN", "BIG_FORCE_N", "BIG_SPEED_MPS", "MAX_SEGMENTS", "MAX_OUTPUT_SAMPLES", "SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig",
-           "TerrainConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig"]
+__all__ = ["XT_DOMAIN", "FINITE_WHY", "BIG_FORCE_N", "BIG_SPEED_MPS", "MAX_SEGMENTS", "MAX_OUTPUT_SAMPLES",
+           "SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig", "TerrainConfig",
+           "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig"]
 
 
 #: Domain of the terrain coefficient X_t wherever it appears (constant, profiles, patches, random
@@ -34,7 +35,8 @@ BIG_TIME_S = 1e5
 MAX_SEGMENTS = 200
 #: most output samples of a run (time steps x segments), which bounds the memory of the results
 MAX_OUTPUT_SAMPLES = 2_000_000
-_FINITE = "A larger value would only make the run stiff or meaningless (it must stay finite)."
+_REG_WHY = "A regularisation speed, small against the driving speeds."
+FINITE_WHY = "A larger value would only make the run stiff or meaningless (it must stay finite)."
 
 
 @dataclass(frozen=True)
@@ -42,18 +44,22 @@ class SegmentConfig(Config):
     """Physical parameters of one segment (docs/model.md section 1)."""
 
     _section = "vehicle.segment"
-    mass_kg: float = field(gt=0, le=1e5, why=_FINITE, unit="kg", doc="segment mass including wheels")
-    wheel_radius_m: float = field(gt=0, le=10, why=_FINITE, unit="m", doc="wheel radius R_w")
-    wheel_inertia_kgm2: float = field(gt=0, le=1e4, why=_FINITE, unit="kg m^2", doc="inertia of one wheel J")
-    wheelbase_m: float = field(ge=0, le=100, why=_FINITE, unit="m", doc="distance between the two axles")
-    wheels_per_axle: int = field(ge=1, le=100, why=_FINITE, doc="wheels on each of the two axles")
-    gravity_mps2: float = field(gt=0, le=100, why=_FINITE, unit="m/s^2", doc="gravitational acceleration")
-    motor_slope_Nms_per_rad: float = field(gt=0, le=1e5, why=_FINITE, unit="N m s/rad", doc="motor torque-speed slope at the wheel")
-    no_load_speed_radps: float = field(gt=0, le=1e4, why=_FINITE, unit="rad/s", doc="no-load wheel speed")
-    torque_limit_Nm: float = field(gt=0, le=1e6, why=_FINITE, unit="N m", doc="motor torque limit at the wheel, per wheel")
+    mass_kg: float = field(gt=0, le=1e5, why=FINITE_WHY, unit="kg", doc="segment mass including wheels")
+    wheel_radius_m: float = field(gt=0, le=10, why=FINITE_WHY, unit="m", doc="wheel radius R_w")
+    wheel_inertia_kgm2: float = field(gt=0, le=1e4, why=FINITE_WHY, unit="kg m^2", doc="inertia of one wheel J")
+    wheelbase_m: float = field(ge=0, le=100, why=FINITE_WHY, unit="m", doc="distance between the two axles")
+    wheels_per_axle: int = field(ge=1, le=100, why=FINITE_WHY, doc="wheels on each of the two axles")
+    gravity_mps2: float = field(gt=0, le=100, why=FINITE_WHY, unit="m/s^2", doc="gravitational acceleration")
+    motor_slope_Nms_per_rad: float = field(gt=0, le=1e5, why=FINITE_WHY, unit="N m s/rad",
+                                           doc="motor torque-speed slope at the wheel")
+    no_load_speed_radps: float = field(gt=0, le=1e4, why=FINITE_WHY, unit="rad/s", doc="no-load wheel speed")
+    torque_limit_Nm: float = field(gt=0, le=1e6, why=FINITE_WHY, unit="N m",
+                                   doc="motor torque limit at the wheel, per wheel")
     drivetrain_efficiency: float = field(gt=0, le=1, doc="drivetrain efficiency, for electrical energy")
-    speed_kp_Nms_per_rad: float = field(gt=0, le=1e5, why=_FINITE, unit="N m s/rad", doc="wheel-speed PI proportional gain")
-    speed_ki_Nm_per_rad: float = field(ge=0, le=1e6, why=_FINITE, unit="N m/rad", doc="wheel-speed PI integral gain")
+    speed_kp_Nms_per_rad: float = field(gt=0, le=1e5, why=FINITE_WHY, unit="N m s/rad",
+                                        doc="wheel-speed PI proportional gain")
+    speed_ki_Nm_per_rad: float = field(ge=0, le=1e6, why=FINITE_WHY, unit="N m/rad",
+                                       doc="wheel-speed PI integral gain")
 
 
 @dataclass(frozen=True)
@@ -62,15 +68,20 @@ class LinkConfig(Config):
 
     _section = "vehicle.links"
     type: tuple[str, ...] = field(doc="'fixed' or 'prismatic', one for all links or a list with one per link")
-    stiffness_N_per_m: float = field(gt=0, le=1e9, why=_FINITE, unit="N/m", doc="link stiffness k_c")
-    damping_Ns_per_m: float = field(ge=0, le=1e8, why=_FINITE, unit="N s/m", doc="link damping c_c")
-    rest_spacing_m: float = field(gt=0, le=100, why=_FINITE, unit="m", doc="centre-to-centre spacing of unloaded segments")
-    stroke_min_m: float = field(ge=-100, le=100, why=_FINITE, unit="m", doc="prismatic joint fully contracted extension")
-    stroke_max_m: float = field(ge=-100, le=100, why=_FINITE, unit="m", doc="prismatic joint fully extended extension")
-    force_max_N: float = field(gt=0, le=BIG_FORCE_N, why=_FINITE, unit="N", doc="prismatic joint force limit")
-    rate_max_mps: float = field(gt=0, le=BIG_SPEED_MPS, why=_FINITE, unit="m/s", doc="prismatic joint rate limit")
-    force_gain_per_s: float = field(gt=0, le=1e5, why=_FINITE, unit="1/s", doc="bandwidth of the joint's force loop")
-    joint_efficiency: float = field(gt=0, le=1, doc="prismatic actuator efficiency, mechanical work / electrical energy")
+    stiffness_N_per_m: float = field(gt=0, le=1e9, why=FINITE_WHY, unit="N/m", doc="link stiffness k_c")
+    damping_Ns_per_m: float = field(ge=0, le=1e8, why=FINITE_WHY, unit="N s/m", doc="link damping c_c")
+    rest_spacing_m: float = field(gt=0, le=100, why=FINITE_WHY, unit="m",
+                                  doc="centre-to-centre spacing of unloaded segments")
+    stroke_min_m: float = field(ge=-100, le=100, why=FINITE_WHY, unit="m",
+                                doc="prismatic joint fully contracted extension")
+    stroke_max_m: float = field(ge=-100, le=100, why=FINITE_WHY, unit="m",
+                                doc="prismatic joint fully extended extension")
+    force_max_N: float = field(gt=0, le=BIG_FORCE_N, why=FINITE_WHY, unit="N", doc="prismatic joint force limit")
+    rate_max_mps: float = field(gt=0, le=BIG_SPEED_MPS, why=FINITE_WHY, unit="m/s", doc="prismatic joint rate limit")
+    force_gain_per_s: float = field(gt=0, le=1e5, why=FINITE_WHY, unit="1/s",
+                                    doc="bandwidth of the joint's force loop")
+    joint_efficiency: float = field(gt=0, le=1,
+                                    doc="prismatic actuator efficiency, mechanical work / electrical energy")
 
     def _check(self, path):
         for j, t in enumerate(self.type):
@@ -86,15 +97,21 @@ class TerrainModelConfig(Config):
     """Terrain-model coefficients (paper Table 3, docs/model.md section 2)."""
 
     _section = "terrain.model"
-    b_tF: float = field(gt=0, le=100, why="Eq. 2: b_tF scales the peak traction F_n X^d b_tF (Eq. 2).", search=(1e-3, 5.0), doc="Eq. 2 slip-to-tractive-force coefficient")
-    b_trF: float = field(ge=0, le=100, why="Eq. 3: b_trF scales the resistance b_trF F_n / X^A (Eq. 3), which opposes motion.", search=(0.0, 2.0), doc="Eq. 3 terrain resistance coefficient")
-    A: float = field(gt=0, le=10, why="Eq. 3: resistance grows as X_t falls (looser snow), so A > 0.", search=(1e-3, 5.0), doc="Eq. 3 terrain coefficient exponent")
-    peak_exponent_d: float = field(gt=0, le=10, why="Eq. 2: the peak traction F_n X^d b_tF falls with X_t, so d > 0 (1 literal, 2 derived).", search=(1e-3, 6.0),
-                                   doc="exponent of X_t in Eq. 2's peak factor (2 default, 1 literal)")
-    tau0: float = field(ge=0, le=100, why="The resistance torque opposes the wheel's rotation, so tau0 >= 0.", search=(0.0, 100.0), doc="resistance torque law constant")
-    tau1: float = field(ge=0, le=100, why="The resistance torque grows in looser snow (1 - X_t), so tau1 >= 0.", search=(0.0, 100.0), doc="resistance torque law slope in (1 - X_t)")
-    slip_eps_mps: float = field(gt=0, le=1, why="A regularisation speed, small against the driving speeds.", unit="m/s", doc="slip regularisation speed")
-    sign_eps_mps: float = field(gt=0, le=1, why="A regularisation speed, small against the driving speeds.", unit="m/s", doc="smooth-sign speed scale")
+    b_tF: float = field(gt=0, le=100, search=(1e-3, 5.0), doc="Eq. 2 slip-to-tractive-force coefficient",
+                        why="Eq. 2: b_tF scales the peak traction F_n X^d b_tF.")
+    b_trF: float = field(ge=0, le=100, search=(0.0, 2.0), doc="Eq. 3 terrain resistance coefficient",
+                         why="Eq. 3: b_trF scales the resistance b_trF F_n / X^A, which opposes motion.")
+    A: float = field(gt=0, le=10, search=(1e-3, 5.0), doc="Eq. 3 terrain coefficient exponent",
+                     why="Eq. 3: the resistance grows as X_t falls (looser snow), so A > 0.")
+    peak_exponent_d: float = field(gt=0, le=10, search=(1e-3, 6.0),
+                                   doc="exponent of X_t in Eq. 2's peak factor (2 default, 1 literal)",
+                                   why="Eq. 2: the peak traction F_n X^d b_tF falls with X_t, so d > 0.")
+    tau0: float = field(ge=0, le=100, search=(0.0, 100.0), doc="resistance torque law constant",
+                        why="The resistance torque opposes the wheel's rotation, so tau0 >= 0.")
+    tau1: float = field(ge=0, le=100, search=(0.0, 100.0), doc="resistance torque law slope in (1 - X_t)",
+                        why="The resistance torque grows in looser snow (1 - X_t), so tau1 >= 0.")
+    slip_eps_mps: float = field(gt=0, le=1, unit="m/s", doc="slip regularisation speed", why=_REG_WHY)
+    sign_eps_mps: float = field(gt=0, le=1, unit="m/s", doc="smooth-sign speed scale", why=_REG_WHY)
     torque_balance: str = field(choices=("contact", "traction"), doc="wheel torque-balance convention")
 
     def params(self) -> TerrainParams:
@@ -107,10 +124,10 @@ class PatchConfig(Config):
     """A patch of other snow on the route (``terrain.patches``), X_t = ``xt`` on ``[start_m, end_m]``."""
 
     _section = "terrain.patches[]"
-    start_m: float = field(ge=-1e7, le=1e7, why=_FINITE, unit="m", doc="position where the patch's X_t is reached")
-    end_m: float = field(ge=-1e7, le=1e7, why=_FINITE, unit="m", doc="position where the patch's X_t ends")
+    start_m: float = field(ge=-1e7, le=1e7, why=FINITE_WHY, unit="m", doc="position where the patch's X_t is reached")
+    end_m: float = field(ge=-1e7, le=1e7, why=FINITE_WHY, unit="m", doc="position where the patch's X_t ends")
     xt: float = field(**XT_DOMAIN, doc="terrain coefficient X_t inside the patch")
-    ramp_m: float = field(0.0, ge=0, le=1e7, why=_FINITE, unit="m",
+    ramp_m: float = field(0.0, ge=0, le=1e7, why=FINITE_WHY, unit="m",
                           doc="length of the linear transition to the base X_t outside each edge (0: a step)")
 
     def _check(self, path):
@@ -126,10 +143,14 @@ class RandomTerrainConfig(Config):
     _section = "terrain.random"
     mean: float = field(**XT_DOMAIN, doc="mean X_t")
     std: float = field(ge=0, le=1, why="X_t lies in (0, 1].", doc="standard deviation of X_t before clipping")
-    correlation_length_m: float = field(gt=0, le=1e7, why=_FINITE, unit="m", doc="distance at which the correlation falls to 1/e")
-    seed: int = field(ge=0, le=2**63 - 1, why="A 64-bit seed.", doc="seed of the random generator (same seed, same profile)")
-    length_m: float = field(gt=0, le=1e7, why=_FINITE, unit="m", doc="length of the generated stretch (X_t held beyond it)")
-    start_m: float = field(0.0, ge=-1e7, le=1e7, why=_FINITE, unit="m", doc="position where the generated stretch starts")
+    correlation_length_m: float = field(gt=0, le=1e7, why=FINITE_WHY, unit="m",
+                                        doc="distance at which the correlation falls to 1/e")
+    seed: int = field(ge=0, le=2**63 - 1, why="A 64-bit seed.",
+                      doc="seed of the random generator (same seed, same profile)")
+    length_m: float = field(gt=0, le=1e7, why=FINITE_WHY, unit="m",
+                            doc="length of the generated stretch (X_t held beyond it)")
+    start_m: float = field(0.0, ge=-1e7, le=1e7, why=FINITE_WHY, unit="m",
+                           doc="position where the generated stretch starts")
     min_xt: float = field(0.05, **XT_DOMAIN, doc="lower clip of X_t, keeps X_t > 0")
 
     def _check(self, path):
@@ -150,7 +171,8 @@ class TerrainConfig(Config):
 
     _section = "terrain"
     model: TerrainModelConfig = field(doc="terrain-model coefficients")
-    xt: Optional[float] = field(None, **XT_DOMAIN, search=(0.05, 1.0), doc="constant terrain coefficient X_t (the base X_t with patches)")
+    xt: Optional[float] = field(None, **XT_DOMAIN, search=(0.05, 1.0),
+                                doc="constant terrain coefficient X_t (the base X_t with patches)")
     profile: Optional[tuple[tuple[float, ...], ...]] = field(None, doc="list of [position_m, xt] pairs")
     patches: Optional[tuple[PatchConfig, ...]] = field(None, doc="patches of other snow on the base xt")
     random: Optional[RandomTerrainConfig] = field(None, doc="seeded random X_t profile")
@@ -207,7 +229,8 @@ class TowConfig(Config):
     """Towed load on the rear segment (docs/model.md section 4)."""
 
     _section = "tow"
-    force_N: float = field(ge=-BIG_FORCE_N, le=BIG_FORCE_N, why=_FINITE, unit="N", doc="constant force pulling the rear segment backward")
+    force_N: float = field(ge=-BIG_FORCE_N, le=BIG_FORCE_N, why=FINITE_WHY, unit="N",
+                           doc="constant force pulling the rear segment backward")
 
 
 @dataclass(frozen=True)
@@ -216,7 +239,8 @@ class VehicleConfig(Config):
 
     _section = "vehicle"
     parameter_set: str = field(choices=tuple(PARAMETER_SETS), doc="named set of physical values")
-    segments: int = field(ge=1, le=MAX_SEGMENTS, why="The paper's vehicles have 2 to 6; more only costs memory and time.", doc="number of segments N (segment 0 leads)")
+    segments: int = field(ge=1, le=MAX_SEGMENTS, doc="number of segments N (segment 0 leads)",
+                          why="The paper's vehicles have 2 to 6; more only costs memory and time.")
     segment: SegmentConfig = field(doc="parameters shared by every segment")
     links: LinkConfig = field(doc="inter-segment links")
     segment_overrides: dict[int, dict] = field(default_factory=dict, doc="per-segment parameter changes, by index")
@@ -266,14 +290,18 @@ class SimulationConfig(Config):
     """Numerical settings (no physics here)."""
 
     _section = "simulation"
-    duration_s: float = field(ge=1e-3, le=BIG_TIME_S, why="From a millisecond to about 28 hours of simulated time.", unit="s", doc="simulated time")
-    output_dt_s: float = field(0.05, gt=0, le=BIG_TIME_S, why=_FINITE, unit="s", doc="output sampling interval")
+    duration_s: float = field(ge=1e-3, le=BIG_TIME_S, unit="s", doc="simulated time",
+                              why="From a millisecond to about 28 hours of simulated time.")
+    output_dt_s: float = field(0.05, gt=0, le=BIG_TIME_S, why=FINITE_WHY, unit="s", doc="output sampling interval")
     method: str = field("LSODA", choices=("LSODA", "BDF", "Radau", "RK45", "DOP853"), doc="solve_ivp method")
     rtol: float = field(1e-5, gt=0, lt=1, doc="relative tolerance")
-    atol_scale: float = field(1.0, gt=0, le=1e3, why="At 1e3 the position tolerance is already 1 mm.", doc="multiplies the per-component absolute tolerances")
-    max_step_s: Optional[float] = field(None, gt=0, le=BIG_TIME_S, why=_FINITE, unit="s", doc="largest solver step (none: unlimited)")
-    max_wall_s: Optional[float] = field(None, gt=0, le=1e7, why=_FINITE, unit="s",
-                                        doc="wall-clock time after which the run stops with a solver failure (none: no limit)")
+    atol_scale: float = field(1.0, gt=0, le=1e3, why="At 1e3 the position tolerance is already 1 mm.",
+                              doc="multiplies the per-component absolute tolerances")
+    max_step_s: Optional[float] = field(None, gt=0, le=BIG_TIME_S, why=FINITE_WHY, unit="s",
+                                        doc="largest solver step (none: unlimited)")
+    max_wall_s: Optional[float] = field(None, gt=0, le=1e7, why=FINITE_WHY, unit="s",
+                                        doc="wall-clock time after which the run stops with a solver failure "
+                                            "(none: no limit)")
 
 
 class ModeConfig(Config):
