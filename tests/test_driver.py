@@ -67,14 +67,23 @@ def test_work_limit_ends_a_too_stiff_run(monkeypatch, scenario_path):
     monkeypatch.setattr(sc.chain_model, "rhs", lambda *a: calls.append(1) or real(*a))
     with pytest.raises(SolverError, match=r"work limit: \d+ right-hand-side evaluations by t = .* too stiff"):
         simulate(sc)
-    assert len(calls) <= 2_000 + D.WORK_NFEV_PER_S * 2e-4        # stopped within the budget
+    assert len(calls) <= 2_000 + D.work_rate(sc.simulation) * 1e-3     # stopped within the budget
 
 
 def test_work_limit_leaves_shipped_runs_alone(scenario_path):
     """The budget is far above what a shipped scenario needs (nfev per simulated second)."""
-    from snoworm.driver import WORK_BASE_NFEV, WORK_NFEV_PER_S
-    res = simulate(load_scenario(scenario_path("inchworm2")))
-    assert res.stats["nfev"] < 0.1 * (WORK_BASE_NFEV + WORK_NFEV_PER_S * 20)
+    from snoworm.driver import WORK_BASE_NFEV, work_rate
+    sc = load_scenario(scenario_path("inchworm2"))
+    res = simulate(sc)
+    assert res.stats["nfev"] < 0.1 * (WORK_BASE_NFEV + work_rate(sc.simulation) * 20)
+
+
+def test_work_rate_grows_with_tighter_tolerances(scenario_path):
+    from snoworm.driver import WORK_NFEV_PER_S, work_rate
+    sc = load_scenario(scenario_path("tow6_uniform"))
+    assert work_rate(sc.simulation) == WORK_NFEV_PER_S                       # rtol 1e-5, atol_scale 1
+    tight = sc.with_({"simulation.rtol": 1e-9, "simulation.atol_scale": 1e-3})
+    assert work_rate(tight.simulation) == pytest.approx(10 * WORK_NFEV_PER_S)  # (1e-5 / 1e-9)^(1/4)
 
 
 def test_max_wall_s_ends_the_run(monkeypatch, scenario_path):

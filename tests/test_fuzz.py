@@ -3,7 +3,7 @@
 A hypothesis fuzz test mutates every shipped scenario (wrong types, NaN/inf, huge and tiny values,
 unknown keys) and runs it through the CLI: each run ends in exit 0 with finite output, exit 2
 (bad input) or exit 1 with a solver failure, never "internal error".  The time of each run is
-bounded by the driver's work limit (``WORK_BASE_NFEV`` + ``WORK_NFEV_PER_S`` right-hand-side
+bounded by the driver's work limit (``WORK_BASE_NFEV`` + ``work_rate`` right-hand-side
 evaluations per simulated second), checked on every successful run; runs are 1.5 s of simulated
 time.  ``SNOWORM_FUZZ_EXAMPLES`` raises the number of examples (default 40, derandomised so CI is
 reproducible).
@@ -28,7 +28,7 @@ from hypothesis import strategies as st
 
 from snoworm import load_scenario
 from snoworm.cli import main
-from snoworm.driver import WORK_BASE_NFEV, WORK_NFEV_PER_S
+from snoworm.driver import WORK_BASE_NFEV, work_rate
 from tests.conftest import SCENARIOS
 
 SHIPPED = sorted(SCENARIOS.glob("*.yaml"))
@@ -72,7 +72,8 @@ def _assert_clean_end(r, out):
         assert not (out / "segments.csv").exists()
         return
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["solver"]["nfev"] <= WORK_BASE_NFEV + WORK_NFEV_PER_S * summary["duration_s"]
+    sim = load_scenario(out / "scenario.yaml").simulation
+    assert summary["solver"]["nfev"] <= WORK_BASE_NFEV + work_rate(sim) * summary["duration_s"]
     for name in ("segments.csv", "links.csv"):
         rows = (out / name).read_text().splitlines()[1:]          # links.csv is empty for one segment
         data = np.array([[float(x) for x in row.split(",")] for row in rows])
