@@ -17,7 +17,7 @@ import yaml
 from . import yamlio
 from .dynamics import ChainModel
 from .params import PARAMETER_SETS, parameter_set
-from .schema import Config, ScenarioError, build, dump, field, quote, suggest
+from .schema import Config, ScenarioError, build, dump, field, quote, short_key, suggest
 from .sections import (MAX_OUTPUT_SAMPLES, LinkConfig, ModeConfig, PatchConfig, RandomTerrainConfig, SegmentConfig,
                        SimulationConfig, TerrainConfig, TerrainModelConfig, TowConfig, VehicleConfig)
 
@@ -172,7 +172,7 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
     raw = copy.deepcopy(raw)
     for key in raw:
         if key not in _TOP_KEYS:
-            raise ScenarioError(f"{key}: unknown key.{suggest(key, _TOP_KEYS)} Known top-level keys: {', '.join(_TOP_KEYS)}.")
+            raise ScenarioError(f"{short_key(key)}: unknown key.{suggest(key, _TOP_KEYS)} Known top-level keys: {', '.join(_TOP_KEYS)}.")
     for key in ("name", "vehicle", "terrain", "tow", "mode", "simulation"):
         if key not in raw:
             raise ScenarioError(f"{key}: is required but missing. Add a '{key}:' section to the scenario "

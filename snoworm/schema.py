@@ -23,7 +23,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Config", "ScenarioError", "field", "build", "dump", "suggest", "quote", "check_field", "domain_text"]
+__all__ = ["Config", "ScenarioError", "field", "build", "dump", "suggest", "quote", "short_key", "check_field",
+           "domain_text"]
 
 _MISSING = dataclasses.MISSING
 
@@ -65,6 +66,8 @@ def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None,
 
 def suggest(word: str, options) -> str:
     """A ' Did you mean ...?' suffix for a misspelt key, or ''."""
+    if len(str(word)) > 100:        # no key or choice is that long (and difflib would take its time)
+        return ""
     close = difflib.get_close_matches(str(word), [str(o) for o in options], n=3, cutoff=0.6)
     if not close:
         return ""
@@ -95,6 +98,12 @@ def quote(value, limit: int = 100) -> str:
         return text
     unit = "characters" if isinstance(value, str) else "bytes" if is_text else "items"
     return f"{text[:limit]}... ({len(value) if hasattr(value, '__len__') else '?'} {unit})"
+
+
+def short_key(key, limit: int = 60) -> str:
+    """A mapping key as written in a dotted path of a message, cut to ``limit`` characters."""
+    text = str(key)
+    return text if len(text) <= limit else f"{text[:limit]}..."
 
 
 def domain_text(md) -> str:
@@ -191,8 +200,8 @@ def _convert(path, value, tp, md):
         kt, vt = args
         out = {}
         for k, v in value.items():
-            kk = _convert(f"{path}.{k}", k, kt, {}) if kt is not Any else k
-            out[kk] = _convert(f"{path}.{k}", v, vt, md)
+            kk = _convert(f"{path}.{short_key(k)}", k, kt, {}) if kt is not Any else k
+            out[kk] = _convert(f"{path}.{short_key(k)}", v, vt, md)
         return out
     if tp is float or tp is int:
         value = _check_number(path, value, md, tp)
@@ -265,7 +274,7 @@ def build(cls, data: dict, path: str = ""):
     prefix = f"{path}." if path else ""
     for key in data:
         if key not in fields:
-            _fail(f"{prefix}{str(key)[:60]}", f"unknown key.{suggest(key, fields)} Known keys here: {', '.join(fields)}.")
+            _fail(f"{prefix}{short_key(key)}", f"unknown key.{suggest(key, fields)} Known keys here: {', '.join(fields)}.")
     for name, f in fields.items():
         if name not in data and f.default is _MISSING and f.default_factory is _MISSING:
             _fail(f"{prefix}{name}", f"is required but missing{_describe(f.metadata)}. Add it to the scenario.")

@@ -16,7 +16,7 @@ import numpy as np
 
 from .dynamics import LinkArrays, SegmentArrays
 from .params import PARAMETER_SETS
-from .schema import Config, ScenarioError, build, check_field, dump, field, quote, suggest
+from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
 from .terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
 
 __all__ = ["XT_DOMAIN", "FINITE_WHY", "BIG_FORCE_N", "BIG_SPEED_MPS", "MAX_SEGMENTS", "MAX_OUTPUT_SAMPLES",
@@ -248,12 +248,12 @@ class VehicleConfig(Config):
     def _check(self, path):
         for k, ov in self.segment_overrides.items():
             if not isinstance(ov, dict) and ov is not None:
-                raise ScenarioError(f"{path}.segment_overrides.{k}: expected a mapping of segment keys (e.g. "
+                raise ScenarioError(f"{path}.segment_overrides.{short_key(k)}: expected a mapping of segment keys (e.g. "
                                     f"{{mass_kg: 120}}), got {type(ov).__name__} {quote(ov)}.")
             if not 0 <= k < self.segments:
-                raise ScenarioError(f"{path}.segment_overrides.{k}: segment index out of range 0..{self.segments - 1}.")
+                raise ScenarioError(f"{path}.segment_overrides.{short_key(k)}: segment index out of range 0..{self.segments - 1}.")
             merged = {**dump(self.segment), **(ov or {})}
-            build(SegmentConfig, merged, f"{path}.segment_overrides.{k}")
+            build(SegmentConfig, merged, f"{path}.segment_overrides.{short_key(k)}")
         n_links = max(self.segments - 1, 0)
         if len(self.links.type) not in (1, n_links) and n_links > 0:
             raise ScenarioError(f"{path}.links.type: give one type for all links or {n_links} (one per link); "

@@ -159,3 +159,9 @@ def test_messages_quote_at_most_about_100_characters():
         build(SimulationConfig, {"duration_s": list(range(10**6))}, "simulation")
     assert len(str(exc.value)) < 400
     assert len(quote(list(range(10**5)))) <= 130
+
+
+def test_a_huge_unknown_key_is_cut_in_the_message():
+    with pytest.raises(ScenarioError) as exc:
+        build(SimulationConfig, {"duration_s": 1.0, "k" * 100_000: 1}, "simulation")
+    assert len(str(exc.value)) < 300 and "unknown key" in str(exc.value)
