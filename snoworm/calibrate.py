@@ -260,6 +260,11 @@ def format_report(res: CalibrationResult) -> str:
         lines.append("std err nan: J^T J is singular; the data cannot determine these parameters separately.")
     if res.immobilised_after:
         lines.append(f"warning: the fitted model is immobilised on case(s) {', '.join(res.immobilised_after)}.")
+    for n, v in zip(res.names, res.value):
+        lo, hi = BOUNDS["xt" if n.startswith("xt[") else n]
+        if min(abs(v - lo), abs(v - hi)) <= 1e-3 * (hi - lo):   # least_squares stays strictly inside
+            lines.append(f"note: {n} = {v:.6g} sits at a bound of its search range [{lo:g}, {hi:g}] (its physical "
+                         "domain); the data push it beyond: check the data or the fitted set.")
     lines += ["", "before:", format_table2(res.rows_before), "", "after:", format_table2(res.rows_after)]
     return "\n".join(lines)
 
