@@ -147,7 +147,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot):
 
 @main.command("terrain-curves")
 @click.option("--xt", "xts", type=float, multiple=True, required=True,
-              help="Terrain coefficient X_t (repeatable), e.g. --xt 1 --xt 0.5 for paper Figure 3.")
+              help="Terrain coefficient X_t in (0, 1] (repeatable), e.g. --xt 1 --xt 0.5 for paper Figure 3.")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for terrain_curves.csv and terrain_curves.png.")
 @param_set_option
@@ -267,8 +267,8 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, b
 @main.command("mobility-map")
 @click.argument("scenario", type=click.Path(dir_okay=False))
 @click.option("--xt", "xt_spec", default="0.2:1.0:9", show_default=True,
-              help="Terrain coefficients: START:STOP:COUNT or a comma-separated list.")
-@click.option("--tow", "tow_spec", default="0", show_default=True, help="Tow forces [N], comma-separated.")
+              help="Terrain coefficients X_t in (0, 1]: START:STOP:COUNT or a comma-separated list.")
+@click.option("--tow", "tow_spec", default="0", show_default=True, help="Tow forces [N], comma-separated (|force| at most 1e6 N).")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for mobility_map.csv and mobility_map.png.")
 @set_option
