@@ -83,8 +83,8 @@ class Scenario(Config):
         n_out = (sim.duration_s / sim.output_dt_s + 1) * self.vehicle.segments
         if n_out > MAX_OUTPUT_SAMPLES:
             raise ScenarioError(f"simulation.output_dt_s: {sim.duration_s:g} s sampled every {sim.output_dt_s:g} s "
-                                f"for {self.vehicle.segments} segments gives {n_out:.3g} output samples, over the "
-                                f"{MAX_OUTPUT_SAMPLES:.0e} allowed (memory). Raise output_dt_s or shorten duration_s.")
+                                f"for {self.vehicle.segments} segments gives {n_out:.0f} output samples (times x segments), over "
+                                f"the {MAX_OUTPUT_SAMPLES} allowed (memory). Raise output_dt_s or shorten duration_s.")
         mode.check_vehicle(self.vehicle, "mode")
         mode.check_scenario(self, "mode")      # checks needing terrain and tow (e.g. force control)
 

@@ -123,7 +123,7 @@ def _tow6(tmp_path, *sets, duration=3):
     ("terrain.model.A=0", "A: must be greater than 0"),
     ("terrain.model.slip_eps_mps=1e300", "slip_eps_mps: must be at most 1 m/s"),
     ("simulation.atol_scale=1e300", "atol_scale: must be at most 1000"),
-    ("simulation.output_dt_s=1e-9", "output samples, over the"),
+    ("simulation.output_dt_s=1e-9", "output samples (times x segments), over the"),
 ])
 def test_former_silent_nonsense_is_bad_input(tmp_path, setting, needle):
     r, out = _tow6(tmp_path, setting)
