@@ -5,7 +5,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 OUT ?= out
 
-.PHONY: demo test bench paper clean
+.PHONY: demo test bench paper docs clean
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -21,6 +21,10 @@ paper: $(VENV)/.installed
 
 bench: $(VENV)/.installed
 	$(PY) benchmarks/run.py --out $(OUT)/benchmarks.json
+
+# API reference from the docstrings (pdoc), into out/docs; fails on any pdoc warning
+docs: $(VENV)/.installed
+	$(PY) docs/api.py $(OUT)/docs
 
 test: $(VENV)/.installed
 	$(PY) -m pytest -q

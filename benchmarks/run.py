@@ -27,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from snoworm import load_scenario, simulate  # noqa: E402
+from snoworm import Simulator, load_scenario, simulate  # noqa: E402
 from snoworm.driver import assemble  # noqa: E402
 from snoworm.sweep import run_sweep  # noqa: E402
 
@@ -41,6 +41,8 @@ TARGETS = {
     "sweep_batched_speedup": (">=", 10.0, "batched (best of 1 and 2 processes) / serial cases/s"),
     "batched_rel_err": ("<=", 1e-3, "batched vs one-by-one metrics (max rel. error)"),
     "sweep10k_peak_MB": ("<", 500.0, "10,000-case sweep peak memory [MB]"),
+    "controller_tow6_rtf": (">=", 20.0, "tow6 20 s, 50 Hz Python controller real-time factor"),
+    "simulator_step_rtf": (">=", 10.0, "Simulator.step dt = 10 ms (tow6, 20 s) real-time factor"),
 }
 
 
@@ -177,6 +179,29 @@ def bench_memory(n_a, n_b, report):
     return out
 
 
+def bench_controllers(repeats, report):
+    """Issue 14: a scenario driven by a Python controller, and the step-by-step Simulator."""
+    out = {}
+    sc = load_scenario(ROOT / "examples" / "controllers" / "tow6_uniform_controller.yaml")
+    res, wall = run_timed(sc, repeats)
+    out["controller_tow6"] = {"wall_s": wall, "rtf": sc.simulation.duration_s / wall, "nfev": res.stats["nfev"],
+                              "intervals": res.stats["intervals"]}
+    report(f"  tow6 20 s, 50 Hz Python controller: RTF {out['controller_tow6']['rtf']:6.1f}x  wall {wall:6.3f} s  "
+           f"nfev {res.stats['nfev']}  intervals {res.stats['intervals']}")
+    base = load_scenario(SC / "tow6_uniform.yaml")
+    best = np.inf
+    for _ in range(repeats):
+        sim = Simulator(base)
+        t0 = time.perf_counter()
+        sim.reset()
+        for k in range(2000):
+            sim.step({"wheel_speed_mps": [1.8] * 6} if k == 100 else None, 0.01)
+        best = min(best, time.perf_counter() - t0)
+    out["simulator_step"] = {"wall_s": best, "rtf": 20.0 / best, "nfev": sim.result().stats["nfev"]}
+    report(f"  Simulator.step dt = 10 ms, tow6 20 s: RTF {out['simulator_step']['rtf']:6.1f}x  wall {best:6.3f} s")
+    return out
+
+
 def verdict(key, value):
     op, target, _ = TARGETS[key]
     ok = {">=": value >= target, "<=": value <= target, "<": value < target}[op]
@@ -207,6 +232,8 @@ def main(argv=None):
     res["sweep"] = bench_sweep(*((8, 5, 5) if args.quick else (20, 10, 5)), report)
     report("Sweep memory (frostyboy_case3 over terrain.xt x mode.speed_mps, batched 500, child process):")
     res["memory"] = bench_memory(*((40, 25) if args.quick else (100, 100)), report)
+    report("Controllers (issue 14: solver restarted at every control period / step):")
+    res["controllers"] = bench_controllers(repeats, report)
 
     sc = res["scenarios"]
     values = {
@@ -220,6 +247,8 @@ def main(argv=None):
                                      res["sweep"]["batched, 2 processes"]["speedup"]),
         "batched_rel_err": res["sweep"]["batched_rel_err"],
         "sweep10k_peak_MB": res["memory"]["peak_MB"],
+        "controller_tow6_rtf": res["controllers"]["controller_tow6"]["rtf"],
+        "simulator_step_rtf": res["controllers"]["simulator_step"]["rtf"],
     }
     if res["memory"]["cases"] < 10_000:
         report(f"  (memory measured on {res['memory']['cases']} cases; rows are ~1 kB each, so 10,000 cases add "

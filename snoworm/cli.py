@@ -23,17 +23,20 @@ def _fail(msg, code):
 
 
 def handle_errors(fn):
-    """Turn ScenarioError into exit 2 and SolverError into exit 1, each with a one-paragraph message."""
+    """Turn ScenarioError into exit 2, SolverError and ControllerError into exit 1, each with a clear message."""
     @functools.wraps(fn)
     def wrapper(*a, **kw):
         from .schema import ScenarioError  # lazy: start-up
         from .driver import SolverError  # lazy: start-up
+        from .modes.controller import ControllerError  # lazy: start-up
         try:
             return fn(*a, **kw)
         except ScenarioError as exc:
             _fail(str(exc), EXIT_INPUT)
         except SolverError as exc:
             _fail(f"solver failure: {exc}", EXIT_SOLVER)
+        except ControllerError as exc:      # the user's controller raised or returned a bad command
+            _fail(str(exc), EXIT_SOLVER)
         except RecursionError:  # a structure nested beyond Python's stack: bad input, not a bug
             _fail("the input is nested too deeply to read (a scenario needs only a few levels); flatten it.",
                   EXIT_INPUT)
@@ -71,6 +74,8 @@ def main():
 set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
                           help="Override a scenario value by its dotted key, e.g. --set terrain.xt=0.5 "
                                "(repeatable; VALUE is parsed as YAML).")
+plot_format_option = click.option("--plot-format", type=click.Choice(["png", "pdf", "svg"]), default="png",
+                                  show_default=True, help="File format of the plots (PNG at 200 dpi).")
 
 
 @main.command()
@@ -78,9 +83,10 @@ set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for segments.csv, links.csv, summary.json, scenario.yaml and the plots.")
 @set_option
-@click.option("--no-plot", is_flag=True, help="Skip the PNG plots.")
+@click.option("--no-plot", is_flag=True, help="Skip the plots.")
+@plot_format_option
 @handle_errors
-def run(scenario, out_dir, sets, no_plot):
+def run(scenario, out_dir, sets, no_plot, plot_format):
     """Run SCENARIO and write its results to --out.
 
     Nothing is written if the scenario is invalid (exit 2) or the solver fails (exit 1);
@@ -90,7 +96,7 @@ def run(scenario, out_dir, sets, no_plot):
     from .scenario import load_scenario  # lazy: start-up
     sc = load_scenario(scenario, sets)
     res = simulate(sc)
-    paths = res.write(out_dir, plot=not no_plot)
+    paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format)
     s = res.summary()
     click.echo(f"{sc.name}: {s['duration_s']:.1f} s simulated in {res.stats['wall_time_s']:.2f} s "
                f"({s['duration_s'] / max(res.stats['wall_time_s'], 1e-9):.0f}x real time), "
@@ -131,8 +137,9 @@ model_file_option = click.option("--model-file", type=click.Path(dir_okay=False)
 @param_set_option
 @model_file_option
 @click.option("--no-plot", is_flag=True, help="Skip table2.png.")
+@plot_format_option
 @handle_errors
-def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot):
+def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plot_format):
     """Compare the steady-state model with field data (paper Table 2).
 
     Runs the steady-state model on every case at its measured wheel speed R_w*omega, drawbar
@@ -140,7 +147,8 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot):
     --out/table2.csv (with residuals, model minus measured) and --out/table2.png.
     """
     from .groundtruth import run_groundtruth  # lazy: start-up
-    _, text, paths = run_groundtruth(out_dir, data_path, parameter_set_name, model_file, plot=not no_plot)
+    _, text, paths = run_groundtruth(out_dir, data_path, parameter_set_name, model_file, plot=not no_plot,
+                                     plot_format=plot_format)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -155,8 +163,9 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot):
 @click.option("--points", "n_points", type=click.IntRange(min=3), default=1001, show_default=True,
               help="Number of slip values on [0, 1].")
 @click.option("--no-plot", is_flag=True, help="Skip terrain_curves.png.")
+@plot_format_option
 @handle_errors
-def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_plot):
+def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_plot, plot_format):
     """Tractive, resistive and net force per wheel against slip (paper Figure 3).
 
     Normal load per wheel is the static one (a quarter of the segment weight); the resistance is
@@ -165,7 +174,7 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
     """
     from .groundtruth import run_terrain_curves  # lazy: start-up
     _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name, model_file, plot=not no_plot,
-                                        n_points=n_points)
+                                        n_points=n_points, plot_format=plot_format)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -218,17 +227,22 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
 @click.option("--zip", "zip_", is_flag=True,
               help="Pair the --set values element by element (equal lengths) instead of a full grid.")
 @click.option("--save-cases", is_flag=True, help="Also write each case's time series to DIR/cases/<case_id>/.")
+@click.option("--series", type=click.Choice(["folders", "netcdf"]), default="folders", show_default=True,
+              help="With --save-cases: each case's time series in its own folder DIR/cases/<case_id>/, or every "
+                   "case in one netCDF file DIR/series.nc (dims: swept keys x time x segment/link; needs "
+                   "pip install 'snoworm[data]').")
 @click.option("--no-plot", is_flag=True, help="Skip sweep.png / heatmap.png.")
+@plot_format_option
 @click.option("--batch", default=0, show_default=True, type=click.IntRange(min=0), metavar="B",
               help="Integrate up to B cases of the same structure (uniform mode) as one stacked system "
                    "(several times the cases/s; 100-500 is a good B); other cases run one by one.")
 @handle_errors
-def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, batch):
+def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no_plot, plot_format, batch):
     """Run SCENARIO over a grid of values and tabulate the results in --out.
 
     \b
     summary.csv has one row per case, appended as each case finishes (completion order):
-      case_id, case_key, the swept values, status (ok, solver_failure, invalid, error), error,
+      case_id, case_key, the swept values, status (ok, solver_failure, invalid, error, controller_failure), error,
       n_segments, distance_m, mean_speed_mps, late_speed_mps (mean forward speed over the
       last 25 % of the run), mean_slip and max_slip (signed slip over the segments and the
       second half of the run), max_link_force_N (largest |force| over the run),
@@ -245,7 +259,8 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, b
     from .sweep import SweepExecutionError, run_sweep  # lazy: start-up
     try:
         table = run_sweep(scenario, sets, out_dir=out_dir, jobs=jobs, scheduler=scheduler, zip_=zip_,
-                          save_cases=save_cases, plot=not no_plot, batch=batch)
+                          save_cases=save_cases, plot=not no_plot, batch=batch, series=series,
+                          plot_format=plot_format)
     except SweepExecutionError as exc:
         _fail(str(exc), EXIT_SOLVER)
     except KeyboardInterrupt:
@@ -280,9 +295,10 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, no_plot, b
 @click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
               help="Worker processes for the inching runs.")
 @click.option("--no-plot", is_flag=True, help="Skip mobility_map.png.")
+@plot_format_option
 @handle_errors
 def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, no_inching, inch_duration_s, jobs,
-                 no_plot):
+                 no_plot, plot_format):
     """Which modes move SCENARIO's vehicle over X_t and tow: rolling, inching only, immobile.
 
     Rolling by the steady-state solver (each segment's share of the tow below its maximum
@@ -292,7 +308,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
     from .mobility import run_mobility_map  # lazy: start-up
     _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps=rolling_speed_mps,
                                       inching=not no_inching, inch_duration_s=inch_duration_s, jobs=jobs,
-                                      plot=not no_plot)
+                                      plot=not no_plot, plot_format=plot_format)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["K_LENGTH", "speed_pi", "link_force_pi", "servo_gain", "joint_force_command_N",
+__all__ = ["K_LENGTH", "speed_pi", "direct_torque", "link_force_pi", "servo_gain", "joint_force_command_N",
            "joint_force_rate_mps", "joint_length_rate_mps"]
 
 #: Gain of the length servo of a length-commanded prismatic joint [1/s].
@@ -51,6 +51,23 @@ def speed_pi(omega_ref, omega, integral_Nm, kp, ki, T_lo, T_hi, on):
     T = np.minimum(np.maximum(u, T_lo), T_hi)
     dI = ki * e + (ki / kp) * (T - u)
     return T * on, dI * on
+
+
+def direct_torque(torque_cmd_Nm, T_lo, T_hi, active, T_pi, dI_pi):
+    """A directly commanded motor torque where ``active``, the wheel-speed PI elsewhere.
+
+    The command (per wheel, at the wheel) is clipped to the motor envelope ``[T_lo, T_hi]``
+    (:func:`snoworm.drivetrain.motor_envelope`, paper section 3); where it acts, the wheel-speed
+    PI's integral is frozen (``dI/dt = 0``) so it resumes from where it was when speed control
+    returns.
+
+    Returns
+    -------
+    (T, dI_dt) : tuple of ndarray
+        Applied torque [N m] and the PI integral's derivative [N m/s].
+    """
+    T = np.minimum(np.maximum(torque_cmd_Nm, T_lo), T_hi)
+    return np.where(active, T, T_pi), np.where(active, 0.0, dI_pi)
 
 
 def link_force_pi(force_N, ref_N, sigma, q_mps, nominal_mps, kp, ki, vmax_mps):

@@ -40,6 +40,10 @@ class Controls:
     joint_anchor, joint_ka : (N-1,) int and [N s/m]: the held segment the joint bears on, and the
         gain by which the force command drops while that anchor slides backward,
         ``|F| -= ka max(0, -v_anchor)`` (limits backward sliding, paper section 5.1).
+    torque_active : (N,) 1 where the motors apply ``torque_cmd_Nm`` directly instead of the
+        wheel-speed PI (a controller's ``wheel_torque_Nm`` command); default 0 everywhere.
+    torque_cmd_Nm : (N,) direct motor torque per wheel at the wheel [N m], clipped to the motor
+        envelope (:func:`snoworm.control.direct_torque`).
     """
 
     motor_on: np.ndarray
@@ -63,6 +67,14 @@ class Controls:
     joint_mover: np.ndarray
     joint_anchor: np.ndarray
     joint_ka: np.ndarray
+    torque_active: np.ndarray = None
+    torque_cmd_Nm: np.ndarray = None
+
+    def __post_init__(self):
+        n = np.shape(self.motor_on)[-1]
+        for name in ("torque_active", "torque_cmd_Nm"):     # no direct torque unless given
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.zeros(n))
 
     @classmethod
     def rolling(cls, n: int, motor_on, speed_sp_mps) -> "Controls":

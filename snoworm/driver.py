@@ -21,8 +21,9 @@ from .dynamics import ChainModel
 from .modes import mode_class
 from .results import Result
 
-__all__ = ["SolverError", "WORK_BASE_NFEV", "WORK_NFEV_PER_S", "work_rate", "SPEED_SANITY_FACTOR", "Case", "assemble", "simulate", "simulate_batch", "batch_key", "BatchMember",
-           "solver_options", "output_grid", "ATOL"]
+__all__ = ["SolverError", "WORK_BASE_NFEV", "WORK_NFEV_PER_S", "work_rate", "SPEED_SANITY_FACTOR", "Case", "assemble",
+           "simulate", "simulate_batch", "batch_key", "BatchMember", "solver_options", "output_grid", "ATOL",
+           "solve_interval"]
 
 
 class SolverError(RuntimeError):
@@ -126,6 +127,42 @@ def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opt
     y_hit = sol.y_events[which][0]
     keep = ts < t_hit
     return np.append(ts[keep], t_hit), np.vstack([ys[keep], y_hit]), float(t_hit), y_hit.copy(), which
+
+
+def solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts):
+    """Integrate ``model`` under controls ``ctl`` from ``(t, y)`` to ``t1`` (or a terminal event).
+
+    The one solver step of every run (:func:`simulate`, batched stacks and
+    :class:`snoworm.simulator.Simulator`): ``solve_ivp`` with the scenario's method, tolerances and
+    Jacobian, retried with the implicit methods before :class:`SolverError`.
+
+    Parameters
+    ----------
+    model, ctl : ChainModel, Controls
+    t, t1 : float
+        Start and end of the interval [s].
+    y : ndarray
+        Flat state at ``t``.
+    events : list of callable
+        Terminal events ``f(t, y, ctl)`` (empty: none).
+    sim : SimulationConfig
+        Solver settings.
+    t_eval : ndarray
+        Output times (:func:`output_grid`).
+    stats : dict
+        Solver counters (``nfev``, ``njev``, ``nlu``, ``intervals``), updated in place.
+    label : str
+        The interval's name for error messages.
+    opts : dict
+        Cache of :func:`solver_options` per method, shared over one run.
+
+    Returns
+    -------
+    (ts, ys, t_next, y_next, event_index) : tuple
+        Output times and states ``(n_t, n_states)``, where the interval ended, the state there,
+        and the index of the event that ended it (None at ``t1``).
+    """
+    return _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts)
 
 
 def _integrate(model, modes, sim, name):

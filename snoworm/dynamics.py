@@ -261,7 +261,9 @@ class ChainModel:
         if cached is ctl:
             return d
         d = {"on": np.asarray(ctl.motor_on, float)[..., None],
-             "w_ref": (ctl.speed_sp_mps / self.seg.wheel_radius_m)[..., None]}
+             "w_ref": (ctl.speed_sp_mps / self.seg.wheel_radius_m)[..., None],
+             "torque": (np.asarray(ctl.torque_active) > 0)[..., None] if np.any(ctl.torque_active) else None,
+             "torque_cmd": np.asarray(ctl.torque_cmd_Nm, float)[..., None]}
         if self.has_joints and self.n > 1:
             d["neg_dir"] = -ctl.joint_dir
             d["neg_vt"] = -ctl.joint_vtarget_mps
@@ -387,6 +389,8 @@ class ChainModel:
             w_ref = cd["w_ref"]
         T_lo, T_hi = drivetrain.motor_envelope(w, self._slope, self._wnl, self._Tmax)
         Tm, dI = control.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on"])
+        if cd["torque"] is not None:           # direct torque commands (a controller's wheel_torque_Nm)
+            Tm, dI = control.direct_torque(cd["torque_cmd"], T_lo, T_hi, cd["torque"], Tm, dI)
         reaction = terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)
         dY[..., L.omega] = (Tm - reaction) / self._J
         dY[..., L.integral] = dI

@@ -278,8 +278,9 @@ def format_table2(rows) -> str:
 
 
 def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostyboy", model_file=None,
-                    plot: bool = True):
-    """Compare the model with field data and write ``table2.csv`` (and ``table2.png``).
+                    plot: bool = True, plot_format: str = "png"):
+    """Compare the model with field data and write ``table2.csv`` (and ``table2.png``, or the
+    ``plot_format``: png, pdf, svg).
 
     Everything is computed and validated before anything is written; each file is written
     atomically.
@@ -299,7 +300,7 @@ def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostybo
     paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows)]
     if plot:
         from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-        paths.append(plotting.plot_table2(rows, out / "table2.png"))
+        paths.append(plotting.save(plotting.plot_table2(rows), out / "table2.png", plot_format))
     return rows, text, paths
 
 
@@ -401,8 +402,9 @@ def format_zero_crossings(c: TerrainCurves) -> str:
 
 
 def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", model_file=None, plot: bool = True,
-                       n_points: int = 1001):
-    """Compute Figure 3's curves and write ``terrain_curves.csv`` (and ``terrain_curves.png``).
+                       n_points: int = 1001, plot_format: str = "png"):
+    """Compute Figure 3's curves and write ``terrain_curves.csv`` (and ``terrain_curves.png``, or
+    the ``plot_format``: png, pdf, svg).
 
     Returns
     -------
@@ -414,5 +416,5 @@ def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", mode
     paths = [write_csv(out / "terrain_curves.csv", CURVE_COLUMNS, _curve_rows(c))]
     if plot:
         from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-        paths.append(plotting.plot_terrain_curves(c, out / "terrain_curves.png"))
+        paths.append(plotting.save(plotting.plot_terrain_curves(c), out / "terrain_curves.png", plot_format))
     return c, format_zero_crossings(c), paths

@@ -230,8 +230,9 @@ def map_csv(result: dict) -> str:
 
 
 def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, rolling_speed_mps=None,
-                     inching=True, inch_duration_s=8.0, jobs=1, plot=True):
-    """Load a scenario, compute its map, write ``mobility_map.csv`` (and ``.png``); return (map, text, paths)."""
+                     inching=True, inch_duration_s=8.0, jobs=1, plot=True, plot_format="png"):
+    """Load a scenario, compute its map, write ``mobility_map.csv`` (and the plot, a ``plot_format`` file:
+    png, pdf or svg); return (map, text, paths)."""
     sc = load_scenario(scenario_path, sets)
     v = rolling_speed_of(sc) if rolling_speed_mps is None else float(rolling_speed_mps)
     res = mobility_map(sc, parse_grid(xt_spec, "--xt"), parse_list(tow_spec, "--tow"), wheel_speed_mps=v,
@@ -239,8 +240,8 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
     out = Path(out_dir)
     paths = [write_csv(out / "mobility_map.csv", MAP_COLUMNS, res["rows"], MAP_FORMAT)]
     if plot:
-        from .plotting import plot_mobility_map   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-        paths.append(plot_mobility_map(res, out / "mobility_map.png"))
+        from . import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
+        paths.append(plotting.save(plotting.plot_mobility_map(res), out / "mobility_map.png", plot_format))
     lines = [f"{sc.name}: mobility map, {len(res['xts'])} X_t x {len(res['tows'])} tow values, "
              f"{res['wall_time_s']:.1f} s"]
     for f in res["tows"]:

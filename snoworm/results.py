@@ -6,19 +6,21 @@ pass of the same force kernel the right-hand side uses (:meth:`ChainModel.evalua
 from __future__ import annotations
 
 import io
-import math
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from . import dataset
 from ._version import __version__
 from .energy import energy_metrics
 from .fileio import atomic_write_text
-from .scenario import dump_scenario
+from .outputs import output_series
+from .scenario import dump_scenario, load_scenario
 
-__all__ = ["Result", "SEGMENT_COLUMNS", "LINK_COLUMNS"]
+__all__ = ["Result", "SEGMENT_COLUMNS", "LINK_COLUMNS", "load_result"]
 
 #: Columns of ``segments.csv`` (after ``t_s, segment``): name -> description.
 SEGMENT_COLUMNS = {
@@ -86,39 +88,8 @@ class Result:
     @classmethod
     def from_pieces(cls, sc, model, mode, pieces, phases, stats):
         seg_parts, link_parts, ts = [], [], []
-        eta = model.seg.drivetrain_efficiency
-        L = model.layout
         for t, ys, ctl in pieces:
-            Y = model.unpack(ys)
-            dY, out = model.evaluate(Y, ctl, outputs=True)
-            R = model.seg.wheel_radius_m
-            nw = model.seg.wheels_per_axle
-            w = out["omega"]
-            Tm = out["motor_torque_Nm"]
-            Ft = out["traction_axle_N"].sum(-1)
-            Ftr = out["resistance_axle_N"].sum(-1)
-            seg = {
-                "x_m": Y[..., L.x], "v_mps": Y[..., L.v],
-                "wheel_speed_mps": (w * R[:, None]).mean(-1), "slip": out["slip"].mean(-1),
-                "traction_N": Ft, "resistance_N": Ftr, "net_force_N": Ft - Ftr,
-                "motor_torque_Nm": Tm.mean(-1), "speed_setpoint_mps": np.array(out["speed_sp_mps"], float),
-                "connector_net_N": out["link_net_N"], "xt": out["X"].mean(-1),
-                "motor_power_W": (Tm * w).sum(-1) * nw,
-                "terrain_dissipation_W": out["terrain_dissipation_W"],
-                "motor_electrical_power_W": (np.maximum(Tm * w, 0.0)).sum(-1) * nw / eta,
-            }
-            x = seg["x_m"]
-            lk = {"force_N": out["link_force_N"], "length_m": x[..., :-1] - x[..., 1:],
-                  "spring_force_N": out["link_spring_N"], "damper_power_W": out["link_damper_W"]}
-            if model.has_joints:
-                s = Y[..., :-1, L.s]
-                ds = dY[..., :-1, L.s]
-                lk["extension_m"] = s
-                # the actuator is in series with the link's spring-damper: it carries the link force
-                lk["joint_power_W"] = -out["link_force_N"] * ds
-            else:
-                lk["extension_m"] = np.zeros_like(lk["length_m"])
-                lk["joint_power_W"] = np.zeros_like(lk["length_m"])
+            seg, lk = output_series(model, ys, ctl)
             seg_parts.append(seg)
             link_parts.append(lk)
             ts.append(t)
@@ -179,6 +150,40 @@ class Result:
         s.update(self.mode_summary)
         return s
 
+    # ------------------------------------------------------------------ data and figures
+    @property
+    def columns(self) -> dict:
+        """``{"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS}``: quantity -> description [unit]."""
+        return {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS}
+
+    def to_pandas(self) -> dict:
+        """``{"segments": DataFrame, "links": DataFrame}``: tidy tables (``t_s``, ``segment`` or
+        ``link``, one column per quantity with its unit suffix), as in the CSV files.
+
+        Needs pandas (``pip install 'snoworm[data]'``); see :func:`snoworm.dataset.to_pandas`.
+        """
+        return dataset.to_pandas(self)
+
+    def to_xarray(self):
+        """The run as an :class:`xarray.Dataset`: dims ``time x segment`` and ``time x link``, units
+        in each variable's attrs, the resolved scenario (YAML) and package versions in the
+        Dataset's attrs.  Needs xarray (``pip install 'snoworm[data]'``); see
+        :func:`snoworm.dataset.to_xarray`.
+        """
+        return dataset.to_xarray(self)
+
+    def plot(self, kind: str = "speeds", ax=None, fig=None, **kwargs):
+        """Draw one of the run's figures and return the :class:`~matplotlib.figure.Figure`.
+
+        ``kind``: ``forces``, ``speeds``, ``positions``, ``force_diagram`` or ``groups`` (see
+        :mod:`snoworm.plotting`).  ``ax``: your own axes (as many as the figure has panels), or
+        ``fig``: a figure to draw in; neither: a new figure.  The matplotlib backend is not changed.
+        """
+        from . import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+        if kind not in plotting.PLOT_KINDS:
+            raise ValueError(f"unknown plot kind {kind!r}; kinds: {', '.join(plotting.PLOT_KINDS)}")
+        return plotting.PLOT_KINDS[kind](self, ax=ax, fig=fig, **kwargs)
+
     # ------------------------------------------------------------------ tables
     def segments_csv(self) -> str:
         n_t, n = self.segments["x_m"].shape
@@ -194,10 +199,12 @@ class Result:
                                + [self.links[c].reshape(-1) for c in LINK_COLUMNS])
         return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
 
-    def write(self, out_dir, plot: bool = True) -> list:
-        """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots).
+    def write(self, out_dir, plot: bool = True, plot_format: str = "png") -> list:
+        """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots,
+        ``plot_format`` files: png at 200 dpi, pdf or svg).
 
         Each file is written atomically (temporary file, then rename).  Returns the paths.
+        :func:`load_result` reads the folder back.
         """
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
@@ -209,7 +216,7 @@ class Result:
         ]
         if plot:
             from . import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
-            paths += plotting.plot_result(self, out)
+            paths += plotting.plot_result(self, out, plot_format)
         return paths
 
 
@@ -217,6 +224,48 @@ def time_decimals(output_dt_s: float) -> int:
     """Decimals of ``t_s`` in the CSVs: 4, or enough that times ``output_dt_s`` apart print apart
     (one digit below the sampling interval's leading digit; at most 12)."""
     return int(min(12, max(4, 1 - math.floor(math.log10(output_dt_s)))))
+
+
+#: Keys of ``summary.json`` that are not the mode's own (the rest is ``Result.mode_summary``).
+_SUMMARY_KEYS = ("scenario", "snoworm_version", "segments", "duration_s", "distance_m", "mean_speed_mps",
+                 "final_link_forces_N", "final_net_forces_N", "final_slip", "final_speed_mps", "max_abs_link_force_N",
+                 "energy", "energy_per_metre_J_per_m", "energy_metrics", "solver", "events")
+
+
+def _read_table(path, index, columns, n_t_hint=None):
+    """(t, {column: ndarray (n_t, n)}) of a ``segments.csv`` / ``links.csv``."""
+    with open(path, encoding="utf-8") as fh:
+        header = fh.readline().strip().split(",")
+    expected = ["t_s", index] + list(columns)
+    if header != expected:
+        raise ValueError(f"{path}: unexpected columns {header}; expected {expected}")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    n = int(data[:, 1].max()) + 1 if data.shape[0] else 0
+    if n == 0:        # no links (a single segment): n_t rows of nothing
+        return None, {c: np.zeros((n_t_hint or 0, 0)) for c in columns}
+    t = data[::n, 0]
+    return t, {c: data[:, 2 + j].reshape(t.size, n) for j, c in enumerate(columns)}
+
+
+def load_result(run_dir) -> Result:
+    """Read a run folder written by :meth:`Result.write` (or ``snoworm run``) back into a Result.
+
+    The series come from ``segments.csv`` and ``links.csv``, so they carry the files' precision:
+    6 significant digits (times: 4 decimals, more for an ``output_dt_s`` below 1e-3).  The scenario is ``scenario.yaml`` (validated
+    again); ``stats``, ``events`` and the mode's metrics come from ``summary.json``.  The
+    integration intervals (``phases``) are not written to disk and come back empty.
+    """
+    d = Path(run_dir)
+    missing = [f for f in ("segments.csv", "links.csv", "summary.json", "scenario.yaml") if not (d / f).is_file()]
+    if missing:
+        raise FileNotFoundError(f"{d} is not a snoworm run folder: {', '.join(missing)} missing")
+    sc = load_scenario(d / "scenario.yaml")
+    t, segments = _read_table(d / "segments.csv", "segment", SEGMENT_COLUMNS)
+    _, links = _read_table(d / "links.csv", "link", LINK_COLUMNS, n_t_hint=t.size)
+    summary = json.loads((d / "summary.json").read_text(encoding="utf-8"))
+    mode_summary = {k: v for k, v in summary.items() if k not in _SUMMARY_KEYS}
+    return Result(sc, t, segments, links, [], list(summary.get("events", [])), dict(summary.get("solver", {})),
+                  mode_summary)
 
 
 def _csv(cols, data, int_cols=(), t_decimals=4):

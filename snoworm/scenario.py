@@ -7,6 +7,7 @@ key (unknown keys are rejected with suggestions) and returns a frozen :class:`Sc
 """
 from __future__ import annotations
 
+import contextvars
 import copy
 import functools
 from dataclasses import dataclass
@@ -25,7 +26,7 @@ __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
     "TerrainModelConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig", "MODE_CONFIGS",
     "register_mode_config", "load_scenario", "scenario_from_dict", "dump_scenario", "apply_overrides",
-    "parse_set_option", "read_model_file", "read_yaml", "ScenarioError",
+    "parse_set_option", "read_model_file", "read_yaml", "ScenarioError", "base_dir",
 ]
 
 #: The scenario's ``mode.type`` -> its :class:`~snoworm.sections.ModeConfig` subclass.  Filled by
@@ -201,7 +202,25 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
         raw["terrain"]["model"] = _merge(model_defaults, raw["terrain"].get("model", {}))
     raw["name"] = _text(raw["name"], "name")
     raw["description"] = _text(raw.get("description", ""), "description")
-    return build(Scenario, raw, "")
+    token = _BASE_DIR.set(None if base_dir is None else Path(base_dir))
+    try:
+        return build(Scenario, raw, "")
+    finally:
+        _BASE_DIR.reset(token)
+
+
+#: folder of the scenario file being validated (None: the working directory); see :func:`base_dir`
+_BASE_DIR = contextvars.ContextVar("snoworm_scenario_dir", default=None)
+
+
+def base_dir() -> Path:
+    """The folder that relative file paths in the scenario being validated are taken from.
+
+    The scenario file's folder while :func:`load_scenario` validates it, else the working
+    directory.  A config section resolving a file path (e.g. ``mode.controller``) calls it.
+    """
+    d = _BASE_DIR.get()
+    return Path.cwd() if d is None else d
 
 
 def _text(v, path):

@@ -317,7 +317,7 @@ class ModeConfig(Config):
     force_loop : bool
         Whether the chain state carries the outer force-loop integrators (``q_mps``).
     extra_plots : tuple of str
-        Names of extra figures drawn for this mode (``snoworm.plotting.plot_<name>``).
+        Names of extra figures drawn for this mode (keys of ``snoworm.plotting.PLOT_KINDS``).
     """
 
     _section = "mode"

@@ -72,3 +72,61 @@ def test_solver_failure_exit_1_nothing_written(tmp_path, monkeypatch):
     r = run("run", SCENARIOS / "tow6_uniform.yaml", "--out", out)
     assert r.exit_code == 1 and "solver failure" in r.output
     assert not out.exists()
+
+
+def _controller_scenario(tmp_path, body):
+    import textwrap
+    import yaml
+    (tmp_path / "c.py").write_text(textwrap.dedent(body))
+    raw = yaml.safe_load((SCENARIOS / "tow6_uniform.yaml").read_text())
+    raw["mode"] = {"type": "controller", "controller": "c.py:C", "period_s": 0.1, "params": {}}
+    raw["simulation"]["duration_s"] = 1.0
+    p = tmp_path / "s.yaml"
+    p.write_text(yaml.safe_dump(raw))
+    return p
+
+
+def test_controller_raising_exit_1_user_frames_nothing_written(tmp_path):
+    p = _controller_scenario(tmp_path, """
+        class C:
+            def __init__(self, params, scenario):
+                pass
+            def __call__(self, obs):
+                if obs.t_s > 0.45:
+                    raise ValueError("gain schedule exhausted")
+                return {}
+    """)
+    out = tmp_path / "o"
+    r = run("run", p, "--out", out)
+    assert r.exit_code == 1
+    assert "controller raised at t = 0.5 s:" in r.output and "c.py" in r.output
+    assert "gain schedule exhausted" in r.output and "snoworm/" not in r.output
+    assert not out.exists()
+
+
+def test_controller_bad_command_exit_1_and_bad_class_exit_2(tmp_path):
+    p = _controller_scenario(tmp_path, """
+        class C:
+            def __init__(self, params, scenario):
+                pass
+            def __call__(self, obs):
+                return {"wheel_speed_mps": [1.0] * 6, "brake": 1}
+    """)
+    out = tmp_path / "o"
+    r = run("run", p, "--out", out)
+    assert r.exit_code == 1 and "'brake'" in r.output and "t = 0 s" in r.output and not out.exists()
+    r = run("run", p, "--out", out, "--set", "mode.controller=c.py:D")
+    assert r.exit_code == 2 and "no class 'D'" in r.output and "Traceback" not in r.output
+def test_plot_format_and_sweep_series(tmp_path):
+    r = run("run", SCENARIOS / "pi3_equal.yaml", "--out", tmp_path / "r", "--set", "simulation.duration_s=1",
+            "--plot-format", "pdf")
+    assert r.exit_code == 0, r.output
+    pdfs = sorted(p.name for p in (tmp_path / "r").glob("*.pdf"))
+    assert pdfs == ["force_diagram.pdf", "forces.pdf", "positions.pdf", "speeds.pdf"]
+    assert not list((tmp_path / "r").glob("*.png"))
+    r = run("sweep", SCENARIOS / "tow6_uniform.yaml", "--set", "tow.force_N=0,100", "--set", "simulation.duration_s=1",
+            "--out", tmp_path / "s", "--series", "netcdf", "--plot-format", "svg")
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in (tmp_path / "s").iterdir()) == ["series.nc", "summary.csv", "sweep.json", "sweep.svg"]
+    r = run("run", SCENARIOS / "pi3_equal.yaml", "--out", tmp_path / "x", "--plot-format", "jpg")
+    assert r.exit_code == 2 and "'jpg' is not one of 'png', 'pdf', 'svg'" in r.output

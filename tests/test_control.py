@@ -116,3 +116,13 @@ def test_joint_length_rate_bounded_by_v_target(s, ref, vt, frac, limit):
     r = float(_length_rate(s, ref, vt, frac * limit, limit))
     assert -vt - 1e-12 <= r <= vt + 1e-12
     assert r * (ref - s) >= 0.0
+
+
+def test_direct_torque_clips_to_envelope_and_freezes_the_integral():
+    w = np.array([0.0, 5.0, 17.0])
+    lo, hi = drivetrain.motor_envelope(w, SLOPE, WNL, TMAX)
+    T_pi, dI_pi = np.full(3, 7.0), np.full(3, 3.0)
+    T, dI = control.direct_torque(np.array([1e3, -1e3, 20.0]), lo, hi, np.array([True, True, False]), T_pi, dI_pi)
+    np.testing.assert_allclose(T, [hi[0], lo[1], 7.0])
+    np.testing.assert_array_equal(dI, [0.0, 0.0, 3.0])
+    assert T[0] == pytest.approx(TMAX) and hi[2] < TMAX      # the envelope falls with speed

@@ -5,7 +5,7 @@ import pytest
 from snoworm.controls import Controls
 
 SEGMENT_FIELDS = ("motor_on", "speed_sp_mps", "fc_active", "fc_link", "fc_sigma", "fc_ref_N", "fc_nominal_mps",
-                  "fc_kp", "fc_ki", "fc_vmax_mps")
+                  "fc_kp", "fc_ki", "fc_vmax_mps", "torque_active", "torque_cmd_Nm")
 
 
 @pytest.mark.parametrize("n", [1, 2, 6])
@@ -53,3 +53,12 @@ def test_with_replaces_only_the_named_arrays():
     np.testing.assert_array_equal(b.speed_sp_mps, [0.0, 0.0, 0.0])
     np.testing.assert_array_equal(a.speed_sp_mps, [1.8, 1.8, 1.8])   # the original is unchanged
     assert b.motor_on is a.motor_on
+
+
+def test_no_direct_torque_by_default_and_stacking_keeps_it():
+    c = Controls.rolling(3, np.ones(3), np.full(3, 1.0))
+    np.testing.assert_array_equal(c.torque_active, 0.0)
+    np.testing.assert_array_equal(c.torque_cmd_Nm, 0.0)
+    d = c.with_(torque_active=np.array([1.0, 0.0, 0.0]), torque_cmd_Nm=np.array([5.0, 0.0, 0.0]))
+    s = Controls.stack([c, d])
+    assert s.torque_cmd_Nm.shape == (2, 3) and s.torque_cmd_Nm[1, 0] == 5.0

@@ -45,3 +45,19 @@ def test_stacked_model_is_the_members_side_by_side(scenario_path):
         np.testing.assert_allclose(J[:, b * n:(b + 1) * n], m.jacobian_banded(0.0, ys[b], ctls[b]),
                                    rtol=1e-7, atol=1e-6)
     assert big.bandwidths() == ms[0].bandwidths()
+
+
+def test_direct_torque_replaces_the_speed_pi_only_where_commanded():
+    from snoworm.drivetrain import motor_envelope
+    m = model_for(SCENARIOS / "tow6_uniform.yaml")
+    y = random_state(m, np.random.default_rng(7))
+    Y = m.unpack(y)
+    base = Controls.rolling(m.n, np.ones(m.n), np.full(m.n, 1.8))
+    dY0, out0 = m.evaluate(Y, base, outputs=True)
+    ctl = base.with_(torque_active=np.r_[1.0, np.zeros(m.n - 1)], torque_cmd_Nm=np.full(m.n, 12.0))
+    dY1, out1 = m.evaluate(Y, ctl, outputs=True)
+    lo, hi = motor_envelope(Y[0, m.layout.omega], m._slope[0], m._wnl[0], m._Tmax[0])
+    np.testing.assert_allclose(out1["motor_torque_Nm"][0], np.clip(12.0, lo, hi), rtol=1e-15)
+    np.testing.assert_array_equal(out1["motor_torque_Nm"][1:], out0["motor_torque_Nm"][1:])
+    np.testing.assert_array_equal(dY1[0, m.layout.integral], 0.0)          # the PI integral frozen there
+    np.testing.assert_array_equal(dY1[1:, m.layout.integral], dY0[1:, m.layout.integral])

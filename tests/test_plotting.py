@@ -19,3 +19,26 @@ def test_plot_result_writes_pngs(tmp_path, name, extra):
         data = p.read_bytes()
         assert data[:8] == PNG_MAGIC and len(data) > 10_000, p.name
     assert sorted(x.name for x in (tmp_path / "plots").iterdir()) == sorted(expected)   # no temporary files left
+
+
+def test_library_never_changes_the_backend_nor_uses_pyplot(tmp_path):
+    """A notebook user's backend survives importing snoworm, writing a run with plots and Result.plot."""
+    import subprocess
+    import sys
+    code = f"""
+import sys, matplotlib
+matplotlib.use("svg")
+import snoworm
+from snoworm import plotting
+res = snoworm.simulate(snoworm.load_scenario({str(SCENARIOS / 'tow6_uniform.yaml')!r}, ["simulation.duration_s=1"]))
+res.write({str(tmp_path / 'run')!r})
+fig = res.plot("forces")
+assert type(fig).__name__ == "Figure", type(fig)
+assert matplotlib.get_backend() == "svg", matplotlib.get_backend()
+assert "matplotlib.pyplot" not in sys.modules
+print("ok")
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok"
+    assert (tmp_path / "run" / "speeds.png").exists()

@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from snoworm import load_scenario, scenario_from_dict, simulate
-from snoworm.results import LINK_COLUMNS, SEGMENT_COLUMNS
+from snoworm.results import LINK_COLUMNS, SEGMENT_COLUMNS, load_result
 from tests.conftest import SCENARIOS
 
 #: ``%.6g`` in the CSV files: half a unit in the 6th significant digit, relative
@@ -74,3 +74,40 @@ def test_time_stamps_resolve_the_output_interval(scenario_path):
     t = [r[0] for r in rows if r[1] == "0"]
     assert len(t) == len(set(t)) == res.t.size
     np.testing.assert_allclose([float(x) for x in t], res.t, atol=1e-6)   # printed to 6 decimals
+
+
+@pytest.mark.parametrize("name", ["tow6_uniform", "inchworm2"])
+def test_load_result_round_trip(tmp_path, name):
+    """simulate -> write -> load_result gives the arrays back within the CSV's printed precision
+    (values 6 significant digits: rtol CSV_RTOL; times 4 decimals: atol 5e-5 s), the same
+    scenario, solver statistics, events and mode metrics."""
+    res = simulate(load_scenario(SCENARIOS / f"{name}.yaml", ["simulation.duration_s=2"]))
+    res.write(tmp_path, plot=False)
+    back = load_result(tmp_path)
+    assert back.scenario == res.scenario
+    np.testing.assert_allclose(back.t, res.t, rtol=0, atol=5e-5 * (1 + 1e-9))
+    for table, columns in (("segments", SEGMENT_COLUMNS), ("links", LINK_COLUMNS)):
+        got, want = getattr(back, table), getattr(res, table)
+        assert list(got) == list(columns)
+        for c in columns:
+            assert got[c].shape == want[c].shape, c
+            np.testing.assert_allclose(got[c], want[c], rtol=CSV_RTOL, atol=0, err_msg=c)
+    assert back.stats == json.loads(json.dumps(res.stats))
+    assert back.events == json.loads(json.dumps(res.events))
+    assert back.mode_summary == json.loads(json.dumps(res.mode_summary))
+    assert back.summary()["distance_m"] == pytest.approx(res.summary()["distance_m"], rel=1e-5)
+
+
+def test_load_result_of_a_folder_that_is_not_a_run(tmp_path):
+    (tmp_path / "segments.csv").write_text("t_s,segment\n")
+    with pytest.raises(FileNotFoundError, match="links.csv, summary.json, scenario.yaml missing"):
+        load_result(tmp_path)
+
+
+def test_result_plot_returns_the_figure(short_run):
+    from matplotlib.figure import Figure
+    ax = Figure().subplots()
+    assert short_run.plot("positions", ax=ax) is ax.figure
+    assert isinstance(short_run.plot("forces"), Figure)
+    with pytest.raises(ValueError, match="unknown plot kind 'nope'; kinds: forces, speeds"):
+        short_run.plot("nope")

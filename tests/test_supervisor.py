@@ -53,7 +53,7 @@ def test_supervisor_switches_in_the_patch_and_back(traverse):
 
 def test_supervisor_plot_and_energy(traverse, tmp_path):
     from snoworm import plotting
-    p = plotting.plot_positions(traverse, tmp_path / "positions.png")
+    p = plotting.save(plotting.plot_positions(traverse), tmp_path / "positions.png")
     assert p.stat().st_size > 10000
     e = energy_metrics(traverse)
     assert e["total_electrical_J"] == pytest.approx(e["motor_electrical_total_J"] + e["joint_electrical_total_J"],

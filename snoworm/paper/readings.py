@@ -44,7 +44,7 @@ def item_readings(ctx: Context) -> Section:
         "X_t = 0.5 net force >= 0 from a slip within 2 points of 74 %, case 5 slip within 0.5 points of 16.7 %",
         abs(first_up - 74.0) <= 2.0 and abs(100 * case5 - 16.7) <= 0.5, source="model"))
     if ctx.out_dir is not None:
-        s.figures.append(plotting.plot_terrain_curves(c1, ctx.figure("fig3_d1_terrain_curves.png")))
+        s.figures.append(plotting.save(plotting.plot_terrain_curves(c1), ctx.figure("fig3_d1_terrain_curves.png")))
     # resistance torque without X dependence
     s.variants.append(Variant("resistance torque independent of X_t (tau1 = 0)", {"terrain.model.tau1": 0},
                               _paper_claims_fig3_table2(ctx.child({"tau1": 0.0}))))

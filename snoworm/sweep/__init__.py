@@ -17,7 +17,10 @@ Modules, in data-flow order
     Where the cases run: serial, local processes (:class:`snoworm.parallel.ProcessExecutor`),
     a Dask cluster, or stacked in batched solves.
 :mod:`.table`
-    :class:`SweepTable`, ``summary.csv`` and ``sweep.json``, resumption.
+    :class:`SweepTable` (``to_pandas``, ``series``), ``summary.csv`` and ``sweep.json``,
+    resumption, :func:`load_sweep`.
+:mod:`.series`
+    Every case's time series in one netCDF file (``series="netcdf"``).
 :mod:`.run`
     :func:`run_sweep`: every case validated up front (invalid ones are recorded, not run) ->
     tasks (small plain dicts: the overridden scenario mapping, never a big object) -> an
@@ -37,6 +40,9 @@ Files in the output directory
     Metrics against the value of a one-axis sweep; a heat map of the mean speed for two axes.
 ``cases/<case_id>/``
     With ``save_cases``: each case's full time series (``Result.write(..., plot=False)``).
+``series.nc``
+    With ``series="netcdf"`` instead: every case's series in one file (dims: swept keys x time
+    x segment/link), see :mod:`.series`.
 
 Metrics
 -------
@@ -54,9 +60,10 @@ from .metrics import (IMMOBILISED_SIGN_FACTOR, IMMOBILISED_SPEED_MPS, LATE_FRACT
                       STATUSES, case_metrics, run_case)
 from .run import run_sweep
 from .spec import Axis, parse_spec, parse_sweep_option
-from .table import SweepTable
+from .series import SERIES_FORMATS, combine_series, load_series
+from .table import SweepTable, load_sweep
 
 __all__ = ["Axis", "Case", "SweepTable", "SweepExecutionError", "parse_spec", "parse_sweep_option", "build_cases",
            "case_metrics", "run_case", "run_sweep", "SerialExecutor", "ProcessExecutor", "DaskExecutor",
            "BatchExecutor", "run_chunk", "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR", "LATE_FRACTION",
-           "SLIP_FRACTION", "METRIC_COLUMNS", "STATUSES"]
+           "SLIP_FRACTION", "METRIC_COLUMNS", "STATUSES", "load_sweep", "load_series", "combine_series", "SERIES_FORMATS"]

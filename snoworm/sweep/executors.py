@@ -17,6 +17,7 @@ from ..driver import batch_key, simulate_batch
 from ..parallel import ProcessExecutor
 from ..scenario import scenario_from_dict
 from ..schema import ScenarioError
+from .series import save_series
 from .metrics import case_metrics
 
 __all__ = ["SweepExecutionError", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "BatchExecutor",
@@ -95,7 +96,7 @@ def _run_group(tasks, scs, fallback, metrics):
         try:
             row.update(metrics(mem.result))
             if task.get("save_dir"):
-                mem.result.write(task["save_dir"], plot=False)
+                save_series(mem.result, task["save_dir"])
         except Exception:  # noqa: BLE001 - let the one-by-one path report the case's error
             row = fallback(task)
         row.setdefault("wall_time_s", wall)

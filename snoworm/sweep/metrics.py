@@ -17,8 +17,10 @@ from pathlib import Path
 import numpy as np
 
 from ..driver import SolverError, simulate
+from ..modes.controller import ControllerError
 from ..scenario import scenario_from_dict
 from ..schema import ScenarioError
+from .series import save_series
 
 __all__ = ["case_metrics", "run_case", "one_line", "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR",
            "LATE_FRACTION", "SLIP_FRACTION", "METRIC_COLUMNS", "STATUSES", "MAX_ERROR_CHARS"]
@@ -33,8 +35,9 @@ LATE_FRACTION = 0.25
 SLIP_FRACTION = 0.5
 
 #: Case statuses: ``ok``; ``solver_failure`` (SolverError); ``invalid`` (the case's scenario is
-#: rejected, ScenarioError); ``error`` (any other exception in the case, a bug: please report it).
-STATUSES = ("ok", "solver_failure", "invalid", "error")
+#: rejected, ScenarioError); ``error`` (any other exception in the case, a bug: please report it);
+#: ``controller_failure`` (the user's controller raised or returned a bad command, ControllerError).
+STATUSES = ("ok", "solver_failure", "invalid", "error", "controller_failure")
 
 #: Metric columns of ``summary.csv`` (the final link forces come between ``max_link_force_N``
 #: and ``energy_per_m_J``, one column ``final_link_force_<j>_N`` per link).
@@ -119,7 +122,8 @@ def run_case(task: dict) -> dict:
     ----------
     task : dict
         ``index``, ``raw`` (the scenario mapping with the case's overrides applied),
-        ``source``, ``base_dir`` and ``save_dir`` (None, or where to write the time series);
+        ``source``, ``base_dir`` and ``save_dir`` (None, or where to write the time series: a folder or
+        a ``.npz`` file, see :func:`~snoworm.sweep.series.save_series`);
         optionally ``scenario``, the :class:`~snoworm.scenario.Scenario` already validated from
         ``raw`` in this process (the batched executor's grouping), so it is not validated twice.
 
@@ -137,12 +141,14 @@ def run_case(task: dict) -> dict:
         res = simulate(sc)
         out.update(case_metrics(res))
         if task.get("save_dir"):
-            res.write(task["save_dir"], plot=False)
+            save_series(res, task["save_dir"])
         del res
     except ScenarioError as exc:
         out.update(status="invalid", error=one_line(exc))
     except SolverError as exc:
         out.update(status="solver_failure", error=one_line(exc))
+    except ControllerError as exc:
+        out.update(status="controller_failure", error=one_line(exc))
     except Exception as exc:  # noqa: BLE001 - a case must never stop the sweep
         tb = traceback.extract_tb(exc.__traceback__)
         where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""

@@ -18,12 +18,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ..dataset import require_xarray
+from ..results import LINK_COLUMNS, SEGMENT_COLUMNS
 from ..scenario import Scenario, apply_overrides, read_yaml, scenario_from_dict
 from ..schema import ScenarioError
 from ..tables import FULL, canonical_json, format_cell
 from .cases import build_cases
 from .executors import BatchExecutor, DaskExecutor, ProcessExecutor, SerialExecutor, SweepExecutionError
 from .metrics import METRIC_COLUMNS, case_metrics, one_line, run_case
+from .series import SERIES_FORMATS, case_series_path, combine_series
 from .spec import as_axes
 from .table import SweepTable, prepare_dir, summary_columns
 
@@ -97,7 +100,7 @@ def _definition(raw, axes, zip_):
 
 def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
               save_cases: bool = False, progress=None, plot: bool = True, executor=None,
-              batch: int = 0) -> SweepTable:
+              batch: int = 0, series: str = "folders", plot_format: str = "png") -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
     Parameters
@@ -117,11 +120,17 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
     zip_ : bool
         Pair the axes element by element (equal lengths) instead of a grid.
     save_cases : bool
-        Write each case's time series to ``out_dir/cases/<case_id>/`` (needs ``out_dir``).
+        Keep each case's time series (needs ``out_dir``), as ``series`` says.
+    series : {"folders", "netcdf"}
+        ``folders``: a run folder per case, ``out_dir/cases/<case_id>/``; ``netcdf``: every case in
+        one file ``out_dir/series.nc`` (dims: swept keys x time x segment/link, see
+        :mod:`snoworm.sweep.series`; needs xarray).  ``netcdf`` implies ``save_cases``.
     progress : bool, optional
         Progress line on stderr; default: only when stderr is a terminal.
     plot : bool
         Write ``sweep.png`` (one varying axis, or zipped axes) or ``heatmap.png`` (two).
+    plot_format : {"png", "pdf", "svg"}
+        File format of the plot.
     executor : object, optional
         Anything with ``map_unordered(fn, tasks)`` and ``close()``; overrides jobs/scheduler.
     batch : int
@@ -140,7 +149,15 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         A malformed SPEC, unequal zip lengths, every case invalid, or an output directory
         holding another sweep.
     """
-
+    if series not in SERIES_FORMATS:
+        raise ScenarioError(f"series: expected one of {', '.join(SERIES_FORMATS)}, got {series!r}.")
+    if series == "netcdf":
+        save_cases = True
+        try:
+            require_xarray()       # before any case runs
+        except ImportError:
+            raise ScenarioError("--series netcdf needs xarray: pip install 'snoworm[data]' "
+                                "(or keep the default --series folders).") from None
     plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs)
     out = Path(out_dir) if out_dir is not None else None
     done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source) \
@@ -153,10 +170,13 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         executor = _make_executor(scheduler, batch, jobs)
     rows = dict(done)
     todo = [c for c in plan.cases if c.index not in done]
-    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, save_cases)
-    table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys)
+    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, save_cases and series)
+    table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys, out_dir=out)
+    if series == "netcdf":
+        combine_series(out, plan.axes, plan.cases, zip_, {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS},
+                       {"scenario": plan.source, "sweep_definition": json.dumps(plan.definition)})
     if out is not None and plot:
-        _plot(table, plan.axes, zip_, out)
+        _plot(table, plan.axes, zip_, out, plot_format)
     return table
 
 
@@ -252,23 +272,25 @@ class _Recorder:
         self.bar.update(row["status"] != "ok")
 
 
-def _tasks(plan: _Plan, todo, out, save_cases):
-    """The tasks of the cases still to run (small plain dicts, made one at a time)."""
+def _tasks(plan: _Plan, todo, out, keep_series):
+    """The tasks of the cases still to run (small plain dicts, made one at a time).
+
+    ``keep_series``: False, or where the cases' series go ("folders" or "netcdf")."""
     for c in todo:
         if c.index in plan.invalid:
             continue
-        save = str(out / "cases" / c.case_id) if save_cases else None
+        save = case_series_path(out, c.case_id, keep_series) if keep_series else None
         yield {"index": c.index, "raw": apply_overrides(plan.raw, c.overrides(plan.axes)), "source": plan.source,
                "base_dir": plan.base_dir, "save_dir": save}
 
 
-def _execute(plan: _Plan, todo, executor, rec: _Recorder, own: bool, out, save_cases):
+def _execute(plan: _Plan, todo, executor, rec: _Recorder, own: bool, out, keep_series):
     """Record the invalid cases, run the others on ``executor``, record each as it finishes; then
     close the progress line, the executor (if the sweep made it) and ``summary.csv``."""
     try:
         rec.open()
         rec.bar.show(force=True)
-        _run_cases(plan, todo, executor, rec, out, save_cases)
+        _run_cases(plan, todo, executor, rec, out, keep_series)
     finally:
         rec.bar.close()
         if own:
@@ -276,13 +298,13 @@ def _execute(plan: _Plan, todo, executor, rec: _Recorder, own: bool, out, save_c
         rec.close()
 
 
-def _run_cases(plan: _Plan, todo, executor, rec: _Recorder, out, save_cases):
+def _run_cases(plan: _Plan, todo, executor, rec: _Recorder, out, keep_series):
     by_index = {c.index: c for c in plan.cases}
     try:
         for c in todo:
             if c.index in plan.invalid:
                 rec.record(c, {"status": "invalid", "error": plan.invalid[c.index], "wall_time_s": 0.0})
-        for result in executor.map_unordered(run_case, _tasks(plan, todo, out, save_cases)):
+        for result in executor.map_unordered(run_case, _tasks(plan, todo, out, keep_series)):
             rec.record(by_index[result["index"]], result)
     except (KeyboardInterrupt, ScenarioError):
         raise
@@ -298,7 +320,7 @@ def _plot_positions(values):
     return list(range(len(values))), [format_cell(v, FULL) for v in values]
 
 
-def _plot(table, axes, zip_, out):
+def _plot(table, axes, zip_, out, plot_format="png"):
     from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
     varying = [a for a in axes if len(a.values) > 1]
     ok = [r["status"] == "ok" for r in table.rows]
@@ -306,8 +328,9 @@ def _plot(table, axes, zip_, out):
         ax = varying[0] if varying else axes[0]
         x, labels = _plot_positions(table.column(ax.key))
         metrics = {m: table.column(m) for m in ("mean_speed_mps", "mean_slip", "max_link_force_N", "energy_per_m_J")}
-        plotting.plot_sweep(x, metrics, ax.key, out / "sweep.png", immobilised=table.column("immobilised"),
-                            ok=ok, tick_labels=labels)
+        fig = plotting.plot_sweep(x, metrics, ax.key, immobilised=table.column("immobilised"), ok=ok,
+                                  tick_labels=labels)
+        plotting.save(fig, out / f"sweep.{plot_format}", plot_format)
     elif len(varying) == 2:
         ax_x, ax_y = varying
         xi = {canonical_json(v): j for j, v in enumerate(ax_x.values)}
@@ -322,6 +345,7 @@ def _plot(table, axes, zip_, out):
                 imm[j, k] = bool(r["immobilised"])
             else:
                 fail[j, k] = True
-        plotting.plot_sweep_heatmap([format_cell(v, FULL) for v in ax_x.values], [format_cell(v, FULL) for v in ax_y.values], grid,
-                                    ax_x.key, ax_y.key, "mean speed [m/s]", out / "heatmap.png",
-                                    immobilised=imm, failed=fail)
+        fig = plotting.plot_sweep_heatmap([format_cell(v, FULL) for v in ax_x.values],
+                                          [format_cell(v, FULL) for v in ax_y.values], grid, ax_x.key, ax_y.key,
+                                          "mean speed [m/s]", immobilised=imm, failed=fail)
+        plotting.save(fig, out / f"heatmap.{plot_format}", plot_format)

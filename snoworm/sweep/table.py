@@ -14,13 +14,15 @@ from pathlib import Path
 import yaml
 
 from .._version import __version__
+from ..dataset import require_pandas
 from ..fileio import atomic_write_text
 from ..schema import ScenarioError
 from ..tables import FULL, csv_line, csv_text, write_csv
 from .metrics import METRIC_COLUMNS
+from .series import SERIES_FILE, load_series
 from .spec import parse_scalar
 
-__all__ = ["SweepTable", "summary_columns", "read_summary", "prepare_dir"]
+__all__ = ["SweepTable", "summary_columns", "read_summary", "prepare_dir", "load_sweep"]
 
 
 def summary_columns(axes, n_links) -> list:
@@ -57,12 +59,15 @@ class SweepTable:
         One mapping column -> value per case (None where empty).
     keys : list of str
         The swept keys (columns after ``case_key``).
+    out_dir : Path or None
+        The sweep's output directory (None for a sweep run without one).
     """
 
-    def __init__(self, columns, rows, keys=()):
+    def __init__(self, columns, rows, keys=(), out_dir=None):
         self.columns = list(columns)
         self.keys = list(keys)
         self.rows = sorted(rows, key=lambda r: r["case_id"])
+        self.out_dir = Path(out_dir) if out_dir is not None else None
 
     def __len__(self):
         return len(self.rows)
@@ -78,6 +83,24 @@ class SweepTable:
         if name not in self.columns:
             raise KeyError(f"no column {name!r}; columns: {', '.join(self.columns)}")
         return [r.get(name) for r in self.rows]
+
+    def to_pandas(self):
+        """The table as a :class:`pandas.DataFrame`, one row per case (sorted by case id), the
+        columns of ``summary.csv`` (the swept keys under their dotted names).  Needs pandas
+        (``pip install 'snoworm[data]'``)."""
+        pd = require_pandas()
+        df = pd.DataFrame([[r.get(c) for c in self.columns] for r in self.rows], columns=self.columns)
+        df.attrs["keys"] = list(self.keys)
+        return df
+
+    def series(self):
+        """Every case's time series as an :class:`xarray.Dataset` (the sweep's ``series.nc``,
+        written by ``run_sweep(..., series="netcdf")``; see :mod:`snoworm.sweep.series`)."""
+        path = self.out_dir / SERIES_FILE if self.out_dir is not None else None
+        if path is None or not path.exists():
+            raise FileNotFoundError(f"no {SERIES_FILE} in {self.out_dir}: run the sweep with --save-cases "
+                                    "--series netcdf (series='netcdf') to keep every case's series in one file")
+        return load_series(path)
 
     def failures(self) -> list:
         """Rows whose status is not ``ok``."""
@@ -103,6 +126,23 @@ class SweepTable:
     def __repr__(self):
         ok = sum(r["status"] == "ok" for r in self.rows)
         return f"SweepTable({len(self.rows)} cases, {ok} ok, keys={self.keys})"
+
+
+def load_sweep(out_dir) -> SweepTable:
+    """Read a sweep's output directory (``sweep.json`` and ``summary.csv``) back into a :class:`SweepTable`.
+
+    The swept values are parsed as in ``--set`` (numbers stay numbers); a truncated last line of
+    an interrupted sweep is ignored.  ``table.series()`` opens ``series.nc`` when the sweep kept
+    its series there.
+    """
+    out = Path(out_dir)
+    spath, dpath = out / "summary.csv", out / "sweep.json"
+    if not spath.is_file() or not dpath.is_file():
+        raise FileNotFoundError(f"{out} is not a sweep's output directory (it needs sweep.json and summary.csv)")
+    definition = json.loads(dpath.read_text(encoding="utf-8")).get("definition", {})
+    keys = [a["key"] for a in definition.get("axes", [])] or None
+    header, rows, _ = read_summary(spath, keys)
+    return SweepTable(header, rows, keys or _keys_from_header(header), out_dir=out)
 
 
 def _keys_from_header(header):

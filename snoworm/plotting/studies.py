@@ -1,0 +1,228 @@
+"""Figures of the studies: field data against the model (paper Table 2), terrain curves (paper
+Figure 3), sweeps (metrics, heat maps) and the mobility map.  Drawn from the tables and dicts
+the studies return; each function draws on new or given axes and returns the Figure."""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.colors import ListedColormap
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from .style import COLOURS, LINESTYLES, MARKERS, legend_outside, new_figure, quantity_label
+
+__all__ = ["plot_table2", "plot_terrain_curves", "plot_sweep", "plot_sweep_heatmap", "plot_mobility_map"]
+
+
+def plot_table2(rows, *, ax=None, fig=None):
+    """Measured against modelled slip and torque per field case (paper Table 2); two panels."""
+    lab = [str(r["case"]) for r in rows]
+    x = np.arange(len(rows))
+    fig, axes = new_figure(ax, fig, 1, 2, figsize=(10, 4.2))
+    a1, a2 = axes[0]
+    w = 0.38
+    kw_m, kw_s = dict(color=COLOURS[0]), dict(color=COLOURS[1], hatch="//", edgecolor="white")
+    a1.bar(x - w / 2, [100 * r["slip_measured"] for r in rows], w, label="measured", **kw_m)
+    a1.bar(x + w / 2, [100 * r["slip_model"] for r in rows], w, label="model", **kw_s)
+    a1.set_ylabel("steady slip [%]")
+    a2.bar(x - w / 2, [r["torque_measured_Nm"] for r in rows], w, label="measured", **kw_m)
+    a2.bar(x + w / 2, [r["torque_model_Nm"] for r in rows], w, label="model", **kw_s)
+    a2.set_ylabel("motor torque per wheel [N m]")
+    for a in (a1, a2):
+        a.set_xticks(x, [f"{c}\nX_t={r['xt']:g}" for c, r in zip(lab, rows)])
+        a.set_xlabel("case")
+        a.grid(alpha=0.3, axis="y")
+        a.legend(fontsize=8)
+    fig.suptitle("FrostyBoy field cases (paper Table 2): measured vs steady-state model", fontsize=10)
+    return fig
+
+
+def plot_terrain_curves(curves, *, ax=None, fig=None):
+    """Tractive, resistive and net force per wheel against slip at each X_t (paper Figure 3)."""
+    fig, axes = new_figure(ax, fig, 1, 1, figsize=(9, 5))
+    a = axes[0, 0]
+    for m, x in enumerate(curves.xt):
+        col = COLOURS[m % len(COLOURS)]
+        s = 100 * curves.slip
+        a.plot(s, curves.traction_N[m], color=col, ls="--", lw=1, label=f"traction, X_t={x:g}")
+        a.plot(s, -curves.resistance_N[m], color=col, ls=":", lw=1, label=f"-resistance, X_t={x:g}")
+        a.plot(s, curves.net_N[m], color=col, lw=2, label=f"net, X_t={x:g}")
+        zc = curves.zero_crossing_slip[m]
+        if np.isfinite(zc):
+            a.plot([100 * zc], [0.0], "o", color=col, ms=7, mfc="none")
+            a.annotate(f"{100 * zc:.2f} %", (100 * zc, 0.0), textcoords="offset points", xytext=(6, -14),
+                       color=col, fontsize=8)
+    a.axhline(0.0, color="0.4", lw=0.8)
+    a.set_xlabel("slip [%]")
+    a.set_ylabel("longitudinal force per wheel [N]")
+    a.set_title(f"Terrain forces per wheel (F_n = {curves.normal_load_N:.1f} N), forward motion", fontsize=10)
+    a.grid(alpha=0.3)
+    legend_outside(a, ncol=1 if len(curves.xt) < 4 else 2)
+    return fig
+
+
+def plot_sweep(x, metrics, xlabel, immobilised=None, ok=None, tick_labels=None, *, ax=None, fig=None):
+    """Metrics of a one-axis sweep against the swept value (``sweep.png``), one panel per metric.
+
+    Parameters
+    ----------
+    x : list of float
+        Swept values (or positions 0..n-1 with ``tick_labels`` for non-numeric values).
+    metrics : dict of str -> list
+        Metric name -> one value per case (None for failed cases); one panel each.
+    xlabel : str
+        The swept key (shown in words with its unit, see :func:`quantity_label`).
+    immobilised : list of bool, optional
+        Cases flagged immobilised, marked with crosses.
+    ok : list of bool, optional
+        False for failed cases, marked by grey lines at their value.
+    tick_labels : list of str, optional
+        Labels of categorical values.
+    ax : sequence of Axes, optional
+        One axes per metric; ``fig``: a figure to draw in.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    x = np.asarray(x, float)
+    order = np.argsort(x, kind="stable")
+    n = len(metrics)
+    fig, axs = new_figure(ax, fig, n, 1, figsize=(7.5, 2.1 * n + 0.6), sharex=True)
+    for a, (name, vals) in zip(axs[:, 0], metrics.items()):
+        y = np.array([np.nan if v is None else float(v) for v in vals])
+        a.plot(x[order], y[order], "o-", ms=4, color=COLOURS[0])
+        pos = y[np.isfinite(y)]
+        if pos.size and pos.min() > 0 and pos.max() > 100 * pos.min():
+            a.set_yscale("log")     # e.g. energy per metre of a nearly immobilised vehicle
+        if immobilised is not None:
+            m = np.array([bool(v) for v in immobilised])
+            if m.any():
+                a.plot(x[m], y[m], "x", color=COLOURS[3], ms=8, mew=2, label="immobilised")
+                a.legend(fontsize=8, loc="best")
+        if ok is not None:
+            for xv, good in zip(x, ok):
+                if not good:
+                    a.axvline(xv, color="0.6", ls=":", lw=1)
+        a.set_ylabel(quantity_label(name), fontsize=9)
+        a.grid(alpha=0.3)
+    axs[-1, 0].set_xlabel(quantity_label(xlabel))
+    if tick_labels is not None:
+        axs[-1, 0].set_xticks(x, tick_labels)
+    axs[0, 0].set_title(f"sweep over the {quantity_label(xlabel)}"
+                        + (" (dotted lines: failed cases)" if ok is not None and not all(ok) else ""), fontsize=10)
+    return fig
+
+
+def plot_sweep_heatmap(x_labels, y_labels, values, xlabel, ylabel, label, immobilised=None, failed=None, *,
+                       ax=None, fig=None):
+    """Heat map of one metric over a two-axis sweep (``heatmap.png``).
+
+    Parameters
+    ----------
+    x_labels, y_labels : list of str
+        Values of the first (columns) and second (rows) swept key.
+    values : ndarray (len(y_labels), len(x_labels))
+        The metric; NaN where the case failed.
+    xlabel, ylabel : str
+        The swept keys (shown in words with units); ``label``: the colour-bar label.
+    immobilised, failed : ndarray of bool, optional
+        Cells annotated "immob." / "failed".
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    v = np.asarray(values, float)
+    ny, nx = v.shape
+    fig, axes = new_figure(ax, fig, 1, 1, figsize=(max(5.0, 0.75 * nx + 2.5), max(3.5, 0.55 * ny + 1.8)))
+    a = axes[0, 0]
+    im = a.imshow(np.ma.masked_invalid(v), origin="lower", aspect="auto", cmap="viridis")
+    fig.colorbar(im, ax=a, label=label)
+    finite = v[np.isfinite(v)]
+    mid = 0.5 * (finite.min() + finite.max()) if finite.size else 0.0
+    for j in range(ny):
+        for k in range(nx):
+            if failed is not None and failed[j, k]:
+                txt, col = "failed", COLOURS[3]
+            elif np.isfinite(v[j, k]):
+                txt = f"{v[j, k]:.2f}" + ("\nimmob." if immobilised is not None and immobilised[j, k] else "")
+                col = "white" if v[j, k] < mid else "black"
+            else:
+                continue
+            a.text(k, j, txt, ha="center", va="center", fontsize=7, color=col)
+    a.set_xticks(range(nx), x_labels, rotation=45 if nx > 8 else 0)
+    a.set_yticks(range(ny), y_labels)
+    a.set_xlabel(quantity_label(xlabel))
+    a.set_ylabel(quantity_label(ylabel))
+    a.set_title(f"{label} over {quantity_label(xlabel)} and {quantity_label(ylabel)}", fontsize=9)
+    return fig
+
+
+def _cell_edges(v):
+    """Cell boundaries of grid values ``v`` that stay within [min, max] of the grid (half cells at
+    its ends); a single value gets a cell of unit width around it."""
+    v = np.asarray(v, float)
+    if v.size == 1:
+        return np.array([v[0] - 0.5, v[0] + 0.5])
+    return np.concatenate([[v[0]], (v[:-1] + v[1:]) / 2, [v[-1]]])
+
+
+def plot_mobility_map(mmap, *, ax=None, fig=None):
+    """Mobility map: regions (rolling, inching only, immobile) over X_t and tow, and energy per metre.
+
+    Left: one cell per grid point coloured by region (cells end at the grid's first and last
+    values), with the steady rolling limit X_t(tow)
+    (:func:`snoworm.steady.immobilisation_limit_xt`) drawn as a line; cells where inching costs
+    less electrical energy per metre than rolling are marked with a star.  Right: electrical
+    energy per metre of each mode against X_t, one colour per tow.  ``ax``: two axes.
+    """
+    REGIONS = tuple(mmap["regions"])
+    xts, tows = np.asarray(mmap["xts"], float), np.asarray(mmap["tows"], float)
+    code = {r: j for j, r in enumerate(REGIONS)}
+    Z = np.zeros((tows.size, xts.size))
+    for r in mmap["rows"]:
+        Z[list(tows).index(r["tow_N"]), list(xts).index(r["xt"])] = code[r["region"]]
+    colours = ["#d9d9d9", COLOURS[1], COLOURS[5]]
+    fig, axes = new_figure(ax, fig, 1, 2, figsize=(13, 4.8))
+    a1, a2 = axes[0]
+    xe, ye = _cell_edges(xts), _cell_edges(tows)
+    a1.pcolormesh(xe, ye, Z, cmap=ListedColormap(colours[:len(REGIONS)]), vmin=-0.5, vmax=len(REGIONS) - 0.5,
+                  edgecolors="white", lw=0.5)
+    a1.set_xlim(xe[0], xe[-1])
+    a1.set_ylim(ye[0], ye[-1])
+    lim = [(f, mmap["rolling_limit_xt"][f]) for f in mmap["tows"] if mmap["rolling_limit_xt"][f] is not None]
+    if lim:
+        a1.plot([x for _, x in lim], [f for f, _ in lim], "k--", lw=1.2, marker="o", ms=3,
+                label="steady rolling limit")
+    for r in mmap["rows"]:
+        if r["inching_cheaper"]:
+            a1.plot(r["xt"], r["tow_N"], "*", color=COLOURS[0], ms=9, clip_on=False)
+    handles = [Patch(color=c, label=lab) for c, lab in zip(colours, REGIONS)]
+    handles += a1.get_legend_handles_labels()[0]
+    if any(r["inching_cheaper"] for r in mmap["rows"]):
+        handles.append(Line2D([], [], ls="", marker="*", color=COLOURS[0], label="inching cheaper per metre"))
+    legend_outside(a1, handles=handles)
+    a1.set_xlabel("terrain coefficient X_t")
+    a1.set_ylabel("tow force [N]")
+    if tows.size == 1:
+        a1.set_yticks([tows[0]])
+    a1.set_title(f"{mmap['scenario']}: which modes move the vehicle", fontsize=10)
+    for j, f in enumerate(mmap["tows"]):
+        rs = sorted((r for r in mmap["rows"] if r["tow_N"] == f), key=lambda r: r["xt"])
+        xr = [r["xt"] for r in rs if r["rolling"]]
+        er = [r["rolling_energy_per_metre_J_per_m"] for r in rs if r["rolling"]]
+        xi = [r["xt"] for r in rs if r.get("inching")]
+        ei = [r["inching_energy_per_metre_J_per_m"] for r in rs if r.get("inching")]
+        c = COLOURS[j % len(COLOURS)]
+        a2.plot(xr, er, ls="-", marker=MARKERS[j % len(MARKERS)], color=c, ms=4, label=f"rolling, tow {f:g} N")
+        if xi:
+            a2.plot(xi, ei, ls=LINESTYLES[1], marker=MARKERS[j % len(MARKERS)], mfc="none", color=c, ms=5,
+                    label=f"inching, tow {f:g} N")
+    a2.set_yscale("log")
+    a2.set_xlabel("terrain coefficient X_t")
+    a2.set_ylabel("electrical energy per metre [J/m]")
+    a2.grid(alpha=0.3, which="both")
+    if a2.get_legend_handles_labels()[0]:
+        legend_outside(a2)
+    a2.set_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)", fontsize=10)
+    return fig

@@ -1,0 +1,156 @@
+"""The controller mode (snoworm.modes.controller): loading, validation, the run, its errors."""
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from snoworm import Simulator, load_scenario, simulate
+from snoworm.modes.controller import ControllerError, load_controller
+from snoworm.schema import ScenarioError
+from tests.conftest import SCENARIOS
+from tests.controller_helpers import schedule
+
+
+def _write(tmp_path, body, mode, name="scenario.yaml", base="tow6_uniform", sim=None):
+    raw = yaml.safe_load((SCENARIOS / f"{base}.yaml").read_text())
+    raw["mode"] = mode
+    if sim:
+        raw["simulation"].update(sim)
+    if body is not None:
+        (tmp_path / "ctl").mkdir(exist_ok=True)
+        (tmp_path / "ctl" / "mine.py").write_text(textwrap.dedent(body))
+    p = tmp_path / name
+    p.write_text(yaml.safe_dump(raw))
+    return p
+
+
+GOOD = """
+    class Const:
+        def __init__(self, params, scenario):
+            self.v = params["v"]
+        def __call__(self, obs):
+            return {"wheel_speed_mps": [self.v] * len(obs.x_m)}
+    class Raises:
+        def __init__(self, params, scenario):
+            pass
+        def __call__(self, obs):
+            if obs.t_s > 0.3:
+                return self.inner(obs)
+            return {}
+        def inner(self, obs):
+            raise RuntimeError("my controller broke")
+    class BadCommand:
+        def __init__(self, params, scenario):
+            pass
+        def __call__(self, obs):
+            return {"wheel_speed_mps": [1.0, 2.0]} if obs.t_s > 0.1 else {}
+    class BadCtor:
+        def __init__(self, params, scenario):
+            raise KeyError("gain_missing")
+"""
+
+
+def _mode(cls, period=0.05, **params):
+    return {"type": "controller", "controller": f"ctl/mine.py:{cls}", "period_s": period, "params": params}
+
+
+def test_relative_path_resolved_from_scenario_folder_and_recorded(tmp_path, monkeypatch):
+    p = _write(tmp_path, GOOD, _mode("Const", v=1.5))
+    monkeypatch.chdir("/")                          # not the scenario's folder
+    sc = load_scenario(p)
+    assert sc.mode.controller == f"{(tmp_path / 'ctl' / 'mine.py').resolve()}:Const"
+    dumped = sc.to_dict()["mode"]
+    assert dumped["controller"] == sc.mode.controller and dumped["params"] == {"v": 1.5}
+    assert sc.with_({"mode.params.v": 1.2}).mode.params == {"v": 1.2}   # re-validates from the absolute path
+
+
+@pytest.mark.parametrize("mode, words", [
+    (_mode("Nope"), ["mine.py", "no class 'Nope'", "Const"]),
+    ({**_mode("Const"), "controller": "ctl/missing.py:Const"}, ["missing.py", "does not exist"]),
+    (_mode("BadCtor"), ["mine.py:BadCtor", "constructing", "gain_missing"]),
+    ({**_mode("Const"), "controller": "ctl/mine.py"}, ["mode.controller", "ClassName"]),
+    ({**_mode("Const"), "controller": "no_such_pkg_xyz.mod:Const"}, ["cannot import", "no_such_pkg_xyz"]),
+    ({**_mode("Const", v=1.0), "period_s": 0}, ["mode.period_s", "greater than 0"]),
+])
+def test_bad_controller_is_scenario_error(tmp_path, mode, words):
+    p = _write(tmp_path, GOOD, mode)
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(p)
+    for w in words:
+        assert w in str(err.value)
+
+
+def test_module_spec_loads_importable_class():
+    cls = load_controller("tests.controller_helpers:Uniform")
+    assert cls.__name__ == "Uniform"
+
+
+def test_controller_raising_reports_time_and_only_user_frames(tmp_path):
+    sc = load_scenario(_write(tmp_path, GOOD, _mode("Raises"), sim={"duration_s": 1.0}))
+    with pytest.raises(ControllerError) as err:
+        simulate(sc)
+    msg = str(err.value)
+    assert msg.startswith("controller raised at t = 0.35 s:")
+    assert "mine.py" in msg and "in inner" in msg and "my controller broke" in msg
+    assert "snoworm" not in msg.replace(str(tmp_path), "")   # no frame of the package
+
+
+def test_bad_command_names_key_and_time(tmp_path):
+    sc = load_scenario(_write(tmp_path, GOOD, _mode("BadCommand"), sim={"duration_s": 1.0}))
+    with pytest.raises(ControllerError, match=r"t = 0.15 s: command key 'wheel_speed_mps': expected 6 values"):
+        simulate(sc)
+
+
+def test_called_once_per_period_at_interval_starts():
+    sc = load_scenario(SCENARIOS / "tow6_uniform.yaml").with_({
+        "mode": {"type": "controller", "controller": "tests.controller_helpers:Uniform", "period_s": 0.1,
+                 "params": {"speed_mps": 1.8, "start_time_s": 0.5}}, "simulation.duration_s": 1.0})
+    res = simulate(sc)
+    assert res.mode_summary["controller_calls"] == 10
+    assert [p["t_start_s"] for p in res.phases] == pytest.approx(np.arange(10) * 0.1, abs=1e-12)
+    # zero-order hold: motors off before the first call at or after 0.5 s, on from it
+    on = res.segments["motor_torque_Nm"][:, 0] != 0
+    assert not on[res.t < 0.5 - 1e-9].any() and on[res.t > 0.55].all()
+
+
+def test_controller_run_equals_simulator_stepped_with_same_commands():
+    """One stepping: a controller run and a Simulator stepped with the same commands give the same result."""
+    base = load_scenario(SCENARIOS / "tow6_uniform.yaml").with_({"simulation.duration_s": 2.0})
+    sc = base.with_({"mode": {"type": "controller", "controller": "tests.controller_helpers:Scheduled",
+                              "period_s": 0.05, "params": {}}})
+    ran = simulate(sc)
+    sim = Simulator(base)
+    obs = sim.reset()
+    while sim.t_s < 2.0 - 1e-12:
+        obs = sim.step(schedule(obs.t_s, 6), min(0.05, 2.0 - sim.t_s))
+    stepped = sim.result()
+    assert stepped.t.shape == ran.t.shape
+    np.testing.assert_allclose(stepped.t, ran.t, rtol=0, atol=1e-12)
+    for k in ("x_m", "v_mps", "motor_torque_Nm", "slip"):
+        np.testing.assert_allclose(stepped.segments[k], ran.segments[k], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(stepped.links["force_N"], ran.links["force_N"], rtol=1e-12, atol=1e-9)
+
+
+def test_sweep_over_mode_params(tmp_path):
+    from snoworm.sweep import run_sweep
+    p = _write(tmp_path, GOOD, _mode("Const", v=1.0), sim={"duration_s": 2.0})
+    table = run_sweep(p, ["mode.params.v=1.0,1.6"], out_dir=tmp_path / "sw", plot=False)
+    rows = table.rows if hasattr(table, "rows") else None
+    text = (tmp_path / "sw" / "summary.csv").read_text().splitlines()
+    assert len(text) == 3 and all(",ok," in line for line in text[1:]), text
+    import csv
+    recs = list(csv.DictReader(text))
+    d = [float(r["distance_m"]) for r in recs]
+    assert d[1] > d[0] * 1.3          # faster wheels, farther
+    assert rows is None or len(rows) == 2
+
+
+def test_failing_controller_is_a_sweep_case_status(tmp_path):
+    from snoworm.sweep import STATUSES, run_case
+    p = _write(tmp_path, GOOD, _mode("Raises"), sim={"duration_s": 1.0})
+    raw = yaml.safe_load(p.read_text())
+    out = run_case({"index": 0, "raw": raw, "source": str(p), "base_dir": str(tmp_path), "save_dir": None})
+    assert out["status"] == "controller_failure" and "controller" in STATUSES[-1]
+    assert "controller raised at t = 0.35 s" in out["error"] and "my controller broke" in out["error"]

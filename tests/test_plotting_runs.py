@@ -1,0 +1,93 @@
+"""Figures of one run (snoworm.plotting.runs): panels, styles, legends, own axes, file formats."""
+import dataclasses
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from snoworm import load_scenario, simulate
+from snoworm.plotting import runs
+from tests.conftest import SCENARIOS
+
+
+@pytest.fixture(scope="module")
+def inch():
+    return simulate(load_scenario(SCENARIOS / "inchworm6.yaml", ["simulation.duration_s=4"]))
+
+
+@pytest.fixture(scope="module")
+def uniform():
+    return simulate(load_scenario(SCENARIOS / "tow6_uniform.yaml", ["simulation.duration_s=2"]))
+
+
+def _labels(ax):
+    return [ln.get_label() for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+
+
+def test_inchworm_speeds_one_panel_per_moving_group(inch):
+    fig = runs.plot_speeds(inch)
+    groups = runs.moving_groups(inch)
+    assert groups == [(0, 3), (1, 4), (2, 5)]        # the six_segment gait's phases (paper Fig 5)
+    panels = [a for a in fig.axes if a.get_ylabel().startswith("ground speed")]
+    assert [_labels(a) for a in panels] == [["leader 0", "follower 3"], ["follower 1", "follower 4"],
+                                            ["follower 2", "follower 5"]]
+    for a in panels:     # the two traces of a pair overlap: they differ in colour, line style and marker
+        l1, l2 = a.get_lines()[:2]
+        assert l1.get_color() != l2.get_color() and l1.get_marker() != l2.get_marker()
+    chart = [a for a in fig.axes if a.get_ylabel() == "segment"]
+    assert len(chart) == 1 and len(chart[0].get_yticklabels()) == 6     # set-points as a chart, a row each
+
+
+def test_uniform_speeds_one_panel(uniform):
+    fig = runs.plot_speeds(uniform)
+    panels = [a for a in fig.axes if a.get_ylabel().startswith("ground speed")]
+    assert len(panels) == 1 and len(_labels(panels[0])) == 6
+    assert runs.moving_groups(uniform) is None
+    # set-points that do not switch between a few values are lines, not a chart
+    assert [a.get_ylabel() for a in fig.axes][-1] == "wheel-speed\nset-point [m/s]"
+    assert len(fig.axes[-1].get_lines()) == 6
+
+
+def test_legends_outside_the_data(uniform):
+    fig = runs.plot_forces(uniform)
+    fig.draw_without_rendering()
+    for a in fig.axes:
+        leg = a.get_legend()
+        assert leg is not None
+        assert leg.get_window_extent().x0 >= a.get_window_extent().x1 - 1e-6
+
+
+def test_positions_side_panel_only_when_terrain_varies(uniform):
+    assert len(runs.plot_positions(uniform).axes) == 1
+    patch = load_scenario(SCENARIOS / "tow6_uniform.yaml", [
+        "simulation.duration_s=1", ("terrain.patches", [{"start_m": -4.0, "end_m": -2.0, "xt": 0.5, "ramp_m": 0.5}])])
+    fig = runs.plot_positions(simulate(patch))
+    assert len(fig.axes) == 2 and fig.axes[0].get_xlabel() == "terrain coefficient X_t"
+
+
+def test_draws_on_the_users_axes(uniform):
+    user = Figure()
+    axes = user.subplots(2, 1)
+    assert runs.plot_forces(uniform, ax=axes) is user
+    assert len(axes[0].get_lines()) >= 5 and len(axes[1].get_lines()) == 6
+    one = Figure().subplots()
+    assert runs.plot_positions(uniform, ax=one) is one.figure and len(one.get_lines()) >= 6
+    with pytest.raises(ValueError, match="panel"):
+        runs.plot_forces(uniform, ax=one)
+
+
+def test_force_diagram_never_prints_minus_zero(uniform):
+    links = dict(uniform.links, force_N=np.full_like(uniform.links["force_N"], -1e-3))
+    segments = dict(uniform.segments, net_force_N=np.full_like(uniform.segments["net_force_N"], -0.02))
+    res = dataclasses.replace(uniform, links=links, segments=segments)
+    fig = runs.plot_force_diagram(res)
+    texts = [t.get_text() for t in fig.axes[0].texts]
+    assert any("0.0 N" in t for t in texts)
+    assert not [t for t in texts if "-0.0" in t]
+
+
+@pytest.mark.parametrize("fmt, magic", [("svg", b"<?xml"), ("pdf", b"%PDF-")])
+def test_plot_result_in_other_formats(uniform, tmp_path, fmt, magic):
+    paths = runs.plot_result(uniform, tmp_path, fmt)
+    assert [p.name for p in paths] == [f"forces.{fmt}", f"speeds.{fmt}", f"positions.{fmt}"]
+    assert all(p.read_bytes()[:5] == magic for p in paths)
