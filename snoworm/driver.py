@@ -288,9 +288,10 @@ def _guarded_integrate(model, modes, sim, name):
         warnings.simplefilter("ignore")
         try:
             pieces, phases, stats = _integrate(_Metered(model, sim, name), modes, sim, name)
-        except (SolverError, ValueError):
-            raise
         except (RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            if type(exc) not in (RuntimeError, ArithmeticError, ZeroDivisionError, OverflowError,
+                                 np.linalg.LinAlgError):
+                raise           # SolverError, a mode's own error (e.g. ControllerError): as they are
             raise SolverError(f"the solver broke down in {name!r} ({type(exc).__name__}: {str(exc)[:200]}). "
                               "The scenario is too stiff or has extreme values; check its gains, stiffnesses "
                               "and forces, or try a smaller simulation.rtol.") from None
