@@ -134,7 +134,8 @@ def solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts
 
     The one solver step of every run (:func:`simulate`, batched stacks and
     :class:`snoworm.simulator.Simulator`): ``solve_ivp`` with the scenario's method, tolerances and
-    Jacobian, retried with the implicit methods before :class:`SolverError`.
+    Jacobian, retried with the implicit methods before :class:`SolverError`; under the work limit
+    (:func:`work_rate`, counted from ``t``), numpy/scipy warnings captured.
 
     Parameters
     ----------
@@ -162,7 +163,8 @@ def solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts
         Output times and states ``(n_t, n_states)``, where the interval ended, the state there,
         and the index of the event that ended it (None at ``t1``).
     """
-    return _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts)
+    return _guarded(lambda m: _solve_interval(m, ctl, t, t1, y, events, sim, t_eval, stats, label, opts),
+                    model, sim, label, t)
 
 
 def _integrate(model, modes, sim, name):
@@ -232,9 +234,9 @@ class _Metered:
     (:data:`WORK_BASE_NFEV` + :data:`WORK_NFEV_PER_S` per simulated second reached) and checks
     ``simulation.max_wall_s``; every other attribute is the model's own."""
 
-    def __init__(self, model, sim, name):
-        self._model, self._sim, self._name = model, sim, name
-        self._n, self._t_max, self._wall0 = 0, 0.0, time.perf_counter()
+    def __init__(self, model, sim, name, t0=0.0):
+        self._model, self._sim, self._name, self._t0 = model, sim, name, float(t0)
+        self._n, self._t_max, self._wall0 = 0, float(t0), time.perf_counter()
         self._rate = work_rate(sim)
 
     def __getattr__(self, attr):
@@ -244,7 +246,7 @@ class _Metered:
         """The model's right-hand side, counted."""
         self._n += 1
         self._t_max = max(self._t_max, float(t))
-        if self._n > WORK_BASE_NFEV + self._rate * self._t_max:
+        if self._n > WORK_BASE_NFEV + self._rate * (self._t_max - self._t0):
             raise SolverError(
                 f"work limit: {self._n} right-hand-side evaluations by t = {self._t_max:.6g} s of {self._name!r} "
                 f"(limit {WORK_BASE_NFEV} + {self._rate:.0f} per simulated second). The system is too stiff or "
@@ -281,13 +283,13 @@ def _check_sane(model, pieces, name):
                                   "the chain has run away. Check forces, gains and speeds for extreme values.")
 
 
-def _guarded_integrate(model, modes, sim, name):
-    """:func:`_integrate` under the work limit, with numpy/scipy warnings kept quiet, solver
-    breakdowns (singular matrices, ...) as :class:`SolverError` and the results checked for sanity."""
+def _guarded(fn, model, sim, name, t0=0.0):
+    """``fn(metered model)`` under the work limit from ``t0``, with numpy/scipy warnings kept quiet
+    and the solver's own breakdowns (singular matrices, ...) as :class:`SolverError`."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            pieces, phases, stats = _integrate(_Metered(model, sim, name), modes, sim, name)
+            return fn(_Metered(model, sim, name, t0))
         except (RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
             if type(exc) not in (RuntimeError, ArithmeticError, ZeroDivisionError, OverflowError,
                                  np.linalg.LinAlgError):
@@ -295,6 +297,11 @@ def _guarded_integrate(model, modes, sim, name):
             raise SolverError(f"the solver broke down in {name!r} ({type(exc).__name__}: {str(exc)[:200]}). "
                               "The scenario is too stiff or has extreme values; check its gains, stiffnesses "
                               "and forces, or try a smaller simulation.rtol.") from None
+
+
+def _guarded_integrate(model, modes, sim, name):
+    """:func:`_integrate` under :func:`_guarded`, its results checked by :func:`_check_sane`."""
+    pieces, phases, stats = _guarded(lambda m: _integrate(m, modes, sim, name), model, sim, name)
     _check_sane(model, pieces, name)
     return pieces, phases, stats
 

@@ -106,3 +106,16 @@ def test_singular_matrix_is_a_solver_failure(scenario_path):
                                                        ("simulation.duration_s", 3)])
     with pytest.raises(SolverError):
         simulate(sc)
+
+
+def test_solve_interval_is_under_the_work_limit_too(scenario_path):
+    """The public interval solve (snoworm.Simulator steps) counts its own budget from its start."""
+    from snoworm.driver import assemble, output_grid, solve_interval
+    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.max_step_s", 1e-7)])
+    case = assemble(sc)
+    y0 = case.mode.initial_state()
+    ctl = case.mode.interval(0.0, y0).controls
+    stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0}
+    with pytest.raises(SolverError, match="work limit"):
+        solve_interval(case.model, ctl, 100.0, 101.0, y0, [], sc.simulation, output_grid(100.0, 101.0, 0.05, True),
+                       stats, "step", {})
