@@ -43,7 +43,7 @@ from . import steady
 from .fileio import atomic_write_text, check_output_folder, output_folder, relocate
 from .groundtruth import FieldData, compare_table2, format_table2, read_field_data, vehicle_model
 from .schema import ScenarioError, suggest
-from .sections import TerrainModelConfig
+from .sections import TerrainConfig, TerrainModelConfig
 from .terrain import TerrainParams
 
 __all__ = ["FIT_NAMES", "BOUNDS", "CalibrationResult", "model_predictions", "calibrate", "run_calibration",
@@ -52,7 +52,7 @@ __all__ = ["FIT_NAMES", "BOUNDS", "CalibrationResult", "model_predictions", "cal
 #: Coefficients that can be fitted, with bounds kept physically meaningful during the search: every
 #: terrain-model field declaring ``search`` bounds (snoworm.sections.TerrainModelConfig), and X_t.
 BOUNDS = {**{f.name: f.metadata["search"] for f in dataclasses.fields(TerrainModelConfig) if f.metadata.get("search")},
-          "xt": (0.05, 2.0)}
+          "xt": next(f.metadata["search"] for f in dataclasses.fields(TerrainConfig) if f.name == "xt")}
 #: Names accepted by ``--fit``; ``xt`` fits the X_t of every case.
 FIT_NAMES = tuple(BOUNDS)
 
@@ -199,8 +199,8 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
     ScenarioError
         Unknown ``fit`` name, or not more residuals than fitted parameters.
     """
-    if not (torque_scale_Nm > 0 and slip_scale > 0):
-        raise ScenarioError(f"residual scales must be greater than 0, got torque {torque_scale_Nm} N m "
+    if not (0 < torque_scale_Nm < math.inf and 0 < slip_scale < math.inf):
+        raise ScenarioError(f"residual scales must be finite and greater than 0, got torque {torque_scale_Nm} N m "
                             f"and slip {slip_scale}.")
     n = len(data)
     names = _check_fit(fit, n)
@@ -268,6 +268,11 @@ def format_report(res: CalibrationResult) -> str:
         lines.append("std err nan: J^T J is singular; the data cannot determine these parameters separately.")
     if res.immobilised_after:
         lines.append(f"warning: the fitted model is immobilised on case(s) {', '.join(res.immobilised_after)}.")
+    for n, v in zip(res.names, res.value):
+        lo, hi = BOUNDS["xt" if n.startswith("xt[") else n]
+        if min(abs(v - lo), abs(v - hi)) <= 1e-3 * (hi - lo):   # least_squares stays strictly inside
+            lines.append(f"note: {n} = {v:.6g} sits at a bound of its search range [{lo:g}, {hi:g}] (its physical "
+                         "domain); the data push it beyond: check the data or the fitted set.")
     lines += ["", "before:", format_table2(res.rows_before), "", "after:", format_table2(res.rows_after)]
     return "\n".join(lines)
 

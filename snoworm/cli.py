@@ -62,6 +62,9 @@ def handle_errors(fn):
             _fail(f"solver failure: {exc}", EXIT_SOLVER)
         except ControllerError as exc:      # the user's controller raised or returned a bad command
             _fail(str(exc), EXIT_SOLVER)
+        except RecursionError:  # a structure nested beyond Python's stack: bad input, not a bug
+            _fail("the input is nested too deeply to read (a scenario needs only a few levels); flatten it.",
+                  EXIT_INPUT)
         except BrokenPipeError:  # output piped into e.g. `head`: not an error of ours
             sys.stderr.close()
             sys.exit(0)
@@ -86,6 +89,14 @@ class _Group(click.Group):
     def parse_args(self, ctx, args):
         ctx.meta["snoworm.argv"] = list(args)
         return super().parse_args(ctx, args)
+
+
+def _check_out(ctx, param, value):
+    """``--out`` must name a directory: an empty path would write into the current folder."""
+    if value is not None and not str(value).strip():
+        raise click.BadParameter("must name a directory, got an empty path (it would write into the current "
+                                 "folder). Give e.g. --out results/.")
+    return value
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
@@ -133,7 +144,7 @@ plot_format_option = click.option("--plot-format", type=click.Choice(["png", "pd
 
 @main.command()
 @click.argument("scenario", type=click.Path(dir_okay=False))
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for segments.csv, links.csv, summary.json, scenario.yaml and the plots.")
 @set_option
 @click.option("--no-plot", is_flag=True, help="Skip the plots.")
@@ -191,7 +202,7 @@ model_file_option = click.option("--model-file", type=click.Path(dir_okay=False)
 @main.command()
 @click.option("--data", "data_path", type=click.Path(dir_okay=False), default=None,
               help="Field-data CSV (default: the shipped FrostyBoy 2020 data, paper Table 2).")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for table2.csv and table2.png.")
 @param_set_option
 @model_file_option
@@ -215,8 +226,8 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
 
 @main.command("terrain-curves")
 @click.option("--xt", "xts", type=float, multiple=True, required=True,
-              help="Terrain coefficient X_t (repeatable), e.g. --xt 1 --xt 0.5 for paper Figure 3.")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Terrain coefficient X_t in (0, 1] (repeatable), e.g. --xt 1 --xt 0.5 for paper Figure 3.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for terrain_curves.csv and terrain_curves.png.")
 @param_set_option
 @model_file_option
@@ -245,7 +256,7 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
 @click.option("--fit", "fit", multiple=True, required=True, metavar="NAME",
               help="Parameter to fit (repeatable): b_tF, b_trF, A, peak_exponent_d, tau0, tau1, "
                    "or xt (fits every case's X_t).")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for terrain_model.yaml and calibration.json.")
 @param_set_option
 @click.option("--model-file", type=click.Path(dir_okay=False), default=None,
@@ -280,7 +291,7 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
               help="A swept scenario key and its values: a list (tow.force_N=0,100,200) or an inclusive "
                    "range START:STOP:COUNT (terrain.xt=0.3:1.0:15 gives 15 values). Repeat for a grid "
                    "(first key slowest); a single value just overrides the key.")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for sweep.json, summary.csv and sweep.png / heatmap.png. Re-running the same "
                    "command resumes an interrupted sweep there.")
 @click.option("-j", "--jobs", default=1, show_default=True, type=click.IntRange(min=1),
@@ -355,9 +366,9 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no
 @main.command("mobility-map")
 @click.argument("scenario", type=click.Path(dir_okay=False))
 @click.option("--xt", "xt_spec", default="0.2:1.0:9", show_default=True,
-              help="Terrain coefficients: START:STOP:COUNT or a comma-separated list.")
-@click.option("--tow", "tow_spec", default="0", show_default=True, help="Tow forces [N], comma-separated.")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Terrain coefficients X_t in (0, 1]: START:STOP:COUNT or a comma-separated list.")
+@click.option("--tow", "tow_spec", default="0", show_default=True, help="Tow forces [N], comma-separated (|force| at most 1e6 N).")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for mobility_map.csv and mobility_map.png.")
 @set_option
 @click.option("--rolling-speed", "rolling_speed_mps", type=float, default=None,
@@ -394,7 +405,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
 # ---------------------------------------------------------------- paper reproduction (snoworm/paper/)
 
 @main.command()
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
               help="Directory for the figures, report.md, report.html (self-contained) and claims.json.")
 @click.option("--quick", is_flag=True,
               help="Shorter inchworm runs (10 s simulated instead of 30 s) for CI; every figure's claims are "

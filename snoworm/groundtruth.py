@@ -26,8 +26,8 @@ from scipy.optimize import brentq
 
 from . import steady, terrain
 from .params import PARAMETER_SETS, parameter_set
-from .scenario import SegmentConfig, TerrainModelConfig, read_model_file
-from .schema import ScenarioError, build, dump, suggest
+from .scenario import SegmentConfig, TerrainConfig, TerrainModelConfig, read_model_file
+from .schema import ScenarioError, build, check_field, dump, suggest
 from .fileio import output_folder, relocate
 from .tables import csv_text, write_csv
 from .terrain import TerrainParams
@@ -47,7 +47,7 @@ FIELD_COLUMNS = {
     "slip": "measured steady slip as a fraction (0.06 for 6 %), in [-1, 1]",
     "torque_Nm": "measured motor output torque per wheel [N m]",
     "drawbar_N": "measured drawbar (tow) force [N]; 0 when nothing is towed",
-    "xt": "terrain coefficient X_t assigned to the case, > 0",
+    "xt": "terrain coefficient X_t assigned to the case, in (0, 1]",
 }
 _NUMERIC = ("speed_mps", "wheel_speed_mps", "slip", "torque_Nm", "drawbar_N", "xt")
 
@@ -158,8 +158,8 @@ def read_field_data(path=None) -> FieldData:
         if not w > 0:
             _bad(path, f"line {lineno} (case {lab}): wheel_speed_mps must be greater than 0 m/s "
                  f"(steady forward driving), got {w:g}.")
-        if not x > 0:
-            _bad(path, f"line {lineno} (case {lab}): xt must be greater than 0, got {x:g}. "
+        if not 0 < x <= 1:
+            _bad(path, f"line {lineno} (case {lab}): xt must be in (0, 1], got {x:g}. "
                  "X_t = 1 is neve, lower is looser snow.")
     dup = sorted({c for c in values["case"] if values["case"].count(c) > 1})
     if dup:
@@ -357,9 +357,9 @@ def terrain_curves(xts, seg, tp: TerrainParams, n_points: int = 1001) -> Terrain
     n_points : int
         Number of slip values on [0, 1].
     """
-    xt = np.asarray(list(xts), float)
-    if xt.size == 0 or not np.all(xt > 0):
-        raise ScenarioError(f"--xt: give one or more terrain coefficients greater than 0, got {xt.tolist()}.")
+    if len(list(xts)) == 0:
+        raise ScenarioError("--xt: give one or more terrain coefficients X_t in (0, 1].")
+    xt = np.asarray([check_field(TerrainConfig, "xt", x, "--xt") for x in xts], float)
     _, F_n, _ = steady.segment_geometry(seg)
     i = np.linspace(0.0, 1.0, int(n_points))
     X = xt[:, None]

@@ -32,9 +32,9 @@ from .driver import SolverError, simulate
 from .energy import energy_metrics
 from .fileio import check_output_folder, output_folder, relocate
 from .parallel import ProcessExecutor
-from .scenario import load_scenario, scenario_from_dict
-from .modes import InchwormMode
-from .schema import ScenarioError, dump
+from .scenario import SimulationConfig, TerrainConfig, TowConfig, load_scenario, scenario_from_dict
+from .modes import InchwormMode, SupervisorConfig
+from .schema import ScenarioError, check_field, dump, quote
 from .sweep.spec import RANGE, parse_spec
 from .tables import CellFormat, csv_text, write_csv
 
@@ -47,7 +47,7 @@ REGIONS = ("immobile", "inching only", "rolling")
 
 def _numbers(text: str, name: str, expected: str) -> np.ndarray:
     """The values of ``text`` (:func:`snoworm.sweep.spec.parse_spec`), which must all be numbers."""
-    opt = f"{name} {text!r}"
+    opt = f"{name} {quote(text, 60)}"
     values = parse_spec(name, text, option=opt)
     if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in values):
         raise ScenarioError(f"{opt}: expected {expected}.")
@@ -67,7 +67,7 @@ def parse_list(text: str, name: str = "--tow") -> np.ndarray:
     """``"0,100,200"`` -> array of floats (a list only, no range)."""
     expected = "a comma-separated list of numbers, e.g. 0,100,200"
     if RANGE.match(text.strip()):
-        raise ScenarioError(f"{name} {text!r}: expected {expected}.")
+        raise ScenarioError(f"{name} {quote(text, 60)}: expected {expected}.")
     return _numbers(text, name, expected)
 
 
@@ -201,10 +201,11 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
         limit, None if above 1), ``wall_time_s``, and the settings.
     """
     wall0 = time.perf_counter()
-    xts = [float(x) for x in xts]
-    tows = [float(f) for f in tows]
-    if any(x <= 0 for x in xts):
-        raise ScenarioError("--xt: every X_t must be greater than 0.")
+    xts = [check_field(TerrainConfig, "xt", x, "--xt") for x in xts]
+    tows = [check_field(TowConfig, "force_N", f, "--tow") for f in tows]
+    wheel_speed_mps = check_field(SupervisorConfig, "rolling_speed_mps", wheel_speed_mps, "--rolling-speed")
+    if inching:
+        check_field(SimulationConfig, "duration_s", inch_duration_s, "--inch-duration")
     rows = []
     for f in tows:
         for x in xts:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import io
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -190,14 +191,14 @@ class Result:
         cols = ["t_s", "segment"] + list(SEGMENT_COLUMNS)
         data = np.column_stack([np.repeat(self.t, n), np.tile(np.arange(n), n_t)]
                                + [self.segments[c].reshape(-1) for c in SEGMENT_COLUMNS])
-        return _csv(cols, data, int_cols=(1,))
+        return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
 
     def links_csv(self) -> str:
         n_t, n = self.links["force_N"].shape
         cols = ["t_s", "link"] + list(LINK_COLUMNS)
         data = np.column_stack([np.repeat(self.t, n), np.tile(np.arange(n), n_t)]
                                + [self.links[c].reshape(-1) for c in LINK_COLUMNS])
-        return _csv(cols, data, int_cols=(1,))
+        return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
 
     def write(self, out_dir, plot: bool = True, plot_format: str = "png", overwrite: bool = False) -> list:
         """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots,
@@ -226,6 +227,12 @@ class Result:
         return relocate(paths, stage, out_dir)
 
 
+def time_decimals(output_dt_s: float) -> int:
+    """Decimals of ``t_s`` in the CSVs: 4, or enough that times ``output_dt_s`` apart print apart
+    (one digit below the sampling interval's leading digit; at most 12)."""
+    return int(min(12, max(4, 1 - math.floor(math.log10(output_dt_s)))))
+
+
 #: Keys of ``summary.json`` that are not the mode's own (the rest is ``Result.mode_summary``).
 _SUMMARY_KEYS = ("scenario", "snoworm_version", "segments", "duration_s", "distance_m", "mean_speed_mps",
                  "final_link_forces_N", "final_net_forces_N", "final_slip", "final_speed_mps", "max_abs_link_force_N",
@@ -251,7 +258,7 @@ def load_result(run_dir) -> Result:
     """Read a run folder written by :meth:`Result.write` (or ``snoworm run``) back into a Result.
 
     The series come from ``segments.csv`` and ``links.csv``, so they carry the files' precision:
-    6 significant digits (times: 4 decimals).  The scenario is ``scenario.yaml`` (validated
+    6 significant digits (times: 4 decimals, more for an ``output_dt_s`` below 1e-3).  The scenario is ``scenario.yaml`` (validated
     again); ``stats``, ``events`` and the mode's metrics come from ``summary.json``.  The
     integration intervals (``phases``) are not written to disk and come back empty.
     """
@@ -268,11 +275,11 @@ def load_result(run_dir) -> Result:
                   mode_summary)
 
 
-def _csv(cols, data, int_cols=()):
+def _csv(cols, data, int_cols=(), t_decimals=4):
     buf = io.StringIO()
     buf.write(",".join(cols) + "\n")
     fmt = ["%.6g"] * data.shape[1]
-    fmt[0] = "%.4f"
+    fmt[0] = f"%.{t_decimals}f"
     for c in int_cols:
         fmt[c] = "%d"
     np.savetxt(buf, data, fmt=fmt, delimiter=",")

@@ -19,9 +19,10 @@ import yaml
 from . import yamlio
 from .dynamics import ChainModel
 from .params import PARAMETER_SETS
-from .schema import Config, ScenarioError, build, dump, field, suggest
-from .sections import (BUILT_IN_MODES, LinkConfig, ModeConfig, ModeRegistry, PatchConfig, RandomTerrainConfig,
-                       SegmentConfig, SimulationConfig, TerrainConfig, TerrainModelConfig, TowConfig, VehicleConfig)
+from .schema import Config, ScenarioError, build, dump, field, quote, short_key, suggest
+from .sections import (BUILT_IN_MODES, MAX_OUTPUT_SAMPLES, LinkConfig, ModeConfig, ModeRegistry, PatchConfig,
+                       RandomTerrainConfig, SegmentConfig, SimulationConfig, TerrainConfig, TerrainModelConfig,
+                       TowConfig, VehicleConfig)
 
 __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
@@ -48,12 +49,15 @@ def build_mode_config(raw, path="mode") -> ModeConfig:
     """Validate a ``mode`` mapping against the config class registered for its ``type``."""
     reg = MODE_CONFIGS
     if not isinstance(raw, dict):
-        raise ScenarioError(f"{path}: expected a mapping with a 'type' key ({', '.join(reg)}), got {raw!r}.")
+        raise ScenarioError(f"{path}: expected a mapping with a 'type' key ({', '.join(reg)}), got {quote(raw)}.")
     kind = raw.get("type")
     if kind is None:
         raise ScenarioError(f"{path}.type: is required but missing. Choose one of: {', '.join(reg)}.")
+    if not isinstance(kind, str):
+        raise ScenarioError(f"{path}.type: expected the name of a mode ({', '.join(reg)}), got "
+                            f"{type(kind).__name__} {quote(kind)}.")
     if kind not in reg:
-        raise ScenarioError(f"{path}.type: unknown mode {kind!r}.{suggest(kind, reg)} Known modes: {', '.join(reg)}.")
+        raise ScenarioError(f"{path}.type: unknown mode {quote(kind)}.{suggest(kind, reg)} Known modes: {', '.join(reg)}.")
     return build(reg[kind], raw, path)
 
 
@@ -80,6 +84,12 @@ class Scenario(Config):
         if not isinstance(mode, ModeConfig):
             mode = build_mode_config(mode)
             object.__setattr__(self, "mode", mode)
+        sim = self.simulation
+        n_out = (sim.duration_s / sim.output_dt_s + 1) * self.vehicle.segments
+        if n_out > MAX_OUTPUT_SAMPLES:
+            raise ScenarioError(f"simulation.output_dt_s: {sim.duration_s:g} s sampled every {sim.output_dt_s:g} s "
+                                f"for {self.vehicle.segments} segments gives {n_out:.0f} output samples (times x segments), over "
+                                f"the {MAX_OUTPUT_SAMPLES} allowed (memory). Raise output_dt_s or shorten duration_s.")
         mode.check_vehicle(self.vehicle, "mode")
         mode.check_scenario(self, "mode")      # checks needing terrain and tow (e.g. force control)
 
@@ -126,8 +136,9 @@ class Scenario(Config):
         for key in ("xt", "profile", "patches", "random"):
             if t[key] is None:
                 t.pop(key)
-        if data["simulation"]["max_step_s"] is None:
-            data["simulation"].pop("max_step_s")
+        for key in ("max_step_s", "max_wall_s"):
+            if data["simulation"][key] is None:
+                data["simulation"].pop(key)
         if self.__dict__.get("_notes"):
             data["sources"] = dict(self.__dict__["_notes"])
         return data
@@ -160,7 +171,7 @@ def read_model_file(mfile, base_dir):
     a relative path is taken relative to the scenario file.
     """
     if not isinstance(mfile, str):
-        raise ScenarioError(f"terrain.model_file: expected a file path, got {mfile!r}.")
+        raise ScenarioError(f"terrain.model_file: expected a file path, got {quote(mfile)}.")
     path = Path(mfile)
     if not path.is_absolute() and base_dir is not None:
         path = Path(base_dir) / path
@@ -190,14 +201,14 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
     raw = copy.deepcopy(raw)
     for key in raw:
         if key not in _TOP_KEYS:
-            raise ScenarioError(f"{key}: unknown key.{suggest(key, _TOP_KEYS)} Known top-level keys: {', '.join(_TOP_KEYS)}.")
+            raise ScenarioError(f"{short_key(key)}: unknown key.{suggest(key, _TOP_KEYS)} Known top-level keys: {', '.join(_TOP_KEYS)}.")
     for key in ("name", "vehicle", "terrain", "tow", "mode", "simulation"):
         if key not in raw:
             raise ScenarioError(f"{key}: is required but missing. Add a '{key}:' section to the scenario "
                                 "(see scenarios/tow6_uniform.yaml for an example).")
     veh = raw["vehicle"]
     if not isinstance(veh, dict):
-        raise ScenarioError(f"vehicle: expected a mapping, got {veh!r}.")
+        raise ScenarioError(f"vehicle: expected a mapping, got {quote(veh)}.")
     entries, veh["parameter_set"] = parameter_entries(veh.get("parameter_set"), base_dir)
     ps = {sec: {k: v for k, (v, _) in items.items()} for sec, items in entries.items()}
     notes = _source_notes(raw.pop("sources", None) or {})
@@ -327,18 +338,18 @@ def read_parameter_file(path) -> dict:
 
 def _text(v, path):
     if not isinstance(v, str):
-        raise ScenarioError(f"{path}: expected text, got {v!r}.")
+        raise ScenarioError(f"{path}: expected text, got {quote(v)}.")
     return v
 
 
 def parse_set_option(item: str):
     """Split ``dotted.key=value`` (value parsed as YAML) into ``(key, value)``."""
     if "=" not in item:
-        raise ScenarioError(f"--set {item!r}: expected KEY=VALUE with a dotted scenario key, e.g. terrain.xt=0.5.")
+        raise ScenarioError(f"--set {quote(item)}: expected KEY=VALUE with a dotted scenario key, e.g. terrain.xt=0.5.")
     key, _, text = item.partition("=")
     key = key.strip()
     if not key or any(not p for p in key.split(".")):
-        raise ScenarioError(f"--set {item!r}: the key must be a dotted path such as tow.force_N.")
+        raise ScenarioError(f"--set {quote(item)}: the key must be a dotted path such as tow.force_N.")
     try:
         value = yamlio.load_yaml_text(text, f"--set {key}")
     except ScenarioError as exc:

@@ -17,12 +17,14 @@ import difflib
 import functools
 import math
 import numbers
+import reprlib
 import typing
 from typing import Any
 
 import numpy as np
 
-__all__ = ["Config", "ScenarioError", "field", "build", "dump", "suggest"]
+__all__ = ["Config", "ScenarioError", "field", "build", "dump", "suggest", "quote", "short_key", "check_field",
+           "domain_text"]
 
 _MISSING = dataclasses.MISSING
 
@@ -32,7 +34,7 @@ class ScenarioError(ValueError):
 
 
 def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None, unit="", doc="",
-          default_factory=_MISSING, search=None):
+          default_factory=_MISSING, search=None, why=""):
     """A dataclass field with validation metadata.
 
     Parameters
@@ -49,8 +51,11 @@ def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None,
         One-line meaning, shown in messages.
     search : (float, float), optional
         Bounds of a parameter search over this value (``snoworm calibrate``); ``None``: not fitted.
+    why : str
+        Why the bounds are what they are (the physical domain, or what a larger value would cost),
+        shown when a value is out of bounds.
     """
-    md = dict(gt=gt, ge=ge, lt=lt, le=le, choices=choices, unit=unit, doc=doc, search=search)
+    md = dict(gt=gt, ge=ge, lt=lt, le=le, choices=choices, unit=unit, doc=doc, search=search, why=why)
     kw = {"metadata": md}
     if default is not _MISSING:
         kw["default"] = default
@@ -61,10 +66,55 @@ def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None,
 
 def suggest(word: str, options) -> str:
     """A ' Did you mean ...?' suffix for a misspelt key, or ''."""
+    if len(str(word)) > 100:        # no key or choice is that long (and difflib would take its time)
+        return ""
     close = difflib.get_close_matches(str(word), [str(o) for o in options], n=3, cutoff=0.6)
     if not close:
         return ""
     return " Did you mean " + " or ".join(repr(c) for c in close) + "?"
+
+
+def quote(value, limit: int = 100) -> str:
+    """The repr of ``value`` cut to ``limit`` characters, for error messages.
+
+    Parameters
+    ----------
+    value : object
+        Offending value; may be huge (a 2 MB string, a long list).
+    limit : int
+        Most characters of the repr kept.
+
+    Returns
+    -------
+    str
+        ``repr(value)`` if short, else its head and the total length: ``'xxxx...' (2000000 characters)``.
+    """
+    is_text = isinstance(value, (str, bytes, bytearray))
+    try:  # reprlib shortens containers and other objects; only the head of a string is repr'd
+        text = repr(value[:limit + 1]) if is_text else reprlib.repr(value)
+    except ValueError:  # an int beyond Python's str-digit limit
+        text = f"<{type(value).__name__}>"
+    if len(text) <= limit and not (is_text and len(value) > limit):
+        return text
+    unit = "characters" if isinstance(value, str) else "bytes" if is_text else "items"
+    return f"{text[:limit]}... ({len(value) if hasattr(value, '__len__') else '?'} {unit})"
+
+
+def short_key(key, limit: int = 60) -> str:
+    """A mapping key as written in a dotted path of a message, cut to ``limit`` characters."""
+    text = str(key)
+    return text if len(text) <= limit else f"{text[:limit]}..."
+
+
+def domain_text(md) -> str:
+    """The interval of a field's bounds, e.g. ``(0, 1]`` or ``[0, 1e+06]``; '' when unbounded."""
+    lo = md.get("gt") if md.get("gt") is not None else md.get("ge")
+    hi = md.get("lt") if md.get("lt") is not None else md.get("le")
+    if lo is None and hi is None:
+        return ""
+    left = "(" if md.get("gt") is not None or lo is None else "["
+    right = ")" if md.get("lt") is not None or hi is None else "]"
+    return f"{left}{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}{right}"
 
 
 def _fail(path, msg):
@@ -88,23 +138,30 @@ def _check_number(path, value, md, kind):
             try:
                 value = float(value)
             except ValueError:
-                _fail(path, f"expected a number{_describe(md)}, got the text {value!r}. Write a plain number, e.g. 1.5.")
+                _fail(path, f"expected a number{_describe(md)}, got the text {quote(value)}. Write a plain number, e.g. 1.5.")
         else:
-            _fail(path, f"expected a number{_describe(md)}, got {type(value).__name__} {value!r}. Write a plain number.")
+            _fail(path, f"expected a number{_describe(md)}, got {type(value).__name__} {quote(value)}. Write a plain number.")
+    if isinstance(value, numbers.Integral):
+        value = int(value)
+        if abs(value) > 1e300:      # beyond any bound; float() of it would overflow
+            _fail(path, f"must be a finite number{_describe(md)}, got an integer of {len(str(abs(value)))} digits.")
+    elif not math.isfinite(float(value)):
+        dom = f" in {domain_text(md)}" if domain_text(md) else ""
+        _fail(path, f"must be a finite number{dom}{_describe(md)}, got {float(value)!r}.")
     if kind is int:
         if float(value) != int(value):
             _fail(path, f"expected a whole number{_describe(md)}, got {value!r}.")
         value = int(value)
     else:
         value = float(value)
-        if not math.isfinite(value):
-            _fail(path, f"must be a finite number{_describe(md)}, got {value!r}.")
     unit = f" {md.get('unit')}" if md.get("unit") else ""
     for key, op, word in (("gt", lambda a, b: a > b, "greater than"), ("ge", lambda a, b: a >= b, "at least"),
                           ("lt", lambda a, b: a < b, "less than"), ("le", lambda a, b: a <= b, "at most")):
         bound = md.get(key)
         if bound is not None and not op(value, bound):
-            _fail(path, f"must be {word} {bound}{unit}{_describe(md)}, got {value!r}. Change it to a value {word} {bound}.")
+            why = f" {md['why']}" if md.get("why") else ""
+            _fail(path, f"must be {word} {bound:g}{unit}{_describe(md)}, got {value:g}; the allowed range is "
+                        f"{domain_text(md)}.{why} Change it to a value {word} {bound:g}.")
     return value
 
 
@@ -126,7 +183,7 @@ def _convert(path, value, tp, md):
         if isinstance(value, tp):       # constructed (and so validated) already
             return value
         if not isinstance(value, dict):
-            _fail(path, f"expected a mapping of keys for {tp.__name__}, got {type(value).__name__} {value!r}.")
+            _fail(path, f"expected a mapping of keys for {tp.__name__}, got {type(value).__name__} {quote(value)}.")
         return build(tp, value, path)
     if origin in (tuple, list):
         if isinstance(value, np.ndarray):
@@ -134,31 +191,31 @@ def _convert(path, value, tp, md):
         if isinstance(value, (numbers.Real, str)) and not isinstance(value, (bool, np.bool_)):
             value = [value]
         if not isinstance(value, (list, tuple)):
-            _fail(path, f"expected a list{_describe(md)}, got {type(value).__name__} {value!r}.")
+            _fail(path, f"expected a list{_describe(md)}, got {type(value).__name__} {quote(value)}.")
         inner = args[0] if args else Any
         return tuple(_convert(f"{path}[{j}]", v, inner, md) for j, v in enumerate(value))
     if origin is dict:
         if not isinstance(value, dict):
-            _fail(path, f"expected a mapping{_describe(md)}, got {type(value).__name__} {value!r}.")
+            _fail(path, f"expected a mapping{_describe(md)}, got {type(value).__name__} {quote(value)}.")
         kt, vt = args
         out = {}
         for k, v in value.items():
-            kk = _convert(f"{path}.{k}", k, kt, {}) if kt is not Any else k
-            out[kk] = _convert(f"{path}.{k}", v, vt, md)
+            kk = _convert(f"{path}.{short_key(k)}", k, kt, {}) if kt is not Any else k
+            out[kk] = _convert(f"{path}.{short_key(k)}", v, vt, md)
         return out
     if tp is float or tp is int:
         value = _check_number(path, value, md, tp)
     elif tp is bool:
         if not isinstance(value, bool):
-            _fail(path, f"expected true or false{_describe(md)}, got {value!r}.")
+            _fail(path, f"expected true or false{_describe(md)}, got {quote(value)}.")
     elif tp is str:
         if isinstance(value, np.str_):
             value = str(value)
         if not isinstance(value, str):
-            _fail(path, f"expected text{_describe(md)}, got {type(value).__name__} {value!r}.")
+            _fail(path, f"expected text{_describe(md)}, got {type(value).__name__} {quote(value)}.")
     choices = md.get("choices")
     if choices is not None and value not in choices:
-        _fail(path, f"must be one of {', '.join(repr(c) for c in choices)}; got {value!r}.{suggest(value, choices)}")
+        _fail(path, f"must be one of {', '.join(repr(c) for c in choices)}; got {quote(value)}.{suggest(value, choices)}")
     return value
 
 
@@ -212,12 +269,12 @@ def build(cls, data: dict, path: str = ""):
     if data is None:
         data = {}
     if not isinstance(data, dict):
-        _fail(path or "scenario", f"expected a mapping of keys, got {type(data).__name__} {data!r}.")
+        _fail(path or "scenario", f"expected a mapping of keys, got {type(data).__name__} {quote(data)}.")
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     prefix = f"{path}." if path else ""
     for key in data:
         if key not in fields:
-            _fail(f"{prefix}{key}", f"unknown key.{suggest(key, fields)} Known keys here: {', '.join(fields)}.")
+            _fail(f"{prefix}{short_key(key)}", f"unknown key.{suggest(key, fields)} Known keys here: {', '.join(fields)}.")
     for name, f in fields.items():
         if name not in data and f.default is _MISSING and f.default_factory is _MISSING:
             _fail(f"{prefix}{name}", f"is required but missing{_describe(f.metadata)}. Add it to the scenario.")
@@ -229,6 +286,29 @@ def build(cls, data: dict, path: str = ""):
         return cls(**{k: _convert(f"{prefix}{k}", v, hints[k], fields[k].metadata) for k, v in data.items()})
     finally:
         _PATH.reset(token)
+
+
+def check_field(cls, name: str, value, path: str | None = None):
+    """Validate one value against the declaration of field ``name`` of config class ``cls``.
+
+    The single place where a command's own option (``--xt``, ``--rolling-speed``, a calibration
+    bound) meets the same domain as the scenario field it stands for.
+
+    Returns
+    -------
+    object
+        The converted value (e.g. a float).
+
+    Raises
+    ------
+    ScenarioError
+        Naming ``path`` (default ``cls._section.name``), the rule and the fix.
+    """
+    f = {f.name: f for f in dataclasses.fields(cls)}[name]
+    if path is None:
+        section = getattr(cls, "_section", "")
+        path = f"{section}.{name}" if section else name
+    return _convert(path, value, _type_hints(cls)[name], f.metadata)
 
 
 def dump(obj):

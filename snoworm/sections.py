@@ -17,12 +17,28 @@ from typing import Optional
 import numpy as np
 
 from .dynamics import LinkArrays, SegmentArrays
-from .schema import Config, ScenarioError, build, dump, field, suggest
+from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
 from .terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
 
-__all__ = ["SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig",
-           "TerrainConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig",
-           "BUILT_IN_MODES", "ModeRegistry"]
+__all__ = ["XT_DOMAIN", "FINITE_WHY", "BIG_FORCE_N", "BIG_SPEED_MPS", "MAX_SEGMENTS", "MAX_OUTPUT_SAMPLES",
+           "SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig", "TerrainConfig",
+           "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig", "BUILT_IN_MODES", "ModeRegistry"]
+
+
+#: Domain of the terrain coefficient X_t wherever it appears (constant, profiles, patches, random
+#: profiles, sweeps, mobility-map grids, calibration): paper section 3 defines X_t on (0, 1].
+XT_DOMAIN = dict(gt=0, le=1, why="X_t is defined on (0, 1] (paper section 3: 1 is firm neve, lower is "
+                                 "looser snow); above about 1.1 the traction law of Eq. 2 reverses.")
+#: Generous but finite bounds: far beyond any rover, small enough that a run stays finite.
+BIG_FORCE_N = 1e6
+BIG_SPEED_MPS = 100.0
+BIG_TIME_S = 1e5
+MAX_SEGMENTS = 200
+#: most output samples of a run (time steps x segments), which bounds the memory of the results and
+#: the CSVs (~900 bytes a sample at the peak: 150 000 keep a run under ~200 MB; shipped runs have at most 12 000)
+MAX_OUTPUT_SAMPLES = 150_000
+_REG_WHY = "A regularisation speed, small against the driving speeds."
+FINITE_WHY = "A larger value would only make the run stiff or meaningless (it must stay finite)."
 
 
 @dataclass(frozen=True)
@@ -30,18 +46,22 @@ class SegmentConfig(Config):
     """Physical parameters of one segment (docs/model.md section 1)."""
 
     _section = "vehicle.segment"
-    mass_kg: float = field(gt=0, unit="kg", doc="segment mass including wheels")
-    wheel_radius_m: float = field(gt=0, unit="m", doc="wheel radius R_w")
-    wheel_inertia_kgm2: float = field(gt=0, unit="kg m^2", doc="inertia of one wheel J")
-    wheelbase_m: float = field(ge=0, unit="m", doc="distance between the two axles")
-    wheels_per_axle: int = field(ge=1, doc="wheels on each of the two axles")
-    gravity_mps2: float = field(gt=0, unit="m/s^2", doc="gravitational acceleration")
-    motor_slope_Nms_per_rad: float = field(gt=0, unit="N m s/rad", doc="motor torque-speed slope at the wheel")
-    no_load_speed_radps: float = field(gt=0, unit="rad/s", doc="no-load wheel speed")
-    torque_limit_Nm: float = field(gt=0, unit="N m", doc="motor torque limit at the wheel, per wheel")
+    mass_kg: float = field(gt=0, le=1e5, why=FINITE_WHY, unit="kg", doc="segment mass including wheels")
+    wheel_radius_m: float = field(gt=0, le=10, why=FINITE_WHY, unit="m", doc="wheel radius R_w")
+    wheel_inertia_kgm2: float = field(gt=0, le=1e4, why=FINITE_WHY, unit="kg m^2", doc="inertia of one wheel J")
+    wheelbase_m: float = field(ge=0, le=100, why=FINITE_WHY, unit="m", doc="distance between the two axles")
+    wheels_per_axle: int = field(ge=1, le=100, why=FINITE_WHY, doc="wheels on each of the two axles")
+    gravity_mps2: float = field(gt=0, le=100, why=FINITE_WHY, unit="m/s^2", doc="gravitational acceleration")
+    motor_slope_Nms_per_rad: float = field(gt=0, le=1e5, why=FINITE_WHY, unit="N m s/rad",
+                                           doc="motor torque-speed slope at the wheel")
+    no_load_speed_radps: float = field(gt=0, le=1e4, why=FINITE_WHY, unit="rad/s", doc="no-load wheel speed")
+    torque_limit_Nm: float = field(gt=0, le=1e6, why=FINITE_WHY, unit="N m",
+                                   doc="motor torque limit at the wheel, per wheel")
     drivetrain_efficiency: float = field(gt=0, le=1, doc="drivetrain efficiency, for electrical energy")
-    speed_kp_Nms_per_rad: float = field(gt=0, unit="N m s/rad", doc="wheel-speed PI proportional gain")
-    speed_ki_Nm_per_rad: float = field(ge=0, unit="N m/rad", doc="wheel-speed PI integral gain")
+    speed_kp_Nms_per_rad: float = field(gt=0, le=1e5, why=FINITE_WHY, unit="N m s/rad",
+                                        doc="wheel-speed PI proportional gain")
+    speed_ki_Nm_per_rad: float = field(ge=0, le=1e6, why=FINITE_WHY, unit="N m/rad",
+                                       doc="wheel-speed PI integral gain")
 
 
 @dataclass(frozen=True)
@@ -50,20 +70,25 @@ class LinkConfig(Config):
 
     _section = "vehicle.links"
     type: tuple[str, ...] = field(doc="'fixed' or 'prismatic', one for all links or a list with one per link")
-    stiffness_N_per_m: float = field(gt=0, unit="N/m", doc="link stiffness k_c")
-    damping_Ns_per_m: float = field(ge=0, unit="N s/m", doc="link damping c_c")
-    rest_spacing_m: float = field(gt=0, unit="m", doc="centre-to-centre spacing of unloaded segments")
-    stroke_min_m: float = field(unit="m", doc="prismatic joint fully contracted extension")
-    stroke_max_m: float = field(unit="m", doc="prismatic joint fully extended extension")
-    force_max_N: float = field(gt=0, unit="N", doc="prismatic joint force limit")
-    rate_max_mps: float = field(gt=0, unit="m/s", doc="prismatic joint rate limit")
-    force_gain_per_s: float = field(gt=0, unit="1/s", doc="bandwidth of the joint's force loop")
-    joint_efficiency: float = field(gt=0, le=1, doc="prismatic actuator efficiency, mechanical work / electrical energy")
+    stiffness_N_per_m: float = field(gt=0, le=1e9, why=FINITE_WHY, unit="N/m", doc="link stiffness k_c")
+    damping_Ns_per_m: float = field(ge=0, le=1e8, why=FINITE_WHY, unit="N s/m", doc="link damping c_c")
+    rest_spacing_m: float = field(gt=0, le=100, why=FINITE_WHY, unit="m",
+                                  doc="centre-to-centre spacing of unloaded segments")
+    stroke_min_m: float = field(ge=-100, le=100, why=FINITE_WHY, unit="m",
+                                doc="prismatic joint fully contracted extension")
+    stroke_max_m: float = field(ge=-100, le=100, why=FINITE_WHY, unit="m",
+                                doc="prismatic joint fully extended extension")
+    force_max_N: float = field(gt=0, le=BIG_FORCE_N, why=FINITE_WHY, unit="N", doc="prismatic joint force limit")
+    rate_max_mps: float = field(gt=0, le=BIG_SPEED_MPS, why=FINITE_WHY, unit="m/s", doc="prismatic joint rate limit")
+    force_gain_per_s: float = field(gt=0, le=1e5, why=FINITE_WHY, unit="1/s",
+                                    doc="bandwidth of the joint's force loop")
+    joint_efficiency: float = field(gt=0, le=1,
+                                    doc="prismatic actuator efficiency, mechanical work / electrical energy")
 
     def _check(self, path):
         for j, t in enumerate(self.type):
             if t not in ("fixed", "prismatic"):
-                raise ScenarioError(f"{path}.type[{j}]: must be 'fixed' or 'prismatic', got {t!r}.{suggest(t, ('fixed', 'prismatic'))}")
+                raise ScenarioError(f"{path}.type[{j}]: must be 'fixed' or 'prismatic', got {quote(t)}.{suggest(t, ('fixed', 'prismatic'))}")
         if not self.stroke_max_m > self.stroke_min_m:
             raise ScenarioError(f"{path}.stroke_max_m: must be greater than stroke_min_m ({self.stroke_min_m} m), "
                                 f"got {self.stroke_max_m} m. Give the joint a positive stroke.")
@@ -74,15 +99,21 @@ class TerrainModelConfig(Config):
     """Terrain-model coefficients (paper Table 3, docs/model.md section 2)."""
 
     _section = "terrain.model"
-    b_tF: float = field(gt=0, search=(1e-3, 5.0), doc="Eq. 2 slip-to-tractive-force coefficient")
-    b_trF: float = field(ge=0, search=(0.0, 2.0), doc="Eq. 3 terrain resistance coefficient")
-    A: float = field(search=(-5.0, 5.0), doc="Eq. 3 terrain coefficient exponent")
-    peak_exponent_d: float = field(search=(0.0, 6.0),
-                                   doc="exponent of X_t in Eq. 2's peak factor (2 default, 1 literal)")
-    tau0: float = field(search=(-math.inf, math.inf), doc="resistance torque law constant")
-    tau1: float = field(search=(-math.inf, math.inf), doc="resistance torque law slope in (1 - X_t)")
-    slip_eps_mps: float = field(gt=0, unit="m/s", doc="slip regularisation speed")
-    sign_eps_mps: float = field(gt=0, unit="m/s", doc="smooth-sign speed scale")
+    b_tF: float = field(gt=0, le=100, search=(1e-3, 5.0), doc="Eq. 2 slip-to-tractive-force coefficient",
+                        why="Eq. 2: b_tF scales the peak traction F_n X^d b_tF.")
+    b_trF: float = field(ge=0, le=100, search=(0.0, 2.0), doc="Eq. 3 terrain resistance coefficient",
+                         why="Eq. 3: b_trF scales the resistance b_trF F_n / X^A, which opposes motion.")
+    A: float = field(gt=0, le=10, search=(1e-3, 5.0), doc="Eq. 3 terrain coefficient exponent",
+                     why="Eq. 3: the resistance grows as X_t falls (looser snow), so A > 0.")
+    peak_exponent_d: float = field(gt=0, le=10, search=(1e-3, 6.0),
+                                   doc="exponent of X_t in Eq. 2's peak factor (2 default, 1 literal)",
+                                   why="Eq. 2: the peak traction F_n X^d b_tF falls with X_t, so d > 0.")
+    tau0: float = field(ge=0, le=100, search=(0.0, 100.0), doc="resistance torque law constant",
+                        why="The resistance torque opposes the wheel's rotation, so tau0 >= 0.")
+    tau1: float = field(ge=0, le=100, search=(0.0, 100.0), doc="resistance torque law slope in (1 - X_t)",
+                        why="The resistance torque grows in looser snow (1 - X_t), so tau1 >= 0.")
+    slip_eps_mps: float = field(gt=0, le=1, unit="m/s", doc="slip regularisation speed", why=_REG_WHY)
+    sign_eps_mps: float = field(gt=0, le=1, unit="m/s", doc="smooth-sign speed scale", why=_REG_WHY)
     torque_balance: str = field(choices=("contact", "traction"), doc="wheel torque-balance convention")
 
     def params(self) -> TerrainParams:
@@ -95,10 +126,10 @@ class PatchConfig(Config):
     """A patch of other snow on the route (``terrain.patches``), X_t = ``xt`` on ``[start_m, end_m]``."""
 
     _section = "terrain.patches[]"
-    start_m: float = field(unit="m", doc="position where the patch's X_t is reached")
-    end_m: float = field(unit="m", doc="position where the patch's X_t ends")
-    xt: float = field(gt=0, doc="terrain coefficient X_t inside the patch")
-    ramp_m: float = field(0.0, ge=0, unit="m",
+    start_m: float = field(ge=-1e7, le=1e7, why=FINITE_WHY, unit="m", doc="position where the patch's X_t is reached")
+    end_m: float = field(ge=-1e7, le=1e7, why=FINITE_WHY, unit="m", doc="position where the patch's X_t ends")
+    xt: float = field(**XT_DOMAIN, doc="terrain coefficient X_t inside the patch")
+    ramp_m: float = field(0.0, ge=0, le=1e7, why=FINITE_WHY, unit="m",
                           doc="length of the linear transition to the base X_t outside each edge (0: a step)")
 
     def _check(self, path):
@@ -112,13 +143,17 @@ class RandomTerrainConfig(Config):
     """A seeded random X_t profile (``terrain.random``): Gaussian-filtered white noise, clipped."""
 
     _section = "terrain.random"
-    mean: float = field(gt=0, doc="mean X_t")
-    std: float = field(ge=0, doc="standard deviation of X_t before clipping")
-    correlation_length_m: float = field(gt=0, unit="m", doc="distance at which the correlation falls to 1/e")
-    seed: int = field(ge=0, doc="seed of the random generator (same seed, same profile)")
-    length_m: float = field(gt=0, unit="m", doc="length of the generated stretch (X_t held beyond it)")
-    start_m: float = field(0.0, unit="m", doc="position where the generated stretch starts")
-    min_xt: float = field(0.05, gt=0, doc="lower clip of X_t, keeps X_t > 0")
+    mean: float = field(**XT_DOMAIN, doc="mean X_t")
+    std: float = field(ge=0, le=1, why="X_t lies in (0, 1].", doc="standard deviation of X_t before clipping")
+    correlation_length_m: float = field(gt=0, le=1e7, why=FINITE_WHY, unit="m",
+                                        doc="distance at which the correlation falls to 1/e")
+    seed: int = field(ge=0, le=2**63 - 1, why="A 64-bit seed.",
+                      doc="seed of the random generator (same seed, same profile)")
+    length_m: float = field(gt=0, le=1e7, why=FINITE_WHY, unit="m",
+                            doc="length of the generated stretch (X_t held beyond it)")
+    start_m: float = field(0.0, ge=-1e7, le=1e7, why=FINITE_WHY, unit="m",
+                           doc="position where the generated stretch starts")
+    min_xt: float = field(0.05, **XT_DOMAIN, doc="lower clip of X_t, keeps X_t > 0")
 
     def _check(self, path):
         if self.length_m / (self.correlation_length_m / 8.0) > 200000:
@@ -138,7 +173,8 @@ class TerrainConfig(Config):
 
     _section = "terrain"
     model: TerrainModelConfig = field(doc="terrain-model coefficients")
-    xt: Optional[float] = field(None, gt=0, doc="constant terrain coefficient X_t (the base X_t with patches)")
+    xt: Optional[float] = field(None, **XT_DOMAIN, search=(0.05, 1.0),
+                                doc="constant terrain coefficient X_t (the base X_t with patches)")
     profile: Optional[tuple[tuple[float, ...], ...]] = field(None, doc="list of [position_m, xt] pairs")
     patches: Optional[tuple[PatchConfig, ...]] = field(None, doc="patches of other snow on the base xt")
     random: Optional[RandomTerrainConfig] = field(None, doc="seeded random X_t profile")
@@ -167,12 +203,11 @@ class TerrainConfig(Config):
             prev = -math.inf
             for j, pair in enumerate(self.profile):
                 if len(pair) != 2:
-                    raise ScenarioError(f"{path}.profile[{j}]: expected a pair [position_m, xt], got {list(pair)}.")
+                    raise ScenarioError(f"{path}.profile[{j}]: expected a pair [position_m, xt], got {quote(list(pair))}.")
                 if not pair[0] > prev:
                     raise ScenarioError(f"{path}.profile[{j}]: positions must increase strictly; {pair[0]} m follows {prev} m.")
-                if not pair[1] > 0:
-                    raise ScenarioError(f"{path}.profile[{j}]: X_t must be greater than 0, got {pair[1]}. "
-                                        "X_t = 1 is neve, lower is looser snow.")
+                check_field(PatchConfig, "start_m", pair[0], f"{path}.profile[{j}][0]")
+                check_field(PatchConfig, "xt", pair[1], f"{path}.profile[{j}][1]")
                 prev = pair[0]
 
     def compile(self) -> TerrainProfile:
@@ -196,7 +231,8 @@ class TowConfig(Config):
     """Towed load on the rear segment (docs/model.md section 4)."""
 
     _section = "tow"
-    force_N: float = field(unit="N", doc="constant force pulling the rear segment backward")
+    force_N: float = field(ge=-BIG_FORCE_N, le=BIG_FORCE_N, why=FINITE_WHY, unit="N",
+                           doc="constant force pulling the rear segment backward")
 
 
 @dataclass(frozen=True)
@@ -206,17 +242,21 @@ class VehicleConfig(Config):
     _section = "vehicle"
     parameter_set: str = field(doc="named set of physical values (one of PARAMETER_SETS), or the path of a YAML "
                                    "parameter-set file of the user's own vehicle")
-    segments: int = field(ge=1, doc="number of segments N (segment 0 leads)")
+    segments: int = field(ge=1, le=MAX_SEGMENTS, doc="number of segments N (segment 0 leads)",
+                          why="The paper's vehicles have 2 to 6; more only costs memory and time.")
     segment: SegmentConfig = field(doc="parameters shared by every segment")
     links: LinkConfig = field(doc="inter-segment links")
     segment_overrides: dict[int, dict] = field(default_factory=dict, doc="per-segment parameter changes, by index")
 
     def _check(self, path):
         for k, ov in self.segment_overrides.items():
+            if not isinstance(ov, dict) and ov is not None:
+                raise ScenarioError(f"{path}.segment_overrides.{short_key(k)}: expected a mapping of segment keys (e.g. "
+                                    f"{{mass_kg: 120}}), got {type(ov).__name__} {quote(ov)}.")
             if not 0 <= k < self.segments:
-                raise ScenarioError(f"{path}.segment_overrides.{k}: segment index out of range 0..{self.segments - 1}.")
+                raise ScenarioError(f"{path}.segment_overrides.{short_key(k)}: segment index out of range 0..{self.segments - 1}.")
             merged = {**dump(self.segment), **(ov or {})}
-            build(SegmentConfig, merged, f"{path}.segment_overrides.{k}")
+            build(SegmentConfig, merged, f"{path}.segment_overrides.{short_key(k)}")
         n_links = max(self.segments - 1, 0)
         if len(self.links.type) not in (1, n_links) and n_links > 0:
             raise ScenarioError(f"{path}.links.type: give one type for all links or {n_links} (one per link); "
@@ -253,13 +293,19 @@ class SimulationConfig(Config):
     """Numerical settings (no physics here)."""
 
     _section = "simulation"
-    duration_s: float = field(gt=0, unit="s", doc="simulated time")
-    output_dt_s: float = field(0.05, gt=0, unit="s", doc="output sampling interval")
+    duration_s: float = field(ge=1e-3, le=BIG_TIME_S, unit="s", doc="simulated time",
+                              why="From a millisecond to about 28 hours of simulated time.")
+    output_dt_s: float = field(0.05, gt=0, le=BIG_TIME_S, why=FINITE_WHY, unit="s", doc="output sampling interval")
     method: str = field("LSODA", choices=("LSODA", "VODE", "BDF", "Radau", "RK45", "DOP853"),
                         doc="solve_ivp method; VODE: ODEPACK VODE (BDF) stepped by snoworm.stepper (inching gaits)")
     rtol: float = field(1e-5, gt=0, lt=1, doc="relative tolerance")
-    atol_scale: float = field(1.0, gt=0, doc="multiplies the per-component absolute tolerances")
-    max_step_s: Optional[float] = field(None, gt=0, unit="s", doc="largest solver step (none: unlimited)")
+    atol_scale: float = field(1.0, gt=0, le=1e3, why="At 1e3 the position tolerance is already 1 mm.",
+                              doc="multiplies the per-component absolute tolerances")
+    max_step_s: Optional[float] = field(None, gt=0, le=BIG_TIME_S, why=FINITE_WHY, unit="s",
+                                        doc="largest solver step (none: unlimited)")
+    max_wall_s: Optional[float] = field(None, gt=0, le=1e7, why=FINITE_WHY, unit="s",
+                                        doc="wall-clock time after which the run stops with a solver failure "
+                                            "(none: no limit)")
 
 
 class ModeConfig(Config):

@@ -307,8 +307,8 @@ def random_profile(mean: float, std: float, correlation_length_m: float, seed: i
     White noise on a grid of spacing ``correlation_length_m / 8`` is convolved with a Gaussian
     kernel of standard deviation ``correlation_length_m / 2``, which gives the squared-exponential
     correlation ``rho(r) = exp(-r^2 / correlation_length_m^2)`` (``rho = 1/e`` at one correlation
-    length); it is scaled to standard deviation ``std``, shifted to ``mean`` and clipped below at
-    ``min_xt`` (> 0) so X_t stays physical.  The same arguments always give the same profile
+    length); it is scaled to standard deviation ``std``, shifted to ``mean`` and clipped to
+    ``[min_xt, 1]`` so X_t stays in its domain (0, 1].  The same arguments always give the same profile
     (``numpy.random.default_rng(seed)``); beyond ``[start_m, start_m + length_m]`` X_t is held at
     the end values.
 
@@ -337,6 +337,6 @@ def random_profile(mean: float, std: float, correlation_length_m: float, seed: i
     kern = np.exp(-0.5 * (r / sigma_k) ** 2)
     kern /= np.sqrt(np.sum(kern**2))           # unit variance of the filtered noise
     field_ = np.convolve(noise, kern, mode="valid")[:n]
-    xt = np.maximum(mean + std * field_, min_xt)
+    xt = np.clip(mean + std * field_, min_xt, 1.0)
     pos = start_m + dx * np.arange(n)
     return TerrainProfile(tuple(pos.tolist()), tuple(xt.tolist()))

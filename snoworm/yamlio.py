@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import codecs
 import os
-import reprlib
 
 import yaml
 from yaml.events import MappingStartEvent, SequenceStartEvent
 from yaml.nodes import ScalarNode, SequenceNode
 
-from .schema import ScenarioError
+from .schema import ScenarioError, quote
 
 __all__ = ["MAX_BYTES", "MAX_DEPTH", "MAX_INT_CHARS", "MAX_NODES", "load_yaml_text", "quote", "read_yaml"]
 
@@ -26,32 +25,6 @@ _SYNTAX_HINT = "Fix the syntax (indentation, colons, quotes)."
 _BOMB = f"more than {MAX_NODES} values after expanding aliases: too many aliases / nodes (a YAML alias bomb?)."
 _DEEP = f"nested more than {MAX_DEPTH} levels deep (counting aliases); a scenario needs only a few levels."
 _SKIP_KEY_TAGS = ("tag:yaml.org,2002:merge", "tag:yaml.org,2002:value")  # '<<' and '=' keys
-
-
-def quote(value, limit: int = 100) -> str:
-    """The repr of ``value`` cut to ``limit`` characters, for error messages.
-
-    Parameters
-    ----------
-    value : object
-        Offending value; may be huge (a 2 MB string, a long list).
-    limit : int
-        Most characters of the repr kept.
-
-    Returns
-    -------
-    str
-        ``repr(value)`` if short, else its head and the total length: ``'xxxx...' (2000000 characters)``.
-    """
-    is_text = isinstance(value, (str, bytes, bytearray))
-    try:  # reprlib shortens containers and other objects; only the head of a string is repr'd
-        text = repr(value[:limit + 1]) if is_text else reprlib.repr(value)
-    except ValueError:  # an int beyond Python's str-digit limit
-        text = f"<{type(value).__name__}>"
-    if len(text) <= limit and not (is_text and len(value) > limit):
-        return text
-    unit = "characters" if isinstance(value, str) else "bytes" if is_text else "items"
-    return f"{text[:limit]}... ({len(value) if hasattr(value, '__len__') else '?'} {unit})"
 
 
 def _clip(text, limit: int = 120) -> str:

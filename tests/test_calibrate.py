@@ -138,3 +138,16 @@ def test_cli_calibrate_refuses_a_foreign_folder_before_fitting(tmp_path, monkeyp
     monkeypatch.setattr(cal, "calibrate", lambda *a, **k: pytest.fail("fitted before checking --out"))
     r = CliRunner().invoke(main, ["calibrate", str(gt.default_data_path()), "--fit", "tau0", "--out", str(out)])
     assert r.exit_code == 2 and str(out) in r.output and "--overwrite" in r.output
+def test_fitted_values_at_a_search_bound_are_noted(data, frostyboy):
+    """X_t of a case fitted against its domain's upper end 1 is reported, not passed silently."""
+    from dataclasses import replace
+    seg, tp = frostyboy
+    res = cal.calibrate(data, ["xt"], seg, replace(tp, tau0=0.5))    # more resistance: X_t wants to exceed 1
+    assert all(0 < v <= 1 for v in res.xt)
+    at_bound = [n for n, v in zip(res.names, res.value) if v >= 1 - 1e-3 * 0.95]
+    assert at_bound
+    text = cal.format_report(res)
+    for n in at_bound:
+        assert f"note: {n} = " in text
+    assert text.count("sits at a bound of its search range [0.05, 1]") == len(at_bound)
+    assert "sits at a bound" not in cal.format_report(cal.calibrate(data, ["xt"], seg, tp))   # the shipped set

@@ -63,6 +63,19 @@ def test_written_summary_and_scenario(short_run, tmp_path):
     assert not list(tmp_path.glob(".*.tmp*"))               # no temporary files left behind
 
 
+def test_time_stamps_resolve_the_output_interval(scenario_path):
+    """output_dt_s = 1e-5: every printed t_s distinct (4 decimals used to print 180 000 duplicates)."""
+    from snoworm.results import time_decimals
+    assert time_decimals(0.05) == 4 and time_decimals(0.02) == 4 and time_decimals(1e-5) == 6
+    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.output_dt_s", 1e-5),
+                                                       ("simulation.duration_s", 0.002)])
+    res = simulate(sc)
+    rows = list(csv.reader(io.StringIO(res.segments_csv())))[1:]
+    t = [r[0] for r in rows if r[1] == "0"]
+    assert len(t) == len(set(t)) == res.t.size
+    np.testing.assert_allclose([float(x) for x in t], res.t, atol=1e-6)   # printed to 6 decimals
+
+
 @pytest.mark.parametrize("name", ["tow6_uniform", "inchworm2"])
 def test_load_result_round_trip(tmp_path, name):
     """simulate -> write -> load_result gives the arrays back within the CSV's printed precision

@@ -116,3 +116,52 @@ def test_dump_round_trips_through_build():
     d = dump(p)
     assert d == {"count": 3, "ratio": 0.5, "values": [0.5, 2.0], "kind": "b", "flag": False, "limit": 4.0}
     assert build(Probe, d, "probe") == p
+
+
+# ------------------------------------------------------------------ domains (issue 15)
+
+def test_whole_numbers_reject_nan_inf_and_fractions():
+    from snoworm.schema import check_field
+    from snoworm.sections import VehicleConfig
+    for bad, needle in ((float("nan"), "finite"), (float("inf"), "finite"), (2.5, "whole number"),
+                        (10**400, "finite"), ([3], "expected a number"), ({"a": 1}, "expected a number")):
+        with pytest.raises(ScenarioError, match=needle):
+            check_field(VehicleConfig, "segments", bad)
+    assert check_field(VehicleConfig, "segments", 6.0) == 6
+
+
+def test_check_field_uses_the_declared_domain():
+    from snoworm.schema import check_field
+    from snoworm.sections import TerrainConfig
+    assert check_field(TerrainConfig, "xt", "0.5", "--xt") == 0.5
+    with pytest.raises(ScenarioError, match=r"^--xt: must be at most 1 .*allowed range is \(0, 1\]"):
+        check_field(TerrainConfig, "xt", 1.5, "--xt")
+    with pytest.raises(ScenarioError, match=r"^terrain\.xt: must be greater than 0"):
+        check_field(TerrainConfig, "xt", 0.0)
+
+
+def test_domain_text_marks_open_and_closed_ends():
+    from snoworm.schema import domain_text
+    assert domain_text({"gt": 0, "le": 1}) == "(0, 1]"
+    assert domain_text({"ge": -1e6, "le": 1e6}) == "[-1e+06, 1e+06]"
+    assert domain_text({"gt": 0}) == "(0, inf)"
+    assert domain_text({}) == ""
+
+
+def test_messages_quote_at_most_about_100_characters():
+    from snoworm.schema import quote
+    huge = "x" * 2_000_000
+    with pytest.raises(ScenarioError) as exc:
+        build(SimulationConfig, {"duration_s": huge}, "simulation")
+    assert len(str(exc.value)) < 400
+    assert "2000000 characters" in str(exc.value)
+    with pytest.raises(ScenarioError) as exc:
+        build(SimulationConfig, {"duration_s": list(range(10**6))}, "simulation")
+    assert len(str(exc.value)) < 400
+    assert len(quote(list(range(10**5)))) <= 130
+
+
+def test_a_huge_unknown_key_is_cut_in_the_message():
+    with pytest.raises(ScenarioError) as exc:
+        build(SimulationConfig, {"duration_s": 1.0, "k" * 100_000: 1}, "simulation")
+    assert len(str(exc.value)) < 300 and "unknown key" in str(exc.value)

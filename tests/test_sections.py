@@ -1,4 +1,6 @@
 """Scenario sections (snoworm.sections): the terrain section compiles to one X_t profile; its validation."""
+import re
+
 import numpy as np
 import pytest
 
@@ -56,6 +58,71 @@ def test_random_profile_reproducible_and_seeded():
 def test_terrain_validation_errors(terrain, match):
     with pytest.raises(ScenarioError, match=match):
         scenario_from_dict(_base(**terrain))
+
+
+# ------------------------------------------------------------------ X_t domain (0, 1] everywhere (issue 15)
+_RANDOM = {"mean": 0.6, "std": 0.15, "correlation_length_m": 5.0, "seed": 7, "length_m": 200.0}
+
+
+@pytest.mark.parametrize("terrain, where", [
+    ({"xt": 1.5}, r"^terrain\.xt: must be at most 1"),
+    ({"xt": 0.0}, r"^terrain\.xt: must be greater than 0"),
+    ({"profile": [[0, 0.5], [10, 1.2]]}, r"^terrain\.profile\[1\]\[1\]: must be at most 1"),
+    ({"xt": 0.9, "patches": [{"start_m": 5, "end_m": 8, "xt": 1.01}]}, r"patches\[0\]\.xt: must be at most 1"),
+    ({"random": {**_RANDOM, "mean": 1.1}}, r"^terrain\.random\.mean: must be at most 1"),
+    ({"random": {**_RANDOM, "min_xt": 2}}, r"^terrain\.random\.min_xt: must be at most 1"),
+])
+def test_xt_outside_0_1_is_rejected_with_the_domain(terrain, where):
+    with pytest.raises(ScenarioError, match=where) as exc:
+        scenario_from_dict(_base(**terrain))
+    assert "(0, 1]" in str(exc.value)
+
+
+def test_nan_in_a_profile_is_rejected():
+    with pytest.raises(ScenarioError, match=r"^terrain\.profile\[1\]\[1\]: must be a finite number"):
+        scenario_from_dict(_base(profile=[[0, 0.5], [10, float("nan")]]))
+
+
+def test_random_profile_stays_in_0_1():
+    p = scenario_from_dict(_base(random={**_RANDOM, "mean": 0.95, "std": 0.3})).terrain.compile()
+    v = np.array(p.values)
+    assert v.max() <= 1.0 and v.min() >= 0.05
+    assert np.mean(v == 1.0) > 0.2          # mean 0.95, std 0.3: ~43 % of the draws exceed 1 before clipping
+
+
+@pytest.mark.parametrize("key, value, needle", [
+    ("tau0", -0.1, "must be at least 0"), ("tau1", -1, "must be at least 0"),
+    ("peak_exponent_d", 0, "must be greater than 0"), ("A", 0, "must be greater than 0"),
+    ("A", -0.6, "must be greater than 0"), ("slip_eps_mps", 1e300, "must be at most 1 m/s"),
+    ("b_tF", 1e300, "must be at most 100"),
+])
+def test_terrain_coefficients_have_their_physical_signs(key, value, needle):
+    raw = _base(xt=0.5)
+    raw["terrain"]["model"] = {key: value}
+    with pytest.raises(ScenarioError, match=rf"^terrain\.model\.{key}: {needle}"):
+        scenario_from_dict(raw)
+
+
+@pytest.mark.parametrize("path, value, limit", [
+    (("tow", "force_N"), 1e300, "1e+06"), (("vehicle", "segments"), 10**8, "200"),
+    (("simulation", "duration_s"), 1e300, "100000"), (("vehicle", "segment", "mass_kg"), 1e300, "100000"),
+    (("vehicle", "links", "stiffness_N_per_m"), 1e300, "1e+09"), (("simulation", "atol_scale"), 1e300, "1000"),
+])
+def test_upper_bounds_name_the_limit(path, value, limit):
+    raw = _base(xt=0.5)
+    node = raw
+    for p in path[:-1]:
+        node = node.setdefault(p, {})
+    node[path[-1]] = value
+    with pytest.raises(ScenarioError, match=rf"^{re.escape('.'.join(path))}: must be at most {re.escape(limit)}"):
+        scenario_from_dict(raw)
+
+
+def test_output_samples_are_capped():
+    raw = _base(xt=0.5)
+    raw["simulation"]["output_dt_s"] = 1e-9
+    with pytest.raises(ScenarioError, match=r"^simulation\.output_dt_s: .* output samples .*, over the 150000 allowed"):
+        scenario_from_dict(raw)
 
 
 # ------------------------------------------------------------------ the lazy mode registry

@@ -45,7 +45,7 @@ class ControllerConfig(ModeConfig):
     type: str = field(choices=("controller",), doc="mode name")
     controller: str = field(doc="the controller class: 'file.py:ClassName' (relative to the scenario file) "
                                 "or 'package.module:ClassName'")
-    period_s: float = field(gt=0, unit="s", doc="control period: the command is held this long")
+    period_s: float = field(gt=0, le=1e5, unit="s", doc="control period: the command is held this long")
     params: dict[str, Any] = field(default_factory=dict, doc="parameters handed to the controller's constructor")
 
     def _check(self, path):

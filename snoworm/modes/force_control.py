@@ -84,7 +84,7 @@ from scipy.optimize import brentq
 from .. import steady, terrain
 from ..controls import Controls
 from ..schema import Config, ScenarioError, field, suggest
-from ..sections import ModeConfig
+from ..sections import FINITE_WHY, ModeConfig
 from .base import Mode, register_mode, rolling_interval, start_times
 
 __all__ = ["TargetsConfig", "ForceControlConfig", "ForceControlMode", "ForcePlan", "plan",
@@ -104,11 +104,11 @@ class TargetsConfig(Config):
     _section = "mode.targets"
 
     link_forces_N: Optional[tuple[float, ...]] = field(
-        None, unit="N", doc="link-force references, tension positive, one per link from the front")
+        None, ge=-1e6, le=1e6, unit="N", doc="link-force references, tension positive, one per link from the front")
     load_shares: Optional[Union[str, tuple[float, ...]]] = field(
         None, doc="fractions of the tow per segment (summing to 1), or a rule: even, drawbar, inverse_slip")
     net_connector_N: Optional[dict[int, float]] = field(
-        None, unit="N", doc="net connector force on chosen segments {index: force}, forward positive")
+        None, ge=-1e6, le=1e6, unit="N", doc="net connector force on chosen segments {index: force}, forward positive")
 
     def _check(self, path):
         given = [k for k in ("link_forces_N", "load_shares", "net_connector_N") if getattr(self, k) is not None]
@@ -137,16 +137,22 @@ class ForceControlConfig(ModeConfig):
 
     type: str = field(choices=("force_control",), doc="mode name")
     speed_mps: tuple[float, ...] = field(
-        gt=0, unit="m/s", doc="nominal wheel speed R_w*omega: the free segment's set-point and the loops' "
-                              "feed-forward, one for all segments or one per segment")
-    start_time_s: tuple[float, ...] = field(ge=0, unit="s", doc="motor start time, one for all or one per segment")
+        gt=0, le=100, why=FINITE_WHY, unit="m/s",
+        doc="nominal wheel speed R_w*omega: the free segment's set-point and the loops' "
+            "feed-forward, one for all segments or one per segment")
+    start_time_s: tuple[float, ...] = field(ge=0, le=1e5, unit="s",
+                                            doc="motor start time, one for all or one per segment")
     targets: TargetsConfig = field(doc="link forces, load shares or net connector forces")
     free_segment: Optional[int] = field(
-        None, ge=0, doc="segment driven at its nominal speed without a force loop (default: the rear one)")
-    kp_mps_per_N: float = field(1.6e-3, gt=0, unit="m/s per N", doc="force-loop proportional gain [assumed]")
-    ki_mps_per_Ns: float = field(4.0e-3, ge=0, unit="m/s per N s", doc="force-loop integral gain [assumed]")
+        None, ge=0, le=1000, why="A segment index (vehicle.segments is at most 200).",
+        doc="segment driven at its nominal speed without a force loop (default: the rear one)")
+    kp_mps_per_N: float = field(1.6e-3, gt=0, le=1, why=FINITE_WHY, unit="m/s per N",
+                                doc="force-loop proportional gain [assumed]")
+    ki_mps_per_Ns: float = field(4.0e-3, ge=0, le=10, why=FINITE_WHY, unit="m/s per N s",
+                                 doc="force-loop integral gain [assumed]")
     max_speed_mps: Optional[float] = field(
-        None, gt=0, unit="m/s", doc="upper limit of a loop's set-point (default: the no-load wheel speed R_w*w_nl)")
+        None, gt=0, le=100, why=FINITE_WHY, unit="m/s",
+        doc="upper limit of a loop's set-point (default: the no-load wheel speed R_w*w_nl)")
 
     #: the state carries the outer force-loop integrators
     force_loop = True

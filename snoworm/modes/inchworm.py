@@ -49,7 +49,7 @@ import numpy as np
 from .. import terrain
 from ..controls import Controls
 from ..schema import ScenarioError, field, suggest
-from ..sections import ModeConfig
+from ..sections import FINITE_WHY, ModeConfig
 from .base import Interval, Mode, register_mode
 
 __all__ = ["InchwormConfig", "InchwormMode", "GAITS", "gait_plan", "progress_conditions"]
@@ -70,20 +70,26 @@ class InchwormConfig(ModeConfig):
 
     type: str = field(choices=("inchworm",), doc="mode name")
     gait: object = field(doc="a named gait (two_segment, six_segment) or a list of phases, each a list of moving segments")
-    target_speed_mps: float = field(gt=0, unit="m/s", doc="speed of a moving segment that the joint force loop aims at")
-    mover_wheel_speed_mps: float = field(ge=0, unit="m/s", doc="wheel-speed set-point R_w*omega of moving segments (held: 0)")
-    hold_margin: Optional[float] = field(gt=0, doc="fraction of an anchor cluster's resistance the joints may load it with "
+    target_speed_mps: float = field(gt=0, le=100, why=FINITE_WHY, unit="m/s",
+                                    doc="speed of a moving segment that the joint force loop aims at")
+    mover_wheel_speed_mps: float = field(ge=0, le=100, why=FINITE_WHY, unit="m/s",
+                                         doc="wheel-speed set-point R_w*omega of moving segments (held: 0)")
+    hold_margin: Optional[float] = field(gt=0, le=100,
+                                         doc="fraction of an anchor cluster's resistance the joints may load it with "
                                                    "(Eq. 5); null: no limit but the joint force limit")
     joint_control: str = field("speed", choices=("speed", "length", "force"),
                                doc="speed: force loop on the mover's speed; length: stroke at target_speed_mps; "
                                    "force: constant joint_force_N")
-    speed_gain_Ns_per_m: float = field(2000.0, ge=0, unit="N s/m", doc="joint force loop gain K_v on the mover's speed error")
-    joint_force_N: Optional[float] = field(None, gt=0, unit="N", doc="joint force of joint_control: force")
-    anchor_gain_Ns_per_m: float = field(0.0, ge=0, unit="N s/m",
+    speed_gain_Ns_per_m: float = field(2000.0, ge=0, le=1e6, why=FINITE_WHY, unit="N s/m",
+                                       doc="joint force loop gain K_v on the mover's speed error")
+    joint_force_N: Optional[float] = field(None, gt=0, le=1e6, why=FINITE_WHY, unit="N",
+                                           doc="joint force of joint_control: force")
+    anchor_gain_Ns_per_m: float = field(0.0, ge=0, le=1e6, why=FINITE_WHY, unit="N s/m",
                                         doc="joint force reduction per m/s of backward sliding of its anchor")
-    force_headroom: float = field(0.2, ge=0, doc="joint force allowed above the feed-forward, as a fraction of it, "
+    force_headroom: float = field(0.2, ge=0, le=100,
+                                  doc="joint force allowed above the feed-forward, as a fraction of it, "
                                                  "to accelerate the mover (speed and length control)")
-    start_time_s: float = field(0.0, ge=0, unit="s", doc="time the gait starts (motors off before)")
+    start_time_s: float = field(0.0, ge=0, le=1e5, unit="s", doc="time the gait starts (motors off before)")
     feedforward: str = field("resistance", choices=("resistance", "none"),
                              doc="speed control's force feed-forward: the mover's terrain resistance, or none")
 

@@ -51,7 +51,7 @@ import numpy as np
 from .. import steady, terrain
 from ..controls import Controls
 from ..schema import ScenarioError, build, field
-from ..sections import ModeConfig
+from ..sections import FINITE_WHY, ModeConfig
 from .base import Interval, Mode, register_mode
 from .inchworm import InchwormConfig, InchwormMode
 
@@ -63,13 +63,16 @@ class SupervisorConfig(ModeConfig):
     """``mode: {type: supervisor, rolling_speed_mps: ..., inching: {...}, ...}``."""
 
     type: str = field(choices=("supervisor",), doc="mode name")
-    rolling_speed_mps: float = field(gt=0, unit="m/s", doc="wheel-speed set-point R_w*omega while rolling")
-    start_time_s: float = field(ge=0, unit="s", doc="motor start time (motors off before)")
-    check_interval_s: float = field(gt=0, unit="s", doc="re-evaluation period of the immobilisation rule while rolling")
-    stuck_window_s: float = field(gt=0, unit="s", doc="window of the mean chain ground speed")
-    stuck_speed_mps: float = field(gt=0, unit="m/s", doc="immobilised if the window's mean speed is below this")
+    rolling_speed_mps: float = field(gt=0, le=100, why=FINITE_WHY, unit="m/s",
+                                     doc="wheel-speed set-point R_w*omega while rolling")
+    start_time_s: float = field(ge=0, le=1e5, unit="s", doc="motor start time (motors off before)")
+    check_interval_s: float = field(gt=0, le=1e5, unit="s",
+                                    doc="re-evaluation period of the immobilisation rule while rolling")
+    stuck_window_s: float = field(gt=0, le=1e5, unit="s", doc="window of the mean chain ground speed")
+    stuck_speed_mps: float = field(gt=0, le=100, unit="m/s",
+                                   doc="immobilised if the window's mean speed is below this")
     stuck_slip: float = field(gt=0, le=1, doc="... and the leader's wheel slip is above this")
-    resume_margin_N: float = field(ge=0, unit="N",
+    resume_margin_N: float = field(ge=0, le=1e6, unit="N",
                                    doc="resume rolling when the chain's steady drawbar surplus is at least this")
     inching: dict = field(doc="inchworm settings (the keys of the inchworm mode except type and start_time_s)")
 

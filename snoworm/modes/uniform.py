@@ -12,7 +12,7 @@ import numpy as np
 
 from ..controls import Controls
 from ..schema import ScenarioError, field
-from ..sections import ModeConfig
+from ..sections import FINITE_WHY, ModeConfig
 from .base import Mode, register_mode, rolling_interval, start_times
 
 __all__ = ["UniformConfig", "UniformMode"]
@@ -23,9 +23,10 @@ class UniformConfig(ModeConfig):
     """``mode: {type: uniform, speed_mps: ..., start_time_s: ...}``."""
 
     type: str = field(choices=("uniform",), doc="mode name")
-    speed_mps: tuple[float, ...] = field(ge=0, unit="m/s",
+    speed_mps: tuple[float, ...] = field(ge=0, le=100, why=FINITE_WHY, unit="m/s",
                                          doc="wheel-speed set-point R_w*omega, one for all segments or one per segment")
-    start_time_s: tuple[float, ...] = field(ge=0, unit="s", doc="motor start time, one for all or one per segment")
+    start_time_s: tuple[float, ...] = field(ge=0, le=1e5, unit="s",
+                                            doc="motor start time, one for all or one per segment")
 
     def check_vehicle(self, vehicle, path):
         start_times(self.start_time_s, vehicle.segments, f"{path}.start_time_s")

@@ -3,9 +3,11 @@ from __future__ import annotations
 
 import hashlib
 import itertools
+import math
 from dataclasses import dataclass
 
 from ..schema import ScenarioError
+from .spec import MAX_CASES
 from ..tables import canonical_json
 
 __all__ = ["Case", "build_cases"]
@@ -31,6 +33,10 @@ def build_cases(axes, zip_: bool = False) -> list:
     element-wise pairing of axes of equal length.  ``case_id`` is the zero-padded index in that
     order; ``key`` is a digest of the keys and values, the identity used for resumption.
     """
+    n_cases = len(axes[0].values) if zip_ and axes else math.prod(len(a.values) for a in axes)
+    if n_cases > MAX_CASES:
+        raise ScenarioError(f"--set: the sweep has {n_cases} cases, over the {MAX_CASES} allowed in one sweep; "
+                            "use fewer values or split the study into several sweeps.")
     if zip_:
         lens = {a.key: len(a.values) for a in axes}
         if len(set(lens.values())) > 1:

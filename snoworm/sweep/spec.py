@@ -14,10 +14,15 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
-from ..schema import ScenarioError
+from ..schema import ScenarioError, quote
 from ..tables import canonical_json
 
-__all__ = ["Axis", "RANGE", "as_axes", "parse_scalar", "parse_spec", "parse_sweep_option"]
+__all__ = ["Axis", "MAX_CASES", "RANGE", "as_axes", "parse_scalar", "parse_spec", "parse_sweep_option"]
+
+
+#: Most values of one range and most cases of a sweep (grid or zip): each case is a simulation and a
+#: row of summary.csv; larger studies are split into several sweeps.
+MAX_CASES = 100_000
 
 
 @dataclass(frozen=True)
@@ -88,7 +93,8 @@ def parse_spec(key: str, spec, option: str | None = None) -> tuple:
     ScenarioError
         Empty item, malformed range, non-positive count, duplicate value.
     """
-    opt = f"--set {key}={spec}" if option is None else option
+    text = str(spec)
+    opt = f"--set {key}={text if len(text) <= 60 else text[:60] + '...'}" if option is None else option
     if isinstance(spec, (list, tuple)):
         values = tuple(spec)
     else:
@@ -101,7 +107,7 @@ def parse_spec(key: str, spec, option: str | None = None) -> tuple:
             items = _split_top_level(text)
             for it in items:
                 if ":" in it and "[" not in it and "{" not in it and _looks_numeric(it.split(":")):
-                    raise ScenarioError(f"{opt}: {it.strip()!r} is not a range: a range is START:STOP:COUNT "
+                    raise ScenarioError(f"{opt}: {quote(it.strip(), 60)} is not a range: a range is START:STOP:COUNT "
                                         "(two colons, no commas; a range cannot be mixed with a list), e.g. 0.3:1.0:15 for 15 values "
                                         "from 0.3 to 1.0.")
             if any(not it.strip() for it in items):
@@ -117,7 +123,7 @@ def parse_spec(key: str, spec, option: str | None = None) -> tuple:
     for v in values:
         k = canonical_json(v)
         if k in seen:
-            raise ScenarioError(f"{opt}: the value {v!r} appears twice. Give each value once.")
+            raise ScenarioError(f"{opt}: the value {quote(v, 60)} appears twice. Give each value once.")
         seen.add(k)
     return values
 
@@ -128,13 +134,16 @@ def _parse_range(opt, text):
     try:
         start, stop = _number(a), _number(b)
     except ValueError:
-        raise ScenarioError(f"{opt}: START and STOP must be numbers, got {a!r} and {b!r}. {hint}") from None
+        raise ScenarioError(f"{opt}: START and STOP must be numbers (finite), got {quote(a, 40)} and {quote(b, 40)}. {hint}") from None
     try:
         count = int(c)
     except ValueError:
-        raise ScenarioError(f"{opt}: COUNT must be a whole number of values, got {c!r}. {hint}") from None
+        raise ScenarioError(f"{opt}: COUNT must be a whole number of values, got {quote(c, 40)}. {hint}") from None
     if count < 1:
         raise ScenarioError(f"{opt}: COUNT must be at least 1, got {count}. {hint}")
+    if count > MAX_CASES:
+        raise ScenarioError(f"{opt}: COUNT {count} is over the {MAX_CASES} values allowed in one range; "
+                            "use fewer values or split the study.")
     if count == 1:
         if start != stop:
             raise ScenarioError(f"{opt}: COUNT 1 needs START = STOP; give {start} alone or COUNT >= 2. {hint}")
@@ -170,12 +179,12 @@ def _number(text):
 def parse_sweep_option(item: str) -> Axis:
     """Split one ``KEY=SPEC`` option into an :class:`Axis`."""
     if not isinstance(item, str) or "=" not in item:
-        raise ScenarioError(f"--set {item!r}: expected KEY=SPEC with a dotted scenario key, e.g. "
+        raise ScenarioError(f"--set {quote(item)}: expected KEY=SPEC with a dotted scenario key, e.g. "
                             "terrain.xt=0.6:1.0:9 or tow.force_N=0,100,200.")
     key, _, spec = item.partition("=")
     key = key.strip()
     if not key or any(not p.strip() for p in key.split(".")):
-        raise ScenarioError(f"--set {item!r}: the key must be a dotted scenario path such as tow.force_N.")
+        raise ScenarioError(f"--set {quote(item)}: the key must be a dotted scenario path such as tow.force_N.")
     return Axis(key, parse_spec(key, spec), spec.strip())
 
 
