@@ -241,6 +241,64 @@ def bench_controllers(repeats, report):
     return out
 
 
+# ---------------------------------------------------------------- start-up (issue 16): whole processes
+#: whole-process ratio targets: command / its import floor, both timed in the same run
+STARTUP_TARGETS = {
+    "startup_help_ratio": ("<=", 1.3, "`snoworm --help` / import numpy, yaml, click"),
+    "startup_run_ratio": ("<=", 1.2, "`snoworm run --no-plot` / import scipy.integrate"),
+    "startup_run_plots_ratio": ("<=", 1.4, "`snoworm run` with plots / + matplotlib.pyplot"),
+}
+TARGETS.update(STARTUP_TARGETS)
+
+
+def _snoworm_command():
+    """The installed ``snoworm`` script beside this interpreter, else ``python -m snoworm``."""
+    script = Path(sys.executable).with_name("snoworm")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "snoworm"]
+
+
+def bench_startup(repeats, report):
+    """Whole-process wall times of three commands and of their import floors, interleaved (one of
+    each per round, after an untimed warm-up round), best of ``repeats`` rounds."""
+    import tempfile
+    snoworm = _snoworm_command()
+    scenario = str(SC / "tow6_uniform.yaml")
+    with tempfile.TemporaryDirectory(prefix="snoworm-bench-") as tmp:
+        cases = {   # key: (command, floor key)
+            "floor_help": ([sys.executable, "-c", "import numpy, yaml, click"], None),
+            "help": (snoworm + ["--help"], "floor_help"),
+            "floor_run": ([sys.executable, "-c", "import scipy.integrate"], None),
+            "run": (snoworm + ["run", scenario, "--no-plot", "--out", f"{tmp}/run"], "floor_run"),
+            "floor_run_plots": ([sys.executable, "-c", "import scipy.integrate, matplotlib.pyplot"], None),
+            "run_plots": (snoworm + ["run", scenario, "--out", f"{tmp}/plots"], "floor_run_plots"),
+        }
+        best = {k: np.inf for k in cases}
+        for rnd in range(repeats + 1):
+            for key, (cmd, _) in cases.items():
+                cmd = [f"{c}{rnd}" if c.startswith(tmp) else c for c in cmd]   # a new --out folder each round
+                t0 = time.perf_counter()
+                subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                if rnd:     # round 0 warms the disk cache and the bytecode
+                    best[key] = min(best[key], time.perf_counter() - t0)
+    labels = {"help": "snoworm --help", "run": "snoworm run tow6_uniform.yaml --no-plot --out D",
+              "run_plots": "snoworm run tow6_uniform.yaml --out D (3 PNG plots)"}
+    out = {}
+    for key, (cmd, floor) in cases.items():
+        out[key] = {"wall_s": best[key], "command": labels.get(key) or f"python -c {cmd[-1]!r}"}
+    for key, (_, floor) in cases.items():
+        if floor:
+            out[key].update(floor=floor, ratio=best[key] / best[floor])
+            report(f"  {out[key]['command']:50s} {best[key]:6.3f} s   floor {out[floor]['command']:50s} "
+                   f"{best[floor]:6.3f} s   ratio {out[key]['ratio']:.2f}")
+    return out
+
+
+def startup_values(rows):
+    """The start-up ratios for the target table."""
+    return {"startup_help_ratio": rows["help"]["ratio"], "startup_run_ratio": rows["run"]["ratio"],
+            "startup_run_plots_ratio": rows["run_plots"]["ratio"]}
+
+
 def verdict(key, value):
     op, target, _ = TARGETS[key]
     ok = {">=": value >= target, "<=": value <= target, "<": value < target}[op]
@@ -275,6 +333,9 @@ def main(argv=None):
     res["processes"] = bench_processes(1 if args.quick else 2, report)
     report("Controllers (issue 14: solver restarted at every control period / step):")
     res["controllers"] = bench_controllers(repeats, report)
+    report("Start-up (issue 16: whole processes against their import floors, interleaved, best of "
+           f"{repeats + 2} rounds):")
+    res["startup"] = bench_startup(repeats + 2, report)
 
     sc = res["scenarios"]
     values = {
@@ -292,6 +353,7 @@ def main(argv=None):
         "controller_tow6_rtf": res["controllers"]["controller_tow6"]["rtf"],
         "simulator_step_rtf": res["controllers"]["simulator_step"]["rtf"],
     }
+    values.update(startup_values(res["startup"]))
     if res["memory"]["cases"] < 10_000:
         report(f"  (memory measured on {res['memory']['cases']} cases; rows are ~1 kB each, so 10,000 cases add "
                f"~{(10_000 - res['memory']['cases']) * 1e-3:.0f} MB at most to the figure below)")

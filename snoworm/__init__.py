@@ -19,18 +19,57 @@ snoworm.env.SnowormEnv              -> a Gymnasium environment (extra: gym)
 
 The layers and their modules are described in docs/architecture.md.
 """
-from ._version import __version__  # noqa: E402
+from __future__ import annotations
 
-from . import modes as modes  # noqa: E402  (registers the built-in modes)
-from .driver import BatchMember, SolverError, simulate, simulate_batch  # noqa: E402
-from .fileio import OutputError  # noqa: E402
-from .modes import Mode, register_mode  # noqa: E402
-from .results import Result, load_result  # noqa: E402
-from .scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios  # noqa: E402
-from .sections import ModeConfig  # noqa: E402
-from .simulator import Observation, Simulator  # noqa: E402
-from .sweep import SweepTable, load_sweep, run_sweep  # noqa: E402
+import importlib
+from typing import TYPE_CHECKING
+
+from ._version import __version__
+
+#: Each public name -> the module defining it.  Imported on first use (PEP 562), so that
+#: ``import snoworm`` and the command line start without SciPy, the sweeps or matplotlib; a
+#: command pays only for the modules it uses (``snoworm --help`` imports none of them).
+_EXPORTS = {
+    "BatchMember": "driver", "SolverError": "driver", "simulate": "driver", "simulate_batch": "driver",
+    "OutputError": "fileio",
+    "Mode": "modes", "register_mode": "modes",
+    "Result": "results", "load_result": "results",
+    "Scenario": "scenario", "ScenarioError": "scenario", "load_scenario": "scenario",
+    "scenario_from_dict": "scenario", "shipped_scenarios": "scenario",
+    "ModeConfig": "sections",
+    "Observation": "simulator", "Simulator": "simulator",
+    "SweepTable": "sweep", "load_sweep": "sweep", "run_sweep": "sweep",
+}
 
 __all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Observation", "OutputError", "Result", "Scenario",
            "ScenarioError", "Simulator", "SolverError", "SweepTable", "load_result", "load_scenario", "load_sweep",
            "register_mode", "run_sweep", "scenario_from_dict", "shipped_scenarios", "simulate", "simulate_batch"]
+
+if TYPE_CHECKING:  # for type checkers and editors; at run time the names come from __getattr__
+    from . import modes as modes
+    from .driver import BatchMember, SolverError, simulate, simulate_batch
+    from .fileio import OutputError
+    from .modes import Mode, register_mode
+    from .results import Result, load_result
+    from .scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios
+    from .sections import ModeConfig
+    from .simulator import Observation, Simulator
+    from .sweep import SweepTable, load_sweep, run_sweep
+
+
+def __getattr__(name: str):
+    """Import a public name's module on first access (``snoworm.simulate``, ``from snoworm import
+    Result``) and keep the name, so later lookups are plain attribute reads."""
+    if name == "modes":         # the modes package (its registries import a built-in mode when looked up)
+        return importlib.import_module(".modes", __name__)
+    try:
+        module = _EXPORTS[name]
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__) | {"modes"})

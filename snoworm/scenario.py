@@ -20,8 +20,9 @@ from . import yamlio
 from .dynamics import ChainModel
 from .params import PARAMETER_SETS
 from .schema import Config, ScenarioError, build, dump, field, quote, short_key, suggest
-from .sections import (MAX_OUTPUT_SAMPLES, LinkConfig, ModeConfig, PatchConfig, RandomTerrainConfig, SegmentConfig,
-                       SimulationConfig, TerrainConfig, TerrainModelConfig, TowConfig, VehicleConfig)
+from .sections import (BUILT_IN_MODES, MAX_OUTPUT_SAMPLES, LinkConfig, ModeConfig, ModeRegistry, PatchConfig,
+                       RandomTerrainConfig, SegmentConfig, SimulationConfig, TerrainConfig, TerrainModelConfig,
+                       TowConfig, VehicleConfig)
 
 __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
@@ -32,8 +33,9 @@ __all__ = [
 ]
 
 #: The scenario's ``mode.type`` -> its :class:`~snoworm.sections.ModeConfig` subclass.  Filled by
-#: :func:`snoworm.modes.register_mode` (the built-in modes register when :mod:`snoworm` is imported).
-MODE_CONFIGS: dict = {}
+#: :func:`snoworm.modes.register_mode`; a built-in mode's module is imported (by name: the modes sit
+#: above this layer) when the mode is first looked up.
+MODE_CONFIGS = ModeRegistry(BUILT_IN_MODES)
 
 
 def register_mode_config(name: str, cls) -> None:

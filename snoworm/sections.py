@@ -8,7 +8,9 @@ physical default.  The mode section is a :class:`ModeConfig`, declared by each m
 """
 from __future__ import annotations
 
+import importlib
 import math
+from collections.abc import MutableMapping
 from dataclasses import dataclass
 from typing import Optional
 
@@ -20,7 +22,7 @@ from .terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile,
 
 __all__ = ["XT_DOMAIN", "FINITE_WHY", "BIG_FORCE_N", "BIG_SPEED_MPS", "MAX_SEGMENTS", "MAX_OUTPUT_SAMPLES",
            "SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig", "TerrainConfig",
-           "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig"]
+           "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig", "BUILT_IN_MODES", "ModeRegistry"]
 
 
 #: Domain of the terrain coefficient X_t wherever it appears (constant, profiles, patches, random
@@ -352,3 +354,54 @@ class ModeConfig(Config):
         """A hashable description of the mode's intervals if it can run in a batched stack
         (event-free, the same intervals for every member with the same signature), else None."""
         return None
+
+
+#: The built-in modes: ``type`` -> the module whose import registers it (:mod:`snoworm.modes`).
+BUILT_IN_MODES = {"controller": "snoworm.modes.controller", "force_control": "snoworm.modes.force_control",
+                  "inchworm": "snoworm.modes.inchworm", "supervisor": "snoworm.modes.supervisor",
+                  "uniform": "snoworm.modes.uniform"}
+
+
+class ModeRegistry(MutableMapping):
+    """A dict of mode ``type`` -> class that imports a built-in mode's module the first time the
+    mode is looked up (all of them when the registry is listed).
+
+    ``snoworm.scenario.MODE_CONFIGS`` (config classes) and ``snoworm.modes.MODES`` (mode classes)
+    are two; ``register_mode`` fills both.  So ``import snoworm`` and the command line start
+    without the modes (and SciPy), a run imports only its own mode, and a scenario still finds
+    every built-in mode.  Writing (registering a mode) imports nothing.
+
+    Parameters
+    ----------
+    built_in : dict
+        ``type`` -> dotted name of the module whose import registers that built-in mode.
+    """
+
+    def __init__(self, built_in: dict):
+        self._built_in, self._d = dict(built_in), {}
+
+    def _load(self, key):
+        if key not in self._d and key in self._built_in:
+            importlib.import_module(self._built_in[key])
+
+    def __getitem__(self, key):
+        self._load(key)
+        return self._d[key]
+
+    def __iter__(self):
+        for key in self._built_in:
+            self._load(key)
+        # built-in modes first, in a fixed order, then the user's in registration order
+        return iter([k for k in self._built_in if k in self._d] + [k for k in self._d if k not in self._built_in])
+
+    def __len__(self):
+        return len(list(iter(self)))
+
+    def __setitem__(self, key, value):
+        self._d[key] = value
+
+    def __delitem__(self, key):
+        del self._d[key]
+
+    def __repr__(self):
+        return f"ModeRegistry({dict(self.items())!r})"

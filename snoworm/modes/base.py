@@ -18,12 +18,12 @@ import numpy as np
 from ..controls import Controls
 from ..schema import ScenarioError
 from ..scenario import register_mode_config
-from ..sections import ModeConfig
+from ..sections import BUILT_IN_MODES, ModeConfig, ModeRegistry
 
 __all__ = ["Mode", "Interval", "MODES", "register_mode", "mode_class", "start_times", "rolling_interval"]
 
 #: ``mode.type`` -> :class:`Mode` subclass (see :func:`register_mode`).
-MODES: dict = {}
+MODES = ModeRegistry(BUILT_IN_MODES)
 
 
 @dataclass

@@ -1,0 +1,101 @@
+"""The package face (snoworm/__init__.py): every public name is there, imported on first use.
+
+The imports are checked in fresh interpreters, since this test process has long imported
+everything.
+"""
+import subprocess
+import sys
+
+import pytest
+
+import snoworm
+from tests.conftest import SCENARIOS
+
+
+def fresh(code: str) -> str:
+    """Run ``code`` in a new interpreter and return its stdout (fails on a non-zero exit)."""
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return proc.stdout
+
+
+def test_every_public_name_resolves_and_is_listed():
+    assert set(snoworm.__all__) <= set(dir(snoworm))
+    for name in snoworm.__all__:
+        assert getattr(snoworm, name) is not None, name
+    assert snoworm.simulate.__module__ == "snoworm.driver"
+    assert snoworm.Result.__module__ == "snoworm.results"
+    assert snoworm.modes.MODES["uniform"].__name__ == "UniformMode"
+    ns = {}
+    exec("from snoworm import *", ns)
+    assert set(snoworm.__all__) <= set(ns)
+
+
+def test_unknown_attribute_is_an_attribute_error():
+    with pytest.raises(AttributeError, match="no attribute 'simulat'"):
+        snoworm.simulat  # noqa: B018
+    assert not hasattr(snoworm, "_no_such_name")
+
+
+def test_import_snoworm_imports_no_heavy_module():
+    out = fresh("import sys, snoworm; print(sorted(m for m in ('numpy', 'scipy', 'matplotlib', 'yaml', "
+                "'snoworm.driver', 'snoworm.modes', 'snoworm.sweep') if m in sys.modules))")
+    assert out.strip() == "[]"
+
+
+def test_names_import_their_module_on_first_use():
+    out = fresh("import sys, snoworm\n"
+                "from snoworm import load_scenario\n"
+                "print('snoworm.scenario' in sys.modules, 'snoworm.sweep' in sys.modules)\n"
+                "snoworm.run_sweep\n"
+                "print('snoworm.sweep' in sys.modules)")
+    assert out.split() == ["True", "False", "True"]
+
+
+def test_a_scenario_finds_the_built_in_modes_without_importing_them_first():
+    # snoworm.scenario sits below the modes: its registry imports them when first read
+    out = fresh("import sys\n"
+                "from snoworm.scenario import load_scenario, scenario_from_dict, read_yaml\n"
+                "print('snoworm.modes' in sys.modules)\n"
+                f"sc = load_scenario({str(SCENARIOS / 'inchworm6.yaml')!r})\n"
+                "print(type(sc.mode).__name__, 'snoworm.modes' in sys.modules)")
+    assert out.split() == ["False", "InchwormConfig", "True"]
+
+
+def test_a_run_imports_only_its_own_mode():
+    out = fresh("import sys\n"
+                "from snoworm import load_scenario, simulate\n"
+                f"simulate(load_scenario({str(SCENARIOS / 'tow6_uniform.yaml')!r}, [('simulation.duration_s', 1.0)]))\n"
+                "print(sorted(m for m in sys.modules if m.startswith('snoworm.modes.')))")
+    assert out.strip() == "['snoworm.modes.base', 'snoworm.modes.command', 'snoworm.modes.uniform']"
+
+
+def test_a_users_mode_registers_in_a_fresh_process():
+    code = f"""
+import numpy as np
+from dataclasses import dataclass
+from snoworm import Mode, ModeConfig, register_mode, scenario_from_dict, simulate
+from snoworm.controls import Controls
+from snoworm.modes.base import Interval
+from snoworm.scenario import MODE_CONFIGS, apply_overrides, read_yaml
+from snoworm.schema import field
+
+@dataclass(frozen=True)
+class MineConfig(ModeConfig):
+    type: str = field(choices=("mine",), doc="mode name")
+
+class Mine(Mode):
+    name = "mine"
+    config_class = MineConfig
+    def interval(self, t, y):
+        return Interval(np.inf, Controls.rolling(self.model.n, 1.0, 1.5), [], "mine")
+
+register_mode(Mine)
+raw = apply_overrides(read_yaml({str(SCENARIOS / 'tow6_uniform.yaml')!r}),
+                      [("mode", {{"type": "mine"}}), ("simulation.duration_s", 2.0)])
+sc = scenario_from_dict(raw)
+print(type(sc.mode).__name__, sorted(MODE_CONFIGS), simulate(sc).summary()["distance_m"] > 0)
+"""
+    out = fresh(code)
+    assert out.split(maxsplit=1)[0] == "MineConfig"
+    assert "'mine'" in out and "'uniform'" in out and "'inchworm'" in out and out.split()[-1] == "True"
