@@ -40,3 +40,25 @@ def test_unbatchable_cases_run_one_by_one(scenario_path):
     assert rows[0]["status"] == rows[1]["status"] == "ok"
     with pytest.raises(ValueError):
         BatchExecutor(0)
+
+
+@pytest.mark.parametrize("batch", [0, 10])
+def test_in_process_sweep_validates_each_case_once(scenario_path, monkeypatch, batch):
+    """A sweep run in this process hands the scenarios it validated while planning to the executor."""
+    import snoworm.sweep.executors as executors
+    import snoworm.sweep.metrics as metrics
+    import snoworm.sweep.run as run
+    calls = []
+
+    def counting(original):
+        def wrapped(*args, **kwargs):
+            calls.append(1)
+            return original(*args, **kwargs)
+        return wrapped
+    monkeypatch.setattr(run, "scenario_from_dict", counting(run.scenario_from_dict))
+    monkeypatch.setattr(executors, "scenario_from_dict", counting(executors.scenario_from_dict))
+    monkeypatch.setattr(metrics, "scenario_from_dict", counting(metrics.scenario_from_dict))
+    table = run_sweep(scenario_path("tow6_uniform"), ["tow.force_N=0,100,200", "simulation.duration_s=1"],
+                      plot=False, batch=batch)
+    assert [r["status"] for r in table.rows] == ["ok"] * 3
+    assert len(calls) == 3

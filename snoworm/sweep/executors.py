@@ -109,7 +109,8 @@ def run_chunk(tasks, fn, metrics, max_group=None) -> list:
     groups, results = {}, []
     for task in tasks:
         try:
-            sc = scenario_from_dict(task["raw"], task.get("source", "scenario"), base_dir=task.get("base_dir"))
+            sc = task.get("scenario") or scenario_from_dict(task["raw"], task.get("source", "scenario"),
+                                                            base_dir=task.get("base_dir"))
             key = batch_key(sc)
             task = {**task, "scenario": sc}          # validated once: fn (run_case) reuses it
         except (ScenarioError, ValueError):

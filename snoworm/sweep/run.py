@@ -13,7 +13,7 @@ import json
 import os
 import sys
 from contextlib import ExitStack
-from dataclasses import dataclass
+from dataclasses import dataclass, field as dc_field
 from pathlib import Path
 
 import numpy as np
@@ -145,7 +145,8 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         except ImportError:
             raise ScenarioError("--series netcdf needs xarray: pip install 'snoworm[data]' "
                                 "(or keep the default --series folders).") from None
-    plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs)
+    in_process = executor is None and scheduler is None and int(jobs) == 1
+    plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=in_process)
     out = Path(out_dir) if out_dir is not None else None
     if out is not None and not (out / "sweep.json").exists():
         check_output_folder(out, overwrite)
@@ -214,14 +215,24 @@ class _Plan:
     n_links: int
     columns: list
     definition: dict
+    #: case index -> its validated Scenario, kept for executors in this process (see _plan)
+    scenarios: dict = dc_field(default_factory=dict)
 
     @property
     def keys(self):
         return [a.key for a in self.axes]
 
 
-def _plan(scenario, sets, zip_, save_cases, out_dir, jobs) -> _Plan:
-    """Parse the axes, build the cases and validate each one (about 2 ms a case)."""
+#: Most validated scenarios a sweep keeps for its in-process executor (about 5 KiB each), so that
+#: a case is not validated twice; larger sweeps validate again in the executor to bound memory.
+KEEP_VALIDATED_MAX = 20_000
+
+
+def _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=False) -> _Plan:
+    """Parse the axes, build the cases and validate each one (about 2 ms a case).
+
+    ``keep``: the cases run in this process; keep their validated scenarios (up to
+    :data:`KEEP_VALIDATED_MAX` cases) for the tasks."""
     axes = as_axes(sets)
     raw, source, base_dir = _base(scenario)
     if not isinstance(raw, dict):
@@ -231,11 +242,14 @@ def _plan(scenario, sets, zip_, save_cases, out_dir, jobs) -> _Plan:
         raise ScenarioError("--save-cases needs --out: the time series are written under DIR/cases/.")
     if int(jobs) < 1:
         raise ScenarioError(f"-j/--jobs must be at least 1, got {jobs}.")
-    invalid, n_links = {}, 0
+    invalid, n_links, kept = {}, 0, {}
+    keep = keep and len(cases) <= KEEP_VALIDATED_MAX
     for c in cases:
         try:
             sc = scenario_from_dict(apply_overrides(raw, c.overrides(axes)), source, base_dir=base_dir)
             n_links = max(n_links, sc.vehicle.segments - 1)
+            if keep:
+                kept[c.index] = sc
         except ScenarioError as exc:
             invalid[c.index] = one_line(exc)
     if len(invalid) == len(cases):
@@ -243,7 +257,7 @@ def _plan(scenario, sets, zip_, save_cases, out_dir, jobs) -> _Plan:
         raise ScenarioError(f"every case of the sweep is invalid, e.g. case {cases[0].case_id} "
                             f"({', '.join(f'{a.key}={v}' for a, v in zip(axes, cases[0].values))}): {first}")
     return _Plan(axes, raw, source, base_dir, cases, invalid, n_links, summary_columns(axes, n_links),
-                 _definition(raw, axes, zip_))
+                 _definition(raw, axes, zip_), kept)
 
 
 def _make_executor(scheduler, batch, jobs):
@@ -306,8 +320,12 @@ def _tasks(plan: _Plan, todo, out, keep_series):
         if c.index in plan.invalid:
             continue
         save = case_series_path(out, c.case_id, keep_series) if keep_series else None
-        yield {"index": c.index, "raw": apply_overrides(plan.raw, c.overrides(plan.axes)), "source": plan.source,
-               "base_dir": plan.base_dir, "save_dir": save}
+        task = {"index": c.index, "raw": apply_overrides(plan.raw, c.overrides(plan.axes)), "source": plan.source,
+                "base_dir": plan.base_dir, "save_dir": save}
+        sc = plan.scenarios.pop(c.index, None)        # validated by _plan, in this process: not again
+        if sc is not None:
+            task["scenario"] = sc
+        yield task
 
 
 def _execute(plan: _Plan, todo, executor, rec: _Recorder, own: bool, out, keep_series):
