@@ -43,6 +43,7 @@ TARGETS = {
     "sweep10k_peak_MB": ("<", 500.0, "10,000-case sweep peak memory [MB]"),
     "controller_tow6_rtf": (">=", 20.0, "tow6 20 s, 50 Hz Python controller real-time factor"),
     "simulator_step_rtf": (">=", 10.0, "Simulator.step dt = 10 ms (tow6, 20 s) real-time factor"),
+    "batched_inchworm6_speedup": (">=", 4.0, "batched inchworm6 sweep, 100 cases / serial cases/s"),
     "paper_s": ("<=", 8.0, "`snoworm paper` whole process [s]"),
     "mobility_map_s": ("<=", 8.0, "`snoworm mobility-map` traverse_patch 9 x 3, -j 2, whole process [s]"),
 }
@@ -168,6 +169,33 @@ def bench_sweep(n_xt, n_tow, duration, report):
     report(f"  speed-up over serial: 2 processes {out['2 processes']['speedup']:.2f}x, batched "
            f"{out['batched']['speedup']:.2f}x, batched in 2 processes {out['batched, 2 processes']['speedup']:.2f}x; "
            f"batched vs serial metrics: max rel. err {out['batched_rel_err']:.2e}")
+    return out
+
+
+def bench_batched_inchworm(n_xt, n_tow, duration, report):
+    """A sweep of inchworm6 over terrain.xt x tow.force_N, batched (``batch=100``) against serial.
+
+    Inchworm cases have no batch signature (docs/performance.md: stacking members with their own
+    gait-phase events did not pay), so the batched sweep runs them one by one: this row measures
+    what a user asking for ``--batch`` gets.  Quick mode: fewer cases, shorter runs (in the row).
+    """
+    sets = [f"terrain.xt=0.2:0.35:{n_xt}", f"tow.force_N=0:90:{n_tow}"]
+    if duration is not None:
+        sets.append(f"simulation.duration_s={duration}")
+    n = n_xt * n_tow
+    out = {"cases": n, "duration_s": duration or 30.0, "sets": sets}
+    tables = {}
+    for label, kw in (("serial", {}), ("batched", {"batch": min(n, 100)})):
+        t0 = time.perf_counter()
+        tables[label] = run_sweep(SC / "inchworm6.yaml", sets, plot=False, progress=False, **kw)
+        wall = time.perf_counter() - t0
+        ok = sum(r["status"] == "ok" for r in tables[label].rows)
+        out[label] = {"wall_s": wall, "cases_per_s": n / wall, "ok": ok}
+        report(f"  inchworm6 {label:12s} {n / wall:7.2f} cases/s  ({wall:6.2f} s for {n} cases of "
+               f"{out['duration_s']:g} s, {ok} ok)")
+    out["speedup"] = out["batched"]["cases_per_s"] / out["serial"]["cases_per_s"]
+    out["rel_err"] = _metric_err(tables["serial"].rows, tables["batched"].rows)
+    report(f"  batched / serial: {out['speedup']:.2f}x; metrics max rel. err {out['rel_err']:.2e}")
     return out
 
 
@@ -327,6 +355,9 @@ def main(argv=None):
     res["scaling"] = bench_scaling(report, repeats)
     report("Sweep throughput (tow6_uniform over terrain.xt x tow.force_N):")
     res["sweep"] = bench_sweep(*((8, 5, 5) if args.quick else (20, 10, 5)), report)
+    report("Batched inchworm6 sweep (terrain.xt x tow.force_N; %s):"
+           % ("quick: 20 cases of 6 s" if args.quick else "100 cases, full 30 s"))
+    res["inchworm_sweep"] = bench_batched_inchworm(*((5, 4, 6) if args.quick else (10, 10, None)), report)
     report("Sweep memory (frostyboy_case3 over terrain.xt x mode.speed_mps, batched 500, child process):")
     res["memory"] = bench_memory(*((40, 25) if args.quick else (100, 100)), report)
     report("Whole processes (best of %d):" % (1 if args.quick else 2))
@@ -348,6 +379,7 @@ def main(argv=None):
         "sweep_batched_speedup": max(res["sweep"]["batched"]["speedup"],
                                      res["sweep"]["batched, 2 processes"]["speedup"]),
         "batched_rel_err": res["sweep"]["batched_rel_err"],
+        "batched_inchworm6_speedup": res["inchworm_sweep"]["speedup"],
         "sweep10k_peak_MB": res["memory"]["peak_MB"],
         **res["processes"],
         "controller_tow6_rtf": res["controllers"]["controller_tow6"]["rtf"],

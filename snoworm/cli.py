@@ -309,7 +309,7 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
 @click.option("--no-plot", is_flag=True, help="Skip sweep.png / heatmap.png.")
 @plot_format_option
 @click.option("--batch", default=0, show_default=True, type=click.IntRange(min=0), metavar="B",
-              help="Integrate up to B cases of the same structure (uniform mode) as one stacked system "
+              help="Integrate up to B cases of the same structure (uniform or force-control mode) as one stacked system "
                    "(several times the cases/s; 100-500 is a good B); other cases run one by one.")
 @click.option("--overwrite", is_flag=True,
               help="Replace another sweep in --out (its files are removed), or write into a non-empty folder "

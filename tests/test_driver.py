@@ -229,3 +229,25 @@ def test_solve_interval_is_under_the_work_limit_too(scenario_path):
     with pytest.raises(SolverError, match="work limit"):
         solve_interval(case.model, ctl, 100.0, 101.0, y0, [], sc.simulation, output_grid(100.0, 101.0, 0.05, True),
                        stats, "step", {})
+
+
+FC_CASES = [(0.9, 200.0, 1.8), (0.75, 150.0, 1.6), (1.0, 250.0, 2.0), (0.85, 100.0, 1.7)]
+
+
+def test_batched_force_control_matches_one_by_one(scenario_path):
+    """Force control has no state events: a stack of it equals its members run one by one."""
+    scs = [load_scenario(scenario_path("pi3_equal"),
+                         [("terrain.xt", xt), ("tow.force_N", f), ("mode.speed_mps", v), ("simulation.duration_s", 6)])
+           for xt, f, v in FC_CASES]
+    assert len({batch_key(sc) for sc in scs}) == 1
+    other = load_scenario(scenario_path("pi3_equal"), [("mode.start_time_s", 0.5)])
+    assert batch_key(other) != batch_key(scs[0])        # other intervals: another stack
+    batched = simulate_batch(scs)
+    for sc, mb in zip(scs, batched):
+        assert mb.status == "ok", mb.error
+        assert mb.result.stats["batch_size"] == len(scs)
+        alone = simulate(sc)
+        assert_metrics_close(case_metrics(alone), case_metrics(mb.result))
+        fa, fb = (r.mode_summary["force_control"] for r in (alone, mb.result))
+        np.testing.assert_allclose(fb["final_setpoints_mps"], fa["final_setpoints_mps"], rtol=0, atol=1e-3)
+        np.testing.assert_allclose(fb["final_link_force_errors_N"], fa["final_link_force_errors_N"], rtol=0, atol=0.1)

@@ -192,6 +192,12 @@ class ForceControlConfig(ModeConfig):
         """The :class:`ForcePlan`, computed once per scenario (``scenario.mode_plan``)."""
         return plan(self, sc, sc.chain_model)
 
+    def batch_signature(self):
+        """No state events (the plan is computed once per scenario): members with the same start
+        times and free segment have the same intervals and loop layout (targets, gains and
+        speeds may differ)."""
+        return ("force_control", tuple(self.start_time_s), self.free_segment)
+
 
 # ---------------------------------------------------------------------- steady-state helpers
 def _hi_torque(seg, wheel_speed_mps):
