@@ -378,26 +378,30 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no
               show_default=True, help="Simulated time of each inching run [s].")
 @click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
               help="Worker processes for the inching runs.")
+@click.option("--every-cell", is_flag=True,
+              help="Simulate inching in every cell, also where the chain rolls (to compare the two modes' energy "
+                   "per metre there); by default only cells that do not roll are simulated (same regions).")
 @click.option("--no-plot", is_flag=True, help="Skip mobility_map.png.")
 @plot_format_option
 @overwrite_option
 @handle_errors
 def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, no_inching, inch_duration_s, jobs,
-                 no_plot, plot_format, overwrite):
+                 every_cell, no_plot, plot_format, overwrite):
     """Which modes move SCENARIO's vehicle (a YAML file or a shipped name) over X_t and tow.
 
     Regions: rolling, inching only, immobile.
 
     Rolling by the steady-state solver (each segment's share of the tow below its maximum
     drawbar); inching by short simulations of the inchworm gait of the scenario's supervisor or
-    inchworm mode.  Writes --out/mobility_map.csv and --out/mobility_map.png.  Progress of
-    the inching runs goes to stderr.
+    inchworm mode, in the cells that do not roll (every cell with --every-cell).  Writes
+    --out/mobility_map.csv and --out/mobility_map.png.  Progress of the inching runs goes to stderr.
     """
     from .mobility import run_mobility_map  # lazy: start-up
     with _progress(1, "mobility map", "inching runs") as bar:
         _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets,
                                           rolling_speed_mps=rolling_speed_mps, inching=not no_inching,
-                                          inch_duration_s=inch_duration_s, jobs=jobs, plot=not no_plot,
+                                          inch_duration_s=inch_duration_s, jobs=jobs, every_cell=every_cell,
+                                          plot=not no_plot,
                                           plot_format=plot_format, overwrite=overwrite, progress=bar.set)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
@@ -412,9 +416,12 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
                    "still checked.")
 @click.option("--strict", is_flag=True,
               help="Exit with status 1 if any claim fails (default: exit 0 and record failures in the report).")
+@click.option("-j", "--jobs", type=click.IntRange(min=1), default=None,
+              help="Worker processes running the items in parallel (default: the usable cores, at most 8; "
+                   "1 runs them one after the other). The claims and the report do not depend on it.")
 @overwrite_option
 @handle_errors
-def paper(out_dir, quick, strict, overwrite):
+def paper(out_dir, quick, strict, jobs, overwrite):
     """Reproduce the paper: Figure 3, Table 2, Figures 5 to 11, in one command.
 
     Runs every scenario behind the paper's quantitative content, checks each of the paper's
@@ -422,10 +429,12 @@ def paper(out_dir, quick, strict, overwrite):
     Table 2 under the alternative readings of the paper (d = 1 in Eq. 2, an X_t-independent
     resistance torque, the traction torque-balance convention), and writes the figures,
     --out/report.md, --out/report.html and --out/claims.json.  One progress line per item goes
-    to stderr.  A failing claim is reported, not fatal: the exit status is 0 unless --strict.
+    to stderr as it finishes.  A failing claim is reported, not fatal: the exit status is 0 unless
+    --strict.
     """
-    from .paper import run_paper  # lazy: start-up
-    rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True), overwrite=overwrite)
+    from .paper import default_jobs, run_paper  # lazy: start-up
+    rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True), overwrite=overwrite,
+                    jobs=default_jobs() if jobs is None else jobs)
     n_ok = sum(c.holds for c in rep.claims)
     click.echo(f"{n_ok} of {len(rep.claims)} claims hold ({'quick' if quick else 'full'} mode, "
                f"{rep.wall_time_s:.1f} s); report: {os.path.join(out_dir, 'report.html')}")

@@ -18,9 +18,17 @@ Inching (short simulations, seconds per cell)
     each phase can start but not how fast the gait goes nor what it costs, hence simulation.
     A solver failure marks the cell as not inching (the message is kept in the CSV).
 
-Runtime: rolling cells are ~10 ms; each inching cell costs about 0.4 s of wall time per
-simulated second with the default solver settings (about 3 s for a 8 s run of six segments),
-run in ``jobs`` worker processes.
+Which cells are simulated
+    By default only the cells where the chain does *not* roll: a rolling cell's region is
+    "rolling" whatever inching does, so its run cannot change the map's regions (this needs no
+    assumption; ``tests/test_mobility.py`` checks it against the full computation on the
+    9 x 3 traverse_patch grid).  Those cells leave the inching columns and ``inching_cheaper``
+    empty (None).  ``every_cell=True`` (``--every-cell``) simulates every cell, which is needed
+    to compare inching's and rolling's energy per metre where both move.
+
+Runtime: rolling cells are ~10 ms; each inching cell costs about 0.1 s of wall time per
+simulated second (0.25-0.9 s for an 8 s run of six segments, longer at higher X_t), run in
+``jobs`` worker processes, highest X_t first so that the longest runs do not finish last.
 """
 from __future__ import annotations
 
@@ -153,12 +161,17 @@ def _indexed_inch_run(item):
     return j, _inch_run(task)
 
 
-def _inch_all(tasks, jobs, progress):
-    """The inching runs' outcomes, in the order of ``tasks`` (``jobs`` processes)."""
+def _inch_all(tasks, jobs, progress, cost=None):
+    """The inching runs' outcomes, in the order of ``tasks`` (``jobs`` processes).
+
+    ``cost`` (one number per task, optional): the pool starts the costliest tasks first, so that
+    no long run starts last while the other workers idle; the outcomes do not depend on the order.
+    """
     outs = [None] * len(tasks)
     if jobs > 1:
+        order = range(len(tasks)) if cost is None else sorted(range(len(tasks)), key=lambda j: -cost[j])
         with ProcessExecutor(jobs) as pool:
-            done = pool.map_unordered(_indexed_inch_run, enumerate(tasks))
+            done = pool.map_unordered(_indexed_inch_run, ((j, tasks[j]) for j in order))
             for n, (j, o) in enumerate(done, 1):
                 outs[j] = o
                 if progress is not None:
@@ -172,7 +185,7 @@ def _inch_all(tasks, jobs, progress):
 
 
 def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True, inch_duration_s: float = 8.0,
-                 inch_min_speed_mps: float = 0.02, jobs: int = 1, progress=None) -> dict:
+                 inch_min_speed_mps: float = 0.02, jobs: int = 1, every_cell: bool = False, progress=None) -> dict:
     """Mobility map of a scenario's vehicle over ``xts`` x ``tows``.
 
     Parameters
@@ -191,6 +204,10 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
         Mean chain speed above which inching counts as moving [m/s].
     jobs : int
         Worker processes for the inching runs.
+    every_cell : bool
+        Simulate inching in every cell; by default only where the chain does not roll (the
+        regions are the same; rolling cells then have no inching speed, energy nor
+        ``inching_cheaper``, all None).
     progress : callable, optional
         ``progress(done, total)`` after each inching cell (e.g. a :class:`snoworm.progress.Progress`).
 
@@ -211,14 +228,20 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
         for x in xts:
             rows.append({"xt": x, "tow_N": f, **rolling_cell(sc, x, f, wheel_speed_mps)})
     if inching:
-        tasks = [(inching_scenario(sc, r["xt"], r["tow_N"], inch_duration_s), inch_min_speed_mps) for r in rows]
-        for r, o in zip(rows, _inch_all(tasks, jobs, progress)):
+        todo = [r for r in rows if every_cell or not r["rolling"]]
+        tasks = [(inching_scenario(sc, r["xt"], r["tow_N"], inch_duration_s), inch_min_speed_mps) for r in todo]
+        for r, o in zip(todo, _inch_all(tasks, jobs, progress, cost=[r["xt"] for r in todo])):
             r.update(o)
+        for r in rows:
+            if "inching" not in r:
+                r.update(inching=None, inching_speed_mps=None, inching_energy_per_metre_J_per_m=None,
+                         inching_note="")
     for r in rows:
         inch_ok = bool(r.get("inching", False))
         r["region"] = "rolling" if r["rolling"] else ("inching only" if inch_ok else "immobile")
         er, ei = r["rolling_energy_per_metre_J_per_m"], r.get("inching_energy_per_metre_J_per_m")
-        r["inching_cheaper"] = bool(er is not None and ei is not None and ei < er)
+        r["inching_cheaper"] = (None if inching and r.get("inching") is None
+                                else bool(er is not None and ei is not None and ei < er))
     seg = sc.vehicle.segment_params()[0]
     tp = sc.terrain.model.params()
     limits = {}
@@ -229,7 +252,7 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
         except ValueError:
             limits[f] = None
     return {"rows": rows, "xts": xts, "tows": tows, "regions": REGIONS, "rolling_limit_xt": limits, "inching": inching,
-            "inch_duration_s": inch_duration_s, "wheel_speed_mps": wheel_speed_mps,
+            "every_cell": bool(every_cell), "inch_duration_s": inch_duration_s, "wheel_speed_mps": wheel_speed_mps,
             "wall_time_s": time.perf_counter() - wall0, "scenario": sc.name}
 
 
@@ -249,7 +272,7 @@ def map_csv(result: dict) -> str:
 
 
 def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, rolling_speed_mps=None,
-                     inching=True, inch_duration_s=8.0, jobs=1, plot=True, plot_format="png", overwrite=False,
+                     inching=True, inch_duration_s=8.0, jobs=1, every_cell=False, plot=True, plot_format="png", overwrite=False,
                      progress=None):
     """Load a scenario, compute its map, write ``mobility_map.csv`` (and the plot, a ``plot_format`` file:
     png, pdf or svg); return (map, text, paths).
@@ -262,7 +285,7 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
     xts, tows = parse_grid(xt_spec, "--xt"), parse_list(tow_spec, "--tow")
     check_output_folder(out_dir, overwrite)
     res = mobility_map(sc, xts, tows, wheel_speed_mps=v, inching=inching, inch_duration_s=inch_duration_s,
-                       jobs=jobs, progress=progress)
+                       jobs=jobs, every_cell=every_cell, progress=progress)
     with output_folder(out_dir, overwrite) as out:
         paths = [write_csv(out / "mobility_map.csv", MAP_COLUMNS, res["rows"], MAP_FORMAT)]
         if plot:
@@ -285,4 +308,6 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
             lines.append(f"  inching run failed (solver) at X_t = {', '.join(f'{x:g}' for x in failed)}; see inching_note")
         if cheap:
             lines.append(f"  inching cheaper per metre than rolling at X_t = {', '.join(f'{x:g}' for x in cheap)}")
+    if inching and not every_cell and any(r["rolling"] for r in res["rows"]):
+        lines.append("inching not simulated where the chain rolls (--every-cell compares its energy with rolling's)")
     return res, "\n".join(lines), paths

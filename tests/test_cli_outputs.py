@@ -159,8 +159,8 @@ def test_jobs_option_on_every_command_that_runs_cases_in_parallel():
     from snoworm import calibrate, groundtruth, mobility
     from snoworm.paper import report
     from snoworm.sweep import run as sweep_run
-    parallel = {"sweep": sweep_run, "mobility-map": mobility}
-    serial = {"calibrate": calibrate, "groundtruth": groundtruth, "paper": report}
+    parallel = {"sweep": sweep_run, "mobility-map": mobility, "paper": report}
+    serial = {"calibrate": calibrate, "groundtruth": groundtruth}
     for name, mod in parallel.items():
         assert "ProcessExecutor" in inspect.getsource(mod)
         assert "-j" in [o for p in main.commands[name].params for o in p.opts], name

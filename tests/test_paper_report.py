@@ -72,6 +72,36 @@ def test_solver_or_input_error_becomes_a_failing_claim():
     assert list(c) == ["fig6.ran"] and not c["fig6.ran"].holds and "error" in c["fig6.ran"].computed
 
 
+def _plain_sections(sections):
+    return [(s.key, s.title, s.scenarios, [c.to_dict() for c in s.claims], s.tables, s.notes,
+             [(v.label, v.overrides, [c.to_dict() for c in v.claims]) for v in s.variants]) for s in sections]
+
+
+def test_parallel_items_give_the_serial_report(quick_report):
+    """-j 2 (items on the process pool, Fig 5's runs as separate tasks) and -j 1 compute the same
+    sections, claims and values, in the same order, with one progress line per item."""
+    rep = quick_report[0]
+    lines = []
+    pooled = paper.evaluate(None, quick=True, jobs=2, progress=lines.append)
+    assert [s.key for s in pooled] == list(paper.ITEMS)
+    assert _plain_sections(pooled) == _plain_sections(rep.sections)
+    assert len(lines) == len(paper.ITEMS)
+    assert sorted(line.split("]")[0] for line in lines) == sorted(f"[{k}/{len(paper.ITEMS)}" for k in range(1, 10))
+    assert all(s.wall_time_s > 0 for s in pooled)
+
+
+def test_parallel_errors_become_failing_claims_too():
+    bad = {"tow6_uniform": ["tow.force_N=heavy"], "inchworm6": ["terrain.xt=heavy"]}
+    c = _claims(["fig5", "fig6", "fig3"], scenario_overrides=bad, quick=True, jobs=2)
+    assert not c["fig5.ran"].holds and not c["fig6.ran"].holds       # a prefetched run and an item failed
+    assert c["fig3.xt1_zero_crossing"].holds and c["fig3.xt05_never_positive"].holds   # the others still ran
+    assert "heavy" in c["fig5.ran"].computed["error"]
+
+
+def test_default_jobs_is_capped():
+    assert 1 <= paper.default_jobs() <= paper.report.MAX_DEFAULT_JOBS
+
+
 def test_unknown_item_is_rejected():
     from snoworm.schema import ScenarioError
     with pytest.raises(ScenarioError, match="unknown report item"):
@@ -87,7 +117,8 @@ def _fake_report(holds):
 
 @pytest.mark.parametrize("holds,strict,code", [(True, True, 0), (False, False, 0), (False, True, 1)])
 def test_cli_exit_status(monkeypatch, tmp_path, holds, strict, code):
-    monkeypatch.setattr(paper, "run_paper", lambda out, quick=False, progress=None, overwrite=False: _fake_report(holds))
+    monkeypatch.setattr(paper, "run_paper", lambda out, quick=False, progress=None, overwrite=False, jobs=1:
+                        _fake_report(holds))
     args = ["paper", "--out", str(tmp_path), "--quick"] + (["--strict"] if strict else [])
     res = CliRunner().invoke(main, args)
     assert res.exit_code == code, res.output

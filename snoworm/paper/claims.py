@@ -159,11 +159,19 @@ class Context:
 
     def run(self, name, extra=()):
         """Simulate the shipped scenario ``name`` with the context's overrides (memoised)."""
-        ov = tuple(self.overrides(name, extra))
-        key = (name, ov)
+        key = (name, tuple(self.overrides(name, extra)))
         if key not in self._runs:
-            self._runs[key] = simulate(load_scenario(SCENARIO_DIR / f"{name}.yaml", list(ov)))
+            self._runs[key] = simulate(load_scenario(SCENARIO_DIR / f"{name}.yaml", list(key[1])))
         return self._runs[key]
+
+    def put(self, name, extra, result):
+        """Memoise ``result`` as :meth:`run` ``(name, extra)`` (a run computed elsewhere, e.g. in a worker)."""
+        self._runs[(name, tuple(self.overrides(name, extra)))] = result
+
+    def args(self) -> tuple:
+        """The constructor's arguments: ``Context(*ctx.args())`` is a context with the same settings
+        and an empty cache (how worker processes get theirs)."""
+        return self.quick, self.model, self.scenario_overrides, self.out_dir
 
     def vehicle(self):
         """``(SegmentConfig, TerrainParams)`` of FrostyBoy with the context's model overrides."""

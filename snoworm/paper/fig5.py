@@ -8,7 +8,7 @@ from .claims import QUICK_INCHWORM_DURATION_S, Context, Section, make_claim, sta
 
 __all__ = ["FIG5_PAIRS", "FIG5_PAIR_RMS_MAX", "FIG5_NONPAIR_RMS_MIN", "FIG5_MOVE_MIN_M", "FIG5_PEAK_EARLY_FRACTION",
            "FIG5_LATE_FRACTION_MAX", "FIG5_LATE_EVERY_MAX", "SLIDING_FRACTION", "FIG5_XT_HIGH", "pair_overlap",
-           "backward_sliding_timing", "check_fig5", "item_fig5"]
+           "backward_sliding_timing", "check_fig5", "fig5_runs", "item_fig5"]
 
 
 #: Segments that move together in the six-segment gait (paper section 5.1).
@@ -176,12 +176,19 @@ def check_fig5(inch, roll, inch_hi) -> list:
 FIG5_XT_HIGH = 0.5
 
 
+def fig5_runs(ctx: Context) -> list:
+    """The runs Figure 5 needs, as ``(scenario name, extra overrides)`` for :meth:`Context.run`:
+    the inchworm on X_t = 0.25, rolling there, the inchworm on X_t = 0.5 (longest first).
+
+    :func:`snoworm.paper.report.evaluate` runs them in parallel before the item when ``jobs > 1``.
+    """
+    dur = _duration(ctx)
+    return [("inchworm6", dur), ("inchworm6", dur + [f"terrain.xt={FIG5_XT_HIGH:g}"]), ("rolling6_xt025", dur)]
+
+
 def item_fig5(ctx: Context) -> Section:
     """Figure 5: six-segment inchworm on X_t = 0.25, against rolling and against X_t = 0.5."""
-    dur = _duration(ctx)
-    inch = ctx.run("inchworm6", dur)
-    roll = ctx.run("rolling6_xt025", dur)
-    hi = ctx.run("inchworm6", dur + [f"terrain.xt={FIG5_XT_HIGH:g}"])
+    inch, hi, roll = (ctx.run(name, extra) for name, extra in fig5_runs(ctx))
     s = Section("fig5", "Figure 5 - inchworm movement of a six-segment SnoWorm", (
         "Section 5.1: a six-segment SnoWorm inches on X_t = 0.25 with two segments held for each one that "
         "moves; 'a simple force controller is used on the prismatic joint to limit backwards sliding of the "
