@@ -62,3 +62,20 @@ def test_in_process_sweep_validates_each_case_once(scenario_path, monkeypatch, b
                       plot=False, batch=batch)
     assert [r["status"] for r in table.rows] == ["ok"] * 3
     assert len(calls) == 3
+
+
+def test_local_pool_tasks_carry_the_validated_scenarios(scenario_path):
+    """For a local executor (this process or its own pool) the tasks carry the scenarios validated
+    while planning, and no mapping to validate again; each equals a fresh validation of its case."""
+    from snoworm.scenario import load_scenario
+    from snoworm.sweep.run import _plan, _tasks
+    sets = ["tow.force_N=0,100", "simulation.duration_s=1"]
+    plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=True)
+    tasks = list(_tasks(plan, plan.cases, None, False))
+    assert [t["index"] for t in tasks] == [0, 1] and all("raw" not in t for t in tasks)
+    for t, f in zip(tasks, (0.0, 100.0)):
+        assert t["scenario"] == load_scenario(scenario_path("tow6_uniform"),
+                                              [("tow.force_N", f), ("simulation.duration_s", 1)])
+    plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=False)
+    assert all("scenario" not in t and t["raw"]["tow"]["force_N"] in (0, 100)
+               for t in _tasks(plan, plan.cases, None, False))

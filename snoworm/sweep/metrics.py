@@ -121,11 +121,11 @@ def run_case(task: dict) -> dict:
     Parameters
     ----------
     task : dict
-        ``index``, ``raw`` (the scenario mapping with the case's overrides applied),
-        ``source``, ``base_dir`` and ``save_dir`` (None, or where to write the time series: a folder or
-        a ``.npz`` file, see :func:`~snoworm.sweep.series.save_series`);
-        optionally ``scenario``, the :class:`~snoworm.scenario.Scenario` already validated from
-        ``raw`` in this process (the batched executor's grouping), so it is not validated twice.
+        ``index``, ``source``, ``base_dir``, ``save_dir`` (None, or where to write the time series:
+        a folder or a ``.npz`` file, see :func:`~snoworm.sweep.series.save_series`) and either
+        ``scenario``, the case's :class:`~snoworm.scenario.Scenario` already validated (by the
+        sweep's plan, or the batched executor's grouping), or ``raw``, the scenario mapping with
+        the case's overrides applied, validated here.
 
     Returns
     -------
