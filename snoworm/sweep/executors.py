@@ -39,11 +39,17 @@ class SerialExecutor:
         pass
 
 
+#: Seconds to wait for a Dask scheduler before the sweep stops with exit 2 (a reachable
+#: scheduler answers in milliseconds; Dask's own default would wait 30 s).
+CONNECT_TIMEOUT_S = 5
+
+
 class DaskExecutor:
     """Run the cases on a Dask distributed cluster at ``address`` (``tcp://host:port``).
 
     The workers need snoworm installed; ``save_cases`` and a relative ``terrain.model_file``
     need a file system shared with the workers.  At most ``4 * workers`` cases are in flight.
+    Connecting waits at most :data:`CONNECT_TIMEOUT_S` seconds.
     """
 
     def __init__(self, address):
@@ -54,7 +60,7 @@ class DaskExecutor:
                                 "pip install 'snoworm[dask]' (or pip install 'dask[distributed]').") from None
         self.address = address
         try:
-            self.client = address if hasattr(address, "submit") else Client(address, timeout="20s")
+            self.client = address if hasattr(address, "submit") else Client(address, timeout=f"{CONNECT_TIMEOUT_S}s")
         except (OSError, TimeoutError, ValueError) as exc:
             raise ScenarioError(f"--scheduler {address}: cannot connect to the Dask scheduler ({exc}). "
                                 "Check the address (tcp://host:port) and that the scheduler is running.") from None
