@@ -3,7 +3,7 @@
 Usage (from the repository root)::
 
     python benchmarks/run.py                 # full run, ~6-8 minutes on 2 cores
-    python benchmarks/run.py --quick         # smaller sweeps, fewer repeats, whole processes once: ~2-3 minutes
+    python benchmarks/run.py --quick         # smaller sweeps, fewer repeats, whole processes once: ~2 minutes
     python benchmarks/run.py --out benchmarks/results.json
 
 Prints a table with every measurement and PASS/MISS against the targets, and writes the same
