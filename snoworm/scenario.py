@@ -159,9 +159,24 @@ _TOP_KEYS = ("name", "description", "vehicle", "terrain", "tow", "mode", "simula
 def _merge(defaults: dict, given):
     if not isinstance(given, dict):
         return given
-    out = copy.deepcopy(defaults)
+    out = _copy_tree(defaults)
     out.update(given)
     return out
+
+
+_ATOMS = (str, int, float, bool, type(None))
+
+
+def _copy_tree(data):
+    """A copy of YAML-like data (nested dicts and lists of plain scalars, copied level by level;
+    anything else by :func:`copy.deepcopy`), several times faster than ``copy.deepcopy`` of it."""
+    if type(data) is dict:
+        return {k: _copy_tree(v) for k, v in data.items()}
+    if type(data) is list:
+        return [_copy_tree(v) for v in data]
+    if isinstance(data, _ATOMS):
+        return data
+    return copy.deepcopy(data)
 
 
 def read_model_file(mfile, base_dir):
@@ -198,7 +213,7 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
     if not isinstance(raw, dict):
         raise ScenarioError(f"{source}: a scenario must be a YAML mapping with keys {', '.join(_TOP_KEYS)}; "
                             f"got {type(raw).__name__}.")
-    raw = copy.deepcopy(raw)
+    raw = _copy_tree(raw)
     for key in raw:
         if key not in _TOP_KEYS:
             raise ScenarioError(f"{short_key(key)}: unknown key.{suggest(key, _TOP_KEYS)} Known top-level keys: {', '.join(_TOP_KEYS)}.")
@@ -365,7 +380,7 @@ def parse_set_option(item: str):
 
 def apply_overrides(raw: dict, overrides) -> dict:
     """Return a copy of ``raw`` with each ``(dotted_key, value)`` set (sections created as needed)."""
-    raw = copy.deepcopy(raw)
+    raw = _copy_tree(raw)
     for key, value in overrides:
         parts = key.split(".")
         node = raw

@@ -17,6 +17,7 @@ import difflib
 import functools
 import math
 import numbers
+import operator
 import reprlib
 import typing
 from typing import Any
@@ -130,17 +131,24 @@ def _describe(md):
     return f" ({', '.join(bits)})" if bits else ""
 
 
+#: The bounds a field may declare: metadata key, comparison that must hold, word for messages.
+_BOUNDS = (("gt", operator.gt, "greater than"), ("ge", operator.ge, "at least"),
+           ("lt", operator.lt, "less than"), ("le", operator.le, "at most"))
+
+
 def _check_number(path, value, md, kind):
-    if isinstance(value, np.ndarray) and value.ndim == 0:
-        value = value.item()
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        if isinstance(value, str):
-            try:
-                value = float(value)
-            except ValueError:
-                _fail(path, f"expected a number{_describe(md)}, got the text {quote(value)}. Write a plain number, e.g. 1.5.")
-        else:
-            _fail(path, f"expected a number{_describe(md)}, got {type(value).__name__} {quote(value)}. Write a plain number.")
+    t = type(value)
+    if t is not float and t is not int:        # plain YAML numbers skip straight to the checks below
+        if isinstance(value, np.ndarray) and value.ndim == 0:
+            value = value.item()
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+            if isinstance(value, str):
+                try:
+                    value = float(value)
+                except ValueError:
+                    _fail(path, f"expected a number{_describe(md)}, got the text {quote(value)}. Write a plain number, e.g. 1.5.")
+            else:
+                _fail(path, f"expected a number{_describe(md)}, got {type(value).__name__} {quote(value)}. Write a plain number.")
     if isinstance(value, numbers.Integral):
         value = int(value)
         if abs(value) > 1e300:      # beyond any bound; float() of it would overflow
@@ -154,20 +162,24 @@ def _check_number(path, value, md, kind):
         value = int(value)
     else:
         value = float(value)
-    unit = f" {md.get('unit')}" if md.get("unit") else ""
-    for key, op, word in (("gt", lambda a, b: a > b, "greater than"), ("ge", lambda a, b: a >= b, "at least"),
-                          ("lt", lambda a, b: a < b, "less than"), ("le", lambda a, b: a <= b, "at most")):
+    for key, holds, word in _BOUNDS:
         bound = md.get(key)
-        if bound is not None and not op(value, bound):
+        if bound is not None and not holds(value, bound):
+            unit = f" {md.get('unit')}" if md.get("unit") else ""
             why = f" {md['why']}" if md.get("why") else ""
             _fail(path, f"must be {word} {bound:g}{unit}{_describe(md)}, got {value:g}; the allowed range is "
                         f"{domain_text(md)}.{why} Change it to a value {word} {bound:g}.")
     return value
 
 
+@functools.lru_cache(maxsize=None)
+def _type_info(tp):
+    """``(origin, args, is a dataclass)`` of an annotation, computed once per type."""
+    return typing.get_origin(tp), typing.get_args(tp), dataclasses.is_dataclass(tp)
+
+
 def _convert(path, value, tp, md):
-    origin = typing.get_origin(tp)
-    args = typing.get_args(tp)
+    origin, args, is_dc = _type_info(tp)
     if origin is typing.Union:
         if value is None and type(None) in args:
             return None
@@ -179,7 +191,7 @@ def _convert(path, value, tp, md):
             except ScenarioError as exc:
                 errors.append(str(exc))
         raise ScenarioError(errors[-1])
-    if dataclasses.is_dataclass(tp):
+    if is_dc:
         if isinstance(value, tp):       # constructed (and so validated) already
             return value
         if not isinstance(value, dict):

@@ -224,3 +224,25 @@ def test_bad_vehicle_files_are_bad_input(tmp_path, text, words):
 def test_a_missing_vehicle_file_names_it(tmp_path):
     with pytest.raises(ScenarioError, match="vehicle.parameter_set: .*nope.yaml: no such file"):
         parameter_entries("nope.yaml", tmp_path)
+
+
+def test_copy_tree_copies_every_level_and_leaves_the_original_alone():
+    import numpy as np
+    from snoworm.scenario import _copy_tree
+    shared = {"k": [1, 2]}
+    data = {"a": shared, "b": shared, "c": [{"x": 1.5, "s": "t", "n": None}], "arr": np.arange(3.0)}
+    out = _copy_tree(data)
+    assert out["a"] == data["a"] and out["c"] == data["c"] and np.array_equal(out["arr"], data["arr"])
+    out["a"]["k"].append(3)
+    out["c"][0]["x"] = 2.0
+    out["arr"][0] = 9.0
+    assert data == {"a": {"k": [1, 2]}, "b": {"k": [1, 2]}, "c": [{"x": 1.5, "s": "t", "n": None}], "arr": data["arr"]}
+    assert data["arr"][0] == 0.0
+    assert out["b"]["k"] == [1, 2]          # a YAML alias's two places are two copies
+
+
+def test_override_of_an_aliased_section_changes_only_the_named_place():
+    raw = {"a": {"v": 1}}
+    raw["b"] = raw["a"]                    # what a YAML alias gives
+    out = apply_overrides(raw, [("a.v", 2)])
+    assert out["a"]["v"] == 2 and out["b"]["v"] == 1 and raw["a"]["v"] == 1
