@@ -419,22 +419,24 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
 @click.option("-j", "--jobs", type=click.IntRange(min=1), default=None,
               help="Worker processes running the items in parallel (default: the usable cores, at most 8; "
                    "1 runs them one after the other). The claims and the report do not depend on it.")
+@plot_format_option
 @overwrite_option
 @handle_errors
-def paper(out_dir, quick, strict, jobs, overwrite):
+def paper(out_dir, quick, strict, jobs, plot_format, overwrite):
     """Reproduce the paper: Figure 3, Table 2, Figures 5 to 11, in one command.
 
     Runs every scenario behind the paper's quantitative content, checks each of the paper's
     statements against the computed numbers with a stated tolerance, re-checks Figure 3 and
     Table 2 under the alternative readings of the paper (d = 1 in Eq. 2, an X_t-independent
     resistance torque, the traction torque-balance convention), and writes the figures,
-    --out/report.md, --out/report.html and --out/claims.json.  One progress line per item goes
+    --out/report.md, --out/report.html and --out/claims.json (--plot-format pdf figures are linked
+    from report.html, png and svg shown in it).  One progress line per item goes
     to stderr as it finishes.  A failing claim is reported, not fatal: the exit status is 0 unless
     --strict.
     """
     from .paper import default_jobs, run_paper  # lazy: start-up
     rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True), overwrite=overwrite,
-                    jobs=default_jobs() if jobs is None else jobs)
+                    jobs=default_jobs() if jobs is None else jobs, plot_format=plot_format)
     n_ok = sum(c.holds for c in rep.claims)
     click.echo(f"{n_ok} of {len(rep.claims)} claims hold ({'quick' if quick else 'full'} mode, "
                f"{rep.wall_time_s:.1f} s); report: {os.path.join(out_dir, 'report.html')}")

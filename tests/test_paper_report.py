@@ -108,6 +108,24 @@ def test_unknown_item_is_rejected():
         paper.evaluate(["fig99"])
 
 
+@pytest.mark.parametrize("fmt,shown", [("svg", "data:image/svg+xml;base64,"), ("pdf", "<a href='fig3_terrain_curves.pdf'>")])
+def test_plot_format_of_the_figures_and_how_the_report_shows_them(tmp_path, fmt, shown):
+    secs = paper.evaluate(["fig3"], out_dir=tmp_path, plot_format=fmt)
+    figs = [p for s in secs for p in s.figures]
+    assert figs and all(p.suffix == f".{fmt}" and p.exists() for p in figs)
+    rep = paper.PaperReport(secs, True, 0.1)
+    html, md = paper.render_html(rep), paper.render_markdown(rep)
+    assert shown in html and "data:image/png" not in html
+    assert (f"![fig3_terrain_curves](fig3_terrain_curves.{fmt})" in md) == (fmt == "svg")
+    assert (f"[fig3_terrain_curves.pdf](fig3_terrain_curves.pdf)" in md) == (fmt == "pdf")
+
+
+def test_unknown_plot_format_is_rejected():
+    from snoworm.schema import ScenarioError
+    with pytest.raises(ScenarioError, match="plot format 'gif'"):
+        paper.evaluate(["fig3"], plot_format="gif")
+
+
 # ------------------------------------------------------------------ CLI
 
 def _fake_report(holds):
@@ -117,8 +135,8 @@ def _fake_report(holds):
 
 @pytest.mark.parametrize("holds,strict,code", [(True, True, 0), (False, False, 0), (False, True, 1)])
 def test_cli_exit_status(monkeypatch, tmp_path, holds, strict, code):
-    monkeypatch.setattr(paper, "run_paper", lambda out, quick=False, progress=None, overwrite=False, jobs=1:
-                        _fake_report(holds))
+    monkeypatch.setattr(paper, "run_paper", lambda out, quick=False, progress=None, overwrite=False, jobs=1,
+                        plot_format="png": _fake_report(holds))
     args = ["paper", "--out", str(tmp_path), "--quick"] + (["--strict"] if strict else [])
     res = CliRunner().invoke(main, args)
     assert res.exit_code == code, res.output

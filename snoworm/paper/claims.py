@@ -138,20 +138,23 @@ class Context:
         ``{"tow6_uniform": ["tow.force_N=300"]}`` (used by the tests to break a claim).
     out_dir : str or Path, optional
         Directory for figures; ``None`` draws nothing.
+    plot_format : {"png", "pdf", "svg"}
+        File format of the figures (:func:`snoworm.plotting.save`; PNG at 200 dpi).
     """
 
-    def __init__(self, quick=False, model=None, scenario_overrides=None, out_dir=None):
+    def __init__(self, quick=False, model=None, scenario_overrides=None, out_dir=None, plot_format="png"):
         self.quick = bool(quick)
         self.model = dict(model or {})
         self.scenario_overrides = {k: list(v) for k, v in (scenario_overrides or {}).items()}
         self.out_dir = Path(out_dir) if out_dir is not None else None
+        self.plot_format = str(plot_format)
         self._runs = {}
 
     def child(self, model=None, plot=False) -> "Context":
         """A context with extra terrain-model overrides (alternative readings), sharing nothing."""
         m = dict(self.model)
         m.update(model or {})
-        return Context(self.quick, m, self.scenario_overrides, self.out_dir if plot else None)
+        return Context(self.quick, m, self.scenario_overrides, self.out_dir if plot else None, self.plot_format)
 
     def overrides(self, name, extra=()) -> list:
         ov = [f"terrain.model.{k}={v}" for k, v in self.model.items()]
@@ -171,7 +174,7 @@ class Context:
     def args(self) -> tuple:
         """The constructor's arguments: ``Context(*ctx.args())`` is a context with the same settings
         and an empty cache (how worker processes get theirs)."""
-        return self.quick, self.model, self.scenario_overrides, self.out_dir
+        return self.quick, self.model, self.scenario_overrides, self.out_dir, self.plot_format
 
     def vehicle(self):
         """``(SegmentConfig, TerrainParams)`` of FrostyBoy with the context's model overrides."""
@@ -179,8 +182,9 @@ class Context:
         return seg, dataclasses.replace(tp, **self.model) if self.model else tp
 
     def figure(self, name):
-        """Path of figure ``name`` in the output directory, or ``None`` when not plotting."""
-        return None if self.out_dir is None else self.out_dir / name
+        """Path of figure ``name`` (its suffix replaced by :attr:`plot_format`) in the output
+        directory, or ``None`` when not plotting."""
+        return None if self.out_dir is None else (self.out_dir / name).with_suffix("." + self.plot_format)
 
 
 def start_time_s(res) -> float:

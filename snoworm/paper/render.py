@@ -50,6 +50,10 @@ def _summary_rows(rep):
             for c in rep.claims]
 
 
+#: MIME types of the figure formats a page can show inline (others, i.e. PDF, are linked).
+_INLINE = {".png": "image/png", ".svg": "image/svg+xml"}
+
+
 def render_markdown(rep) -> str:
     """``report.md``: summary table of claims, then one section per figure/table (relative figure links)."""
     L = ["# snoworm reproduction of Elliott, Lines & Ray (SnoWorm)", ""] + [p + "\n" for p in _header(rep)]
@@ -71,8 +75,9 @@ def render_markdown(rep) -> str:
                 L.append(f"| {c.id} | {_verdict(base)} | {_verdict(c)} | {_md_cell(_computed_text(c))} |")
         for n in s.notes:
             L += ["", f"*Note:* {n}"]
-        for p in s.figures:
-            L += ["", f"![{Path(p).stem}]({Path(p).name})"]
+        for p in s.figures:       # PNG and SVG shown, PDF linked
+            p = Path(p)
+            L += ["", f"![{p.stem}]({p.name})" if p.suffix.lower() in _INLINE else f"[{p.name}]({p.name})"]
     return "\n".join(L) + "\n"
 
 
@@ -119,8 +124,19 @@ def _md_table_to_html(md: str) -> str:
     return _html_table(rows[0], rows[1:])
 
 
+def _html_figure(path: Path) -> str:
+    """One figure of report.html: inline as a data URI, or a link for PDF."""
+    name = _h(path.name)
+    mime = _INLINE.get(path.suffix.lower())
+    if mime is None:
+        return f"<figure><a href='{name}'>{name}</a><figcaption>{name}</figcaption></figure>"
+    data = base64.b64encode(path.read_bytes()).decode("ascii")
+    return f"<figure><img alt='{_h(path.stem)}' src='data:{mime};base64,{data}'><figcaption>{name}</figcaption></figure>"
+
+
 def render_html(rep) -> str:
-    """``report.html``: the same content as ``report.md``, self-contained (figures as base64 PNG data URIs)."""
+    """``report.html``: the same content as ``report.md``, self-contained (PNG and SVG figures as
+    base64 data URIs; PDF figures, which browsers do not show inline, as links beside the report)."""
     B = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>snoworm paper reproduction</title>",
          f"<style>{_CSS}</style></head><body>", "<h1>snoworm reproduction of Elliott, Lines &amp; Ray (SnoWorm)</h1>"]
     hdr = _header(rep)
@@ -144,9 +160,6 @@ def render_html(rep) -> str:
             B.append(_html_table(["claim", "default reading", "alternative", "alternative computed"], vrows,
                                  raw_cols=range(4)))
         B += [f"<p><i>Note:</i> {_h(n)}</p>" for n in s.notes]
-        for p in s.figures:
-            data = base64.b64encode(Path(p).read_bytes()).decode("ascii")
-            B.append(f"<figure><img alt='{_h(Path(p).stem)}' src='data:image/png;base64,{data}'>"
-                     f"<figcaption>{_h(Path(p).name)}</figcaption></figure>")
+        B += [_html_figure(Path(p)) for p in s.figures]
     B.append("</body></html>")
     return "\n".join(B) + "\n"
