@@ -99,6 +99,12 @@ def _check_out(ctx, param, value):
     return value
 
 
+def out_option(help_text):
+    """The ``--out DIR`` option of a command that writes results (checked by :func:`_check_out`)."""
+    return click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
+                        help=help_text)
+
+
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="snoworm")
 @click.option("-v", "--verbose", is_flag=True, help="Also log solver fallbacks and retries to stderr.")
@@ -144,8 +150,7 @@ plot_format_option = click.option("--plot-format", type=click.Choice(["png", "pd
 
 @main.command()
 @click.argument("scenario", type=click.Path(dir_okay=False))
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
-              help="Directory for segments.csv, links.csv, summary.json, scenario.yaml and the plots.")
+@out_option("Directory for segments.csv, links.csv, summary.json, scenario.yaml and the plots.")
 @set_option
 @click.option("--no-plot", is_flag=True, help="Skip the plots.")
 @plot_format_option
@@ -202,8 +207,7 @@ model_file_option = click.option("--model-file", type=click.Path(dir_okay=False)
 @main.command()
 @click.option("--data", "data_path", type=click.Path(dir_okay=False), default=None,
               help="Field-data CSV (default: the shipped FrostyBoy 2020 data, paper Table 2).")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
-              help="Directory for table2.csv and table2.png.")
+@out_option("Directory for table2.csv and table2.png.")
 @param_set_option
 @model_file_option
 @click.option("--no-plot", is_flag=True, help="Skip table2.png.")
@@ -227,8 +231,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
 @main.command("terrain-curves")
 @click.option("--xt", "xts", type=float, multiple=True, required=True,
               help="Terrain coefficient X_t in (0, 1] (repeatable), e.g. --xt 1 --xt 0.5 for paper Figure 3.")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
-              help="Directory for terrain_curves.csv and terrain_curves.png.")
+@out_option("Directory for terrain_curves.csv and terrain_curves.png.")
 @param_set_option
 @model_file_option
 @click.option("--points", "n_points", type=click.IntRange(min=3), default=1001, show_default=True,
@@ -256,8 +259,7 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
 @click.option("--fit", "fit", multiple=True, required=True, metavar="NAME",
               help="Parameter to fit (repeatable): b_tF, b_trF, A, peak_exponent_d, tau0, tau1, "
                    "or xt (fits every case's X_t).")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
-              help="Directory for terrain_model.yaml and calibration.json.")
+@out_option("Directory for terrain_model.yaml and calibration.json.")
 @param_set_option
 @click.option("--model-file", type=click.Path(dir_okay=False), default=None,
               help="YAML of terrain-model coefficients to start from instead of the parameter set's.")
@@ -291,9 +293,8 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
               help="A swept scenario key and its values: a list (tow.force_N=0,100,200) or an inclusive "
                    "range START:STOP:COUNT (terrain.xt=0.3:1.0:15 gives 15 values). Repeat for a grid "
                    "(first key slowest); a single value just overrides the key.")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
-              help="Directory for sweep.json, summary.csv and sweep.png / heatmap.png. Re-running the same "
-                   "command resumes an interrupted sweep there.")
+@out_option("Directory for sweep.json, summary.csv and sweep.png / heatmap.png. Re-running the same "
+            "command resumes an interrupted sweep there.")
 @click.option("-j", "--jobs", default=1, show_default=True, type=click.IntRange(min=1),
               help="Local worker processes.")
 @click.option("--scheduler", metavar="ADDRESS", default=None,
@@ -368,8 +369,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no
 @click.option("--xt", "xt_spec", default="0.2:1.0:9", show_default=True,
               help="Terrain coefficients X_t in (0, 1]: START:STOP:COUNT or a comma-separated list.")
 @click.option("--tow", "tow_spec", default="0", show_default=True, help="Tow forces [N], comma-separated (|force| at most 1e6 N).")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
-              help="Directory for mobility_map.csv and mobility_map.png.")
+@out_option("Directory for mobility_map.csv and mobility_map.png.")
 @set_option
 @click.option("--rolling-speed", "rolling_speed_mps", type=float, default=None,
               help="Rolling wheel-speed set-point [m/s] (default: the scenario's supervisor or uniform mode).")
@@ -409,8 +409,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
 # ---------------------------------------------------------------- paper reproduction (snoworm/paper/)
 
 @main.command()
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
-              help="Directory for the figures, report.md, report.html (self-contained) and claims.json.")
+@out_option("Directory for the figures, report.md, report.html (self-contained) and claims.json.")
 @click.option("--quick", is_flag=True,
               help="Shorter inchworm runs (10 s simulated instead of 30 s) for CI; every figure's claims are "
                    "still checked.")
