@@ -358,9 +358,7 @@ def folder_lock(folder):
     lp = folder / LOCK
     try:
         fd = _acquire(lp)
-    except FolderLocked:
-        raise
-    except OSError as exc:
+    except OSError as exc:         # FolderLocked is not an OSError: it passes unchanged
         raise OutputError(f"cannot lock the folder: {os_error_message(exc, lp)}") from None
     try:
         yield lp

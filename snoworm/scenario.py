@@ -274,14 +274,14 @@ _SECTIONS = {"segment": "vehicle.segment", "links": "vehicle.links", "terrain_mo
 def _tag(value, where):
     if not isinstance(value, str) or not value.startswith(SOURCE_TAGS):
         raise ScenarioError(f"{where}: a source must start with one of {', '.join(SOURCE_TAGS)}, e.g. "
-                            f"'[field data] weighed 2026-01'; got {yamlio.quote(value)}.")
+                            f"'[field data] weighed 2026-01'; got {quote(value)}.")
     return value
 
 
 def _source_notes(notes) -> dict:
     """The scenario's ``sources:`` block ({dotted key: tag}), checked."""
     if not isinstance(notes, dict):
-        raise ScenarioError(f"sources: expected a mapping of dotted keys to source tags, got {yamlio.quote(notes)}.")
+        raise ScenarioError(f"sources: expected a mapping of dotted keys to source tags, got {quote(notes)}.")
     return {str(k): _tag(v, f"sources.{k}") for k, v in notes.items()}
 
 
@@ -307,7 +307,7 @@ def parameter_entries(ps_name, base_dir=None):
         if not path.is_absolute() and base_dir is not None:
             path = Path(base_dir) / path
         return read_parameter_file(path), str(path.resolve())
-    raise ScenarioError(f"vehicle.parameter_set: unknown set {yamlio.quote(ps_name)}.{suggest(str(ps_name), PARAMETER_SETS)} "
+    raise ScenarioError(f"vehicle.parameter_set: unknown set {quote(ps_name)}.{suggest(str(ps_name), PARAMETER_SETS)} "
                         f"Known sets: {', '.join(PARAMETER_SETS)}; or give a YAML parameter-set file (path ending .yaml).")
 
 
@@ -329,16 +329,16 @@ def read_parameter_file(path) -> dict:
     ref = PARAMETER_SETS["frostyboy"]
     for key in data:
         if key not in ("name", "description", "base", *ref):
-            raise ScenarioError(f"{where}: unknown key {yamlio.quote(key)}.{suggest(str(key), [*ref, 'base', 'name'])} "
+            raise ScenarioError(f"{where}: unknown key {quote(key)}.{suggest(str(key), [*ref, 'base', 'name'])} "
                                 f"Known keys: name, description, base, {', '.join(ref)}.")
     base = data.get("base")
     if base is not None and base not in PARAMETER_SETS:
-        raise ScenarioError(f"{where}: base: unknown set {yamlio.quote(base)}. Known sets: {', '.join(PARAMETER_SETS)}.")
+        raise ScenarioError(f"{where}: base: unknown set {quote(base)}. Known sets: {', '.join(PARAMETER_SETS)}.")
     out = _entries_copy(PARAMETER_SETS[base]) if base else {sec: {} for sec in ref}
     for sec in ref:
         given = data.get(sec) or {}
         if not isinstance(given, dict):
-            raise ScenarioError(f"{where}: {sec}: expected a mapping of values, got {yamlio.quote(given)}.")
+            raise ScenarioError(f"{where}: {sec}: expected a mapping of values, got {quote(given)}.")
         for k, v in given.items():
             if k not in ref[sec]:
                 raise ScenarioError(f"{where}: {sec}.{k}: unknown key.{suggest(str(k), ref[sec])} "
@@ -346,7 +346,7 @@ def read_parameter_file(path) -> dict:
             if isinstance(v, dict):
                 if set(v) - {"value", "source"} or "value" not in v:
                     raise ScenarioError(f"{where}: {sec}.{k}: give a value, or a mapping {{value: ..., source: "
-                                        f"'[tag] note'}}; got {yamlio.quote(v)}.")
+                                        f"'[tag] note'}}; got {quote(v)}.")
                 out[sec][k] = (v["value"], _tag(v.get("source", f"[user] {Path(path).name}"), f"{where}: {sec}.{k}.source"))
             else:
                 out[sec][k] = (v, f"[user] {Path(path).name}")
@@ -374,7 +374,7 @@ def parse_set_option(item: str):
     try:
         value = yamlio.load_yaml_text(text, f"--set {key}")
     except ScenarioError as exc:
-        raise ScenarioError(f"--set {yamlio.quote(item)}: the value is not valid YAML ({exc}).") from None
+        raise ScenarioError(f"--set {quote(item)}: the value is not valid YAML ({exc}).") from None
     return key, value
 
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..schema import ScenarioError, field
+from ..schema import ScenarioError, field, quote
 from ..scenario import base_dir
 from ..sections import ModeConfig
 from .base import Interval, Mode, register_mode
@@ -64,7 +64,7 @@ def _is_file_spec(target: str) -> bool:
 def _split(spec, path):
     target, sep, name = str(spec).rpartition(":")
     if not sep or not target or not name.isidentifier():
-        raise ScenarioError(f"{path}: expected 'file.py:ClassName' or 'package.module:ClassName', got {spec!r}. "
+        raise ScenarioError(f"{path}: expected 'file.py:ClassName' or 'package.module:ClassName', got {quote(spec)}. "
                             "Name the class after a colon.")
     return target, name
 

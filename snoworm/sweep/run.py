@@ -48,12 +48,12 @@ class _Progress:
     def _info(self):
         return f"{self.failed} failed" + (f", {self.already} resumed" if self.already else "")
 
-    def update(self, failed: bool, force=False):
+    def update(self, failed: bool):
         self.done += 1
         self.failed += int(failed)
         self.bar.set(self.already + self.done, info=self._info())
 
-    def show(self, force=False):
+    def show(self):
         self.bar.set(self.already + self.done, info=self._info())
 
     def close(self):
@@ -335,7 +335,7 @@ def _execute(plan: _Plan, todo, executor, rec: _Recorder, own: bool, out, keep_s
     close the progress line, the executor (if the sweep made it) and ``summary.csv``."""
     try:
         rec.open()
-        rec.bar.show(force=True)
+        rec.bar.show()
         _run_cases(plan, todo, executor, rec, out, keep_series)
     finally:
         rec.bar.close()
