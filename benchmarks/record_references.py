@@ -5,10 +5,11 @@
     python benchmarks/record_references.py tight --only inchworm6 inchworm2
 
 ``summaries``: every shipped scenario at its own settings; tests/test_reference_summaries.py
-holds refactors to it (1e-9).  Re-record it only for a deliberate numerical change, and say so
+holds every change to it (tolerances from the solver tolerance and each quantity's physical
+scale, see its docstring).  Re-record it only for a deliberate numerical change, and say so
 in the commit.  ``tight``: every shipped scenario at rtol 1e-9 and 1e-3 times the default
 absolute tolerances with LSODA, whatever its YAML says; tests/test_tight_reference.py holds
-the shipped settings within 1e-3 of it.  Re-record it only when the model changes.
+the shipped settings within half their 1e-3 promise of it.  Re-record it only when the model changes.
 """
 from __future__ import annotations
 
@@ -22,8 +23,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from snoworm import load_scenario, simulate  # noqa: E402
-from tests.test_reference_summaries import summary_of  # noqa: E402
-from tests.test_tight_reference import TIGHT_SETTINGS, tight_quantities  # noqa: E402
+from tests.reference_quantities import quantities  # noqa: E402
+from tests.test_tight_reference import TIGHT_SETTINGS  # noqa: E402
 
 DATA = ROOT / "tests" / "data"
 SC = ROOT / "scenarios"
@@ -41,11 +42,10 @@ def main(argv=None):
     for name in names:
         t0 = time.perf_counter()
         if a.which == "summaries":
-            data[name] = summary_of(simulate(load_scenario(SC / f"{name}.yaml")))
+            data[name] = quantities(simulate(load_scenario(SC / f"{name}.yaml")))
         else:
             res = simulate(load_scenario(SC / f"{name}.yaml", TIGHT_SETTINGS))
-            data[name] = dict(tight_quantities(res), settings=[list(s) for s in TIGHT_SETTINGS],
-                              nfev=res.stats["nfev"])
+            data[name] = dict(quantities(res), settings=[list(s) for s in TIGHT_SETTINGS])
         if name in old:              # keep the file's key order (small diffs)
             data[name] = {k: data[name][k] for k in [*old[name], *data[name]] if k in data[name]}
         print(f"{name}: {time.perf_counter() - t0:.1f} s", flush=True)
