@@ -28,8 +28,8 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from snoworm import Simulator, load_scenario, simulate  # noqa: E402
-from snoworm.driver import assemble  # noqa: E402
-from snoworm.sweep import run_sweep  # noqa: E402
+from snoworm.simulation.driver import assemble  # noqa: E402
+from snoworm.studies.sweep import run_sweep  # noqa: E402
 
 SC = ROOT / "scenarios"
 TARGETS = {
@@ -218,7 +218,7 @@ def bench_batched_inchworm(n_xt, n_tow, duration, report):
 _MEMORY_CHILD = r"""
 import json, resource, sys, time
 sys.path.insert(0, {root!r})
-from snoworm.sweep import run_sweep
+from snoworm.studies.sweep import run_sweep
 t0 = time.perf_counter()
 tab = run_sweep({scenario!r}, {sets!r}, plot=False, progress=False, batch={batch})
 wall = time.perf_counter() - t0

@@ -30,15 +30,16 @@ from ._version import __version__
 #: ``import snoworm`` and the command line start without SciPy, the sweeps or matplotlib; a
 #: command pays only for the modules it uses (``snoworm --help`` imports none of them).
 _EXPORTS = {
-    "BatchMember": "driver", "SolverError": "driver", "simulate": "driver", "simulate_batch": "driver",
-    "OutputError": "fileio",
+    "BatchMember": "simulation.driver", "SolverError": "simulation.driver", "simulate": "simulation.driver",
+    "simulate_batch": "simulation.driver",
+    "OutputError": "infra.folders",
     "Mode": "modes", "register_mode": "modes",
-    "Result": "results", "load_result": "results",
-    "Scenario": "scenario", "ScenarioError": "scenario", "load_scenario": "scenario",
-    "scenario_from_dict": "scenario", "shipped_scenarios": "scenario",
-    "ModeConfig": "sections",
-    "Observation": "simulator", "Simulator": "simulator",
-    "SweepTable": "sweep", "load_sweep": "sweep", "run_sweep": "sweep",
+    "Result": "results.result", "load_result": "results.result",
+    "Scenario": "config.scenario", "ScenarioError": "config.scenario", "load_scenario": "config.scenario",
+    "scenario_from_dict": "config.scenario", "shipped_scenarios": "config.scenario",
+    "ModeConfig": "config.sections",
+    "Observation": "simulation.stepwise", "Simulator": "simulation.stepwise",
+    "SweepTable": "studies.sweep", "load_sweep": "studies.sweep", "run_sweep": "studies.sweep",
 }
 
 __all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Observation", "OutputError", "Result", "Scenario",
@@ -47,14 +48,14 @@ __all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Observation", "O
 
 if TYPE_CHECKING:  # for type checkers and editors; at run time the names come from __getattr__
     from . import modes as modes
-    from .driver import BatchMember, SolverError, simulate, simulate_batch
-    from .fileio import OutputError
+    from .simulation.driver import BatchMember, SolverError, simulate, simulate_batch
+    from .infra.folders import OutputError
     from .modes import Mode, register_mode
-    from .results import Result, load_result
-    from .scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios
-    from .sections import ModeConfig
-    from .simulator import Observation, Simulator
-    from .sweep import SweepTable, load_sweep, run_sweep
+    from .results.result import Result, load_result
+    from .config.scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios
+    from .config.sections import ModeConfig
+    from .simulation.stepwise import Observation, Simulator
+    from .studies.sweep import SweepTable, load_sweep, run_sweep
 
 
 def __getattr__(name: str):

@@ -46,14 +46,14 @@ def handle_errors(fn):
     each with a clear message; SIGTERM is handled like Ctrl-C."""
     @functools.wraps(fn)
     def wrapper(*a, **kw):
-        from .schema import ScenarioError  # lazy: start-up
-        from .driver import SolverError  # lazy: start-up
+        from .config.schema import ScenarioError  # lazy: start-up
+        from .simulation.driver import SolverError  # lazy: start-up
         from .modes.controller import ControllerError  # lazy: start-up
-        from . import fileio  # lazy: start-up
-        from .fileio import OutputError  # lazy: start-up
+        from .infra import folders  # lazy: start-up
+        from .infra.folders import OutputError  # lazy: start-up
         old = _catch_sigterm()
         argv = click.get_current_context().find_root().meta.get("snoworm.argv")
-        fileio.COMMAND = shlex.join(["snoworm", *argv]) if argv is not None else None   # for the manifests
+        folders.COMMAND = shlex.join(["snoworm", *argv]) if argv is not None else None   # for the manifests
         try:
             return fn(*a, **kw)
         except (ScenarioError, OutputError) as exc:
@@ -77,7 +77,7 @@ def handle_errors(fn):
             _fail(f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
                   "rerun with SNOWORM_DEBUG=1 for the traceback and report it.", EXIT_SOLVER)
         finally:
-            fileio.COMMAND = None
+            folders.COMMAND = None
             if old is not None:
                 signal.signal(signal.SIGTERM, old)
     return wrapper
@@ -137,7 +137,7 @@ overwrite_option = click.option("--overwrite", is_flag=True,
 
 
 def _progress(total, desc, unit):
-    from .progress import Progress  # lazy: start-up
+    from .infra.progress import Progress  # lazy: start-up
     return Progress(total, desc, unit)
 
 
@@ -164,9 +164,9 @@ def run(scenario, out_dir, sets, no_plot, plot_format, overwrite):
     invalid (exit 2), the solver fails (exit 1) or the run is interrupted.  Progress in
     simulated time goes to stderr.
     """
-    from .driver import simulate  # lazy: start-up
-    from .fileio import check_output_folder  # lazy: start-up
-    from .scenario import load_scenario  # lazy: start-up
+    from .simulation.driver import simulate  # lazy: start-up
+    from .infra.folders import check_output_folder  # lazy: start-up
+    from .config.scenario import load_scenario  # lazy: start-up
     sc = load_scenario(scenario, sets)
     check_output_folder(out_dir, overwrite)
     with _progress(sc.simulation.duration_s, sc.name, "s simulated") as bar:
@@ -188,14 +188,14 @@ def run(scenario, out_dir, sets, no_plot, plot_format, overwrite):
 @handle_errors
 def validate(scenario, sets):
     """Check SCENARIO without running it (exit 0 if valid, 2 with the reason if not)."""
-    from .scenario import load_scenario  # lazy: start-up
+    from .config.scenario import load_scenario  # lazy: start-up
     sc = load_scenario(scenario, sets)
     click.echo(f"{scenario}: valid ({sc.vehicle.segments} segments, mode {sc.mode.type}, "
                f"{sc.simulation.duration_s:g} s)")
 
 
 # ---------------------------------------------------------------- ground truth and calibration
-# (snoworm/groundtruth.py, snoworm/calibrate.py; paper Table 2 and Figure 3)
+# (snoworm/studies/groundtruth.py, snoworm/studies/calibrate.py; paper Table 2 and Figure 3)
 
 param_set_option = click.option("--parameter-set", "parameter_set_name", default="frostyboy", show_default=True,
                                 help="Named set of physical values (segment and terrain model) to use.")
@@ -221,7 +221,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
     and X_t, prints measured against modelled speed, slip and torque, and writes
     --out/table2.csv (with residuals, model minus measured) and --out/table2.png.
     """
-    from .groundtruth import run_groundtruth  # lazy: start-up
+    from .studies.groundtruth import run_groundtruth  # lazy: start-up
     _, text, paths = run_groundtruth(out_dir, data_path, parameter_set_name, model_file, plot=not no_plot,
                                      plot_format=plot_format, overwrite=overwrite)
     click.echo(text)
@@ -247,7 +247,7 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
     that of forward motion (Eq. 3 with sgn = +1).  Prints the slip at which the net force
     crosses zero for each X_t, or says that it stays negative.
     """
-    from .groundtruth import run_terrain_curves  # lazy: start-up
+    from .studies.groundtruth import run_terrain_curves  # lazy: start-up
     _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name, model_file, plot=not no_plot,
                                         n_points=n_points, plot_format=plot_format, overwrite=overwrite)
     click.echo(text)
@@ -279,7 +279,7 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     --out/terrain_model.yaml (use it in a scenario with terrain.model_file) and
     --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
     """
-    from .calibrate import run_calibration  # lazy: start-up
+    from .studies.calibrate import run_calibration  # lazy: start-up
     with _progress(1, "calibrate", "model evaluations (budget)") as bar:
         _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
                                          torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, overwrite=overwrite,
@@ -340,7 +340,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no
     worker process or the Dask cluster fails, 130 when interrupted (143 on SIGTERM; re-run to
     resume).
     """
-    from .sweep import SweepExecutionError, run_sweep  # lazy: start-up
+    from .studies.sweep import SweepExecutionError, run_sweep  # lazy: start-up
     try:
         table = run_sweep(scenario, sets, out_dir=out_dir, jobs=jobs, scheduler=scheduler, zip_=zip_,
                           save_cases=save_cases, plot=not no_plot, batch=batch, series=series,
@@ -362,7 +362,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no
         click.echo(f"  ... and {len(bad) - 5} more (see the error column)")
 
 
-# ---------------------------------------------------------------- mobility map (snoworm/mobility.py)
+# ---------------------------------------------------------------- mobility map (snoworm/studies/mobility.py)
 
 @main.command("mobility-map")
 @click.argument("scenario", type=click.Path(dir_okay=False))
@@ -396,7 +396,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
     inchworm mode, in the cells that do not roll (every cell with --every-cell).  Writes
     --out/mobility_map.csv and --out/mobility_map.png.  Progress of the inching runs goes to stderr.
     """
-    from .mobility import run_mobility_map  # lazy: start-up
+    from .studies.mobility import run_mobility_map  # lazy: start-up
     with _progress(1, "mobility map", "inching runs") as bar:
         _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets,
                                           rolling_speed_mps=rolling_speed_mps, inching=not no_inching,
@@ -406,7 +406,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
-# ---------------------------------------------------------------- paper reproduction (snoworm/paper/)
+# ---------------------------------------------------------------- paper reproduction (snoworm/studies/paper/)
 
 @main.command()
 @out_option("Directory for the figures, report.md, report.html (self-contained) and claims.json.")
@@ -433,7 +433,7 @@ def paper(out_dir, quick, strict, jobs, plot_format, overwrite):
     to stderr as it finishes.  A failing claim is reported, not fatal: the exit status is 0 unless
     --strict.
     """
-    from .paper import default_jobs, run_paper  # lazy: start-up
+    from .studies.paper import default_jobs, run_paper  # lazy: start-up
     rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True), overwrite=overwrite,
                     jobs=default_jobs() if jobs is None else jobs, plot_format=plot_format)
     n_ok = sum(c.holds for c in rep.claims)
@@ -454,7 +454,7 @@ def scenarios():
     Run one by name from anywhere: `snoworm run inchworm6 --out out/` (a path that exists wins
     over a name).
     """
-    from .scenario import shipped_scenarios  # lazy: start-up
+    from .config.scenario import shipped_scenarios  # lazy: start-up
     items = shipped_scenarios()
     width = max(map(len, items), default=0)
     for name, (_, desc) in items.items():

@@ -3,7 +3,7 @@
 A pure NumPy kernel, vectorised over wheels/axles/segments/batch members; the chain dynamics
 call it.  All torques are at the wheel, per wheel, with the 20 % drivetrain loss already folded
 in.  The wheel-speed controller that commands this motor is a control law
-(:func:`snoworm.control.speed_pi`).
+(:func:`snoworm.feedback.speed_pi`).
 """
 from __future__ import annotations
 

@@ -16,10 +16,10 @@ r"""Longitudinal dynamics of a chain of wheeled segments (docs/model.md section 
 
 The model composes the law kernels -- terrain (:mod:`snoworm.terrain`, Eqs. 1-3), motor
 (:mod:`snoworm.drivetrain`), links (:mod:`snoworm.links`) and control laws
-(:mod:`snoworm.control`) -- into one kernel, :meth:`ChainModel.evaluate`, which computes every
+(:mod:`snoworm.feedback`) -- into one kernel, :meth:`ChainModel.evaluate`, which computes every
 force from the state for any leading batch shape: the right-hand side calls it on one state
 (or a stack of batch members), the results call it on all output samples at once after the
-solve, and the finite-difference Jacobian (:mod:`snoworm.jacobian`) on a stack of perturbed
+solve, and the finite-difference Jacobian (:mod:`snoworm.model.jacobian`) on a stack of perturbed
 states.
 
 The state layout is named by :class:`StateLayout`: one block of ``n_s`` fields per segment,
@@ -37,8 +37,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import control, drivetrain, jacobian, links as link_law, terrain
-from .controls import Controls
+from . import drivetrain, feedback, links as link_law, terrain
+from .model import jacobian
+from .model.inputs import Controls
 from .terrain import TerrainParams, TerrainProfile
 
 __all__ = ["ChainModel", "LinkArrays", "SegmentArrays", "StackedConstantProfile", "StateLayout"]
@@ -214,7 +215,7 @@ class ChainModel:
         self._R = col(seg.wheel_radius_m)
         self._J = col(seg.wheel_inertia_kgm2)
         self._kp, self._ki = col(seg.speed_kp_Nms_per_rad), col(seg.speed_ki_Nm_per_rad)
-        self._ki_kp = self._ki / self._kp         # precomputed for control.speed_pi (same value)
+        self._ki_kp = self._ki / self._kp         # precomputed for feedback.speed_pi (same value)
         self._slope = col(seg.motor_slope_Nms_per_rad)
         self._wnl = col(seg.no_load_speed_radps)
         self._Tmax = col(seg.torque_limit_Nm)
@@ -245,11 +246,11 @@ class ChainModel:
         self._k_link = np.asarray(L.stiffness_N_per_m, float)
         self._c_link = np.asarray(L.damping_Ns_per_m, float)
         self._L0 = np.asarray(L.rest_spacing_m, float)
-        self._gk = (control.servo_gain(L.force_gain_per_s, L.stiffness_N_per_m, L.damping_Ns_per_m)
+        self._gk = (feedback.servo_gain(L.force_gain_per_s, L.stiffness_N_per_m, L.damping_Ns_per_m)
                     if self.n > 1 else np.zeros(0))
         self._rate_max = np.asarray(L.rate_max_mps, float)
         self._neg_rate_max = -self._rate_max
-        self._k_stop, self._k_length = z(link_law.K_STOP), z(control.K_LENGTH)
+        self._k_stop, self._k_length = z(link_law.K_STOP), z(feedback.K_LENGTH)
         self._stroke_max = np.asarray(L.stroke_max_m, float)
         self._stroke_min = np.asarray(L.stroke_min_m, float)
         self._tow_col = np.asarray(self.tow_force_N, float)[..., None]
@@ -336,7 +337,7 @@ class ChainModel:
 
     # ------------------------------------------------------------------ Jacobian
     def jac_sparsity(self, member: bool = False):
-        """Structural non-zero pattern of ``d(dy/dt)/dy`` (:func:`snoworm.jacobian.sparsity`)."""
+        """Structural non-zero pattern of ``d(dy/dt)/dy`` (:func:`snoworm.model.jacobian.sparsity`)."""
         return jacobian.sparsity(self, member)
 
     def bandwidths(self):
@@ -346,7 +347,7 @@ class ChainModel:
         return self._bands
 
     def jacobian_banded(self, t, y, ctl: Controls):
-        """Finite-difference Jacobian in LAPACK packed band format (:func:`snoworm.jacobian.banded`)."""
+        """Finite-difference Jacobian in LAPACK packed band format (:func:`snoworm.model.jacobian.banded`)."""
         if self._fd is None:
             self._fd = jacobian.BandedDifferences(self.n_states, *self.bandwidths())
         return self._fd(lambda Yp: self.evaluate(self.unpack(Yp), ctl)[0].reshape(Yp.shape), y)
@@ -381,7 +382,7 @@ class ChainModel:
         if self.force_loop:
             tow = np.broadcast_to(self._tow_col, T.shape[:-1] + (1,))
             Fsel = np.concatenate([T, tow], axis=-1)[..., ctl.fc_link]
-            vsp, dq = control.link_force_pi(Fsel, ctl.fc_ref_N, ctl.fc_sigma, Y[..., L.q], ctl.fc_nominal_mps,
+            vsp, dq = feedback.link_force_pi(Fsel, ctl.fc_ref_N, ctl.fc_sigma, Y[..., L.q], ctl.fc_nominal_mps,
                                             ctl.fc_kp, ctl.fc_ki, ctl.fc_vmax_mps)
             dY[..., L.q] = dq * ctl.fc_active * ctl.motor_on
             sp = np.where(ctl.fc_active > 0, vsp, sp)
@@ -389,9 +390,9 @@ class ChainModel:
         else:
             w_ref = cd["w_ref"]
         T_lo, T_hi = drivetrain.motor_envelope(w, self._slope, self._wnl, self._Tmax)
-        Tm, dI = control.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on_mask"], self._ki_kp)
+        Tm, dI = feedback.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on_mask"], self._ki_kp)
         if cd["torque"] is not None:           # direct torque commands (a controller's wheel_torque_Nm)
-            Tm, dI = control.direct_torque(cd["torque_cmd"], T_lo, T_hi, cd["torque"], Tm, dI)
+            Tm, dI = feedback.direct_torque(cd["torque_cmd"], T_lo, T_hi, cd["torque"], Tm, dI)
         reaction = terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)
         dY[..., L.omega] = (Tm - reaction) / self._J
         dY[..., L.integral] = dI
@@ -470,8 +471,8 @@ class ChainModel:
     def _joint_rate(self, s, v, rel, T_spring, ctl: Controls, cd):
         """Extension rate of the prismatic actuators: the commanded servo within the actuator's limits.
 
-        Force command (:func:`snoworm.control.joint_force_rate_mps`) or length command
-        (:func:`snoworm.control.joint_length_rate_mps`), then the actuator's rate limit and soft
+        Force command (:func:`snoworm.feedback.joint_force_rate_mps`) or length command
+        (:func:`snoworm.feedback.joint_length_rate_mps`), then the actuator's rate limit and soft
         end stops (:func:`snoworm.links.actuator_rate_mps`); locked (inactive) joints and fixed
         links do not move.
         """
@@ -479,15 +480,15 @@ class ChainModel:
             return s * self._zero
         gk = self._gk
         if cd["any_force"]:
-            mag = control.joint_force_command_N(
+            mag = feedback.joint_force_command_N(
                 ctl.joint_ff_N, ctl.joint_limit_N, self._zero,
                 kv=ctl.joint_kv if cd["any_kv"] else None, v_target_mps=ctl.joint_vtarget_mps,
                 v_mover_mps=v[..., ctl.joint_mover] if cd["any_kv"] else None,
                 ka=ctl.joint_ka if cd["any_ka"] else None,
                 v_anchor_mps=v[..., ctl.joint_anchor] if cd["any_ka"] else None)
-            rate = control.joint_force_rate_mps(rel, T_spring, cd["neg_dir"], mag, gk)
+            rate = feedback.joint_force_rate_mps(rel, T_spring, cd["neg_dir"], mag, gk)
         if cd["any_length"]:
-            rate_l = control.joint_length_rate_mps(s, ctl.joint_sref_m, ctl.joint_vtarget_mps, cd["neg_vt"], rel,
+            rate_l = feedback.joint_length_rate_mps(s, ctl.joint_sref_m, ctl.joint_vtarget_mps, cd["neg_vt"], rel,
                                                    T_spring, ctl.joint_limit_N, gk, self._k_length)
             rate = np.where(cd["length_mode"], rate_l, rate) if cd["any_force"] else rate_l
         rate = link_law.actuator_rate_mps(rate, s, self._rate_max, self._neg_rate_max, self._stroke_min,

@@ -1,4 +1,4 @@
-"""A Gymnasium environment over :class:`snoworm.simulator.Simulator` (optional extra ``gym``).
+"""A Gymnasium environment over :class:`snoworm.simulation.stepwise.Simulator` (optional extra ``gym``).
 
 ::
 
@@ -33,8 +33,8 @@ try:
 except ImportError as exc:  # pragma: no cover - depends on the installed extras
     raise ImportError("snoworm.env needs gymnasium: pip install 'snoworm[gym]'") from exc
 
-from .outputs import output_series
-from .simulator import Simulator
+from .model.quantities import output_series
+from .simulation.stepwise import Simulator
 
 __all__ = ["SnowormEnv", "OBSERVATION_FIELDS", "default_reward"]
 

@@ -8,7 +8,7 @@ tension.  A fixed link is the same law with the actuator locked at zero extensio
 
 ``s_k`` is the extension of the prismatic actuator.  The actuator's physical limits (rate limit
 and soft end stops at its stroke limits) are here; what it is *commanded* to do is a control law
-(:mod:`snoworm.control`).  Pure NumPy, vectorised over links and batch members.
+(:mod:`snoworm.feedback`).  Pure NumPy, vectorised over links and batch members.
 """
 from __future__ import annotations
 

@@ -3,7 +3,7 @@
 Every function here is a pure NumPy kernel, vectorised over any array shape (wheels, axles,
 segments, batch members).  They are the single implementation of each law: the chain dynamics,
 the steady-state solver, the terrain-curve plots and the calibration all call them.  Parameter
-values live in :mod:`snoworm.params` (named parameter sets); this module holds no defaults.
+values live in :mod:`snoworm.config.params` (named parameter sets); this module holds no defaults.
 
 Sign conventions: forward is positive.  ``V`` is the wheel's longitudinal ground speed [m/s],
 ``omega`` its spin rate [rad/s] (positive rolling forward), ``F_n`` its normal load [N].

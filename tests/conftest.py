@@ -8,7 +8,7 @@ import yaml
 
 from snoworm import load_scenario, simulate
 from snoworm.dynamics import Controls
-from snoworm.scenario import apply_overrides, read_yaml, scenario_from_dict
+from snoworm.config.scenario import apply_overrides, read_yaml, scenario_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
@@ -28,7 +28,7 @@ def scenario_path():
 
 
 # ------------------------------------------------------------------ chain models and states
-# (shared by test_dynamics.py and test_jacobian.py)
+# (shared by test_dynamics.py and test_model_jacobian.py)
 
 
 def model_for(path, overrides=(), force_loop=None):
@@ -67,7 +67,7 @@ def busy_controls(m, rng):
                    joint_mover=np.minimum(links + rng.integers(0, 2, n - 1), n - 1))
 
 
-# ------------------------------------------------------------------ batched runs (test_driver.py, test_performance.py)
+# ------------------------------------------------------ batched runs (test_simulation_driver.py, test_performance.py)
 
 
 def assert_metrics_close(a, b, rel=1e-3):
@@ -85,7 +85,7 @@ def assert_metrics_close(a, b, rel=1e-3):
 
 
 # ------------------------------------------------------------------ traverse_patch runs
-# (session scope: shared by test_supervisor.py and test_energy.py)
+# (session scope: shared by test_modes_supervisor.py and test_results_energy.py)
 
 UNIFORM = 'mode={type: uniform, speed_mps: 1.8, start_time_s: 0.5}'
 
@@ -115,13 +115,13 @@ def traverse_raw(**terrain):
 @pytest.fixture(scope="session")
 def frostyboy():
     """(segment, terrain parameters) of the frostyboy set (ground truth and calibration tests)."""
-    from snoworm import groundtruth
+    from snoworm.studies import groundtruth
     return groundtruth.vehicle_model("frostyboy")
 
 
 @pytest.fixture(scope="session")
 def data():
     """The shipped FrostyBoy field data (paper Table 2)."""
-    from snoworm import groundtruth
+    from snoworm.studies import groundtruth
     return groundtruth.read_field_data()
 

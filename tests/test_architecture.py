@@ -2,16 +2,28 @@
 
 * The layer contract of pyproject.toml ([tool.importlinter]) holds: ``lint-imports`` passes.
 * No import cycle between snoworm modules, counting imports inside functions too.
+* The tree, the contract and docs/architecture.md tell one story: every package and top-level
+  module of ``snoworm/`` is a tier of the contract, and the doc's layer table lists the contract's
+  tiers in the contract's order.
 * An import inside a function is only for an optional or slow-to-import dependency (or in the
   CLI, for start-up time), and says why in a comment on its line or the line above.
 """
 import ast
+import re
 import subprocess
 import sys
 from pathlib import Path
 
+try:
+    import tomllib
+except ModuleNotFoundError:     # Python 3.10: tomli (a dependency of import-linter there)
+    import tomli as tomllib
+
 ROOT = Path(__file__).resolve().parents[1]
 PKG = ROOT / "snoworm"
+DOC = ROOT / "docs" / "architecture.md"
+#: the heading of the doc's layer table (the first table after it)
+DOC_TABLE_HEADING = "## The layers, highest first"
 
 #: Dependencies that may be imported inside a function: optional extras, and the heavy imports
 #: that runs not needing them should not pay for at start-up.
@@ -122,3 +134,65 @@ def test_function_level_imports_are_justified():
                            + ("" if allowed else " (not an optional or slow dependency)")
                            + ("" if "#" in text else " without a comment saying why"))
     assert not bad, "\n".join(bad)
+
+
+# ------------------------------------------------------------------ tree, contract and doc agree
+
+
+def tree_entries(pkg: Path = PKG) -> set:
+    """The packages and modules at the top of the package (``config``, ``dynamics``, ...)."""
+    names = {p.stem for p in pkg.glob("*.py") if p.name != "__init__.py"}
+    return names | {p.name for p in pkg.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
+
+
+def contract_tiers(pyproject: Path = ROOT / "pyproject.toml") -> list:
+    """The tiers of the top-level layers contract (the one whose container is ``snoworm``), highest first."""
+    contracts = tomllib.loads(pyproject.read_text(encoding="utf-8"))["tool"]["importlinter"]["contracts"]
+    (top,) = [c for c in contracts if c["type"] == "layers" and c["containers"] == ["snoworm"]]
+    return [" | ".join(n.strip() for n in re.split(r"[|:]", tier)) for tier in top["layers"]]
+
+
+def doc_tiers(text: str) -> list:
+    """The first column (a backticked contract entry) of the doc's layer table, top to bottom."""
+    table = []
+    for ln in text.split(DOC_TABLE_HEADING, 1)[1].splitlines():
+        if ln.startswith("|"):
+            table.append(ln)
+        elif table:             # the first table ends at its first non-table line
+            break
+    cells = [re.split(r"(?<!\\)\|", ln)[1].strip() for ln in table[2:]]   # skip header and separator
+    return [re.fullmatch(r"`(.+)`", c).group(1).replace("\\|", "|") if re.fullmatch(r"`(.+)`", c) else c
+            for c in cells]
+
+
+def layer_mismatches(tree: set, tiers: list, documented: list) -> list:
+    """Every disagreement between the tree, the contract's tiers and the documented tiers."""
+    in_contract = {n.strip() for tier in tiers for n in tier.split("|")}
+    problems = [f"snoworm/{n} is in no tier of the contract" for n in sorted(tree - in_contract)]
+    problems += [f"the contract names {n!r}, which is not in snoworm/" for n in sorted(in_contract - tree)]
+    if documented != tiers:
+        problems.append(f"docs/architecture.md's layer table lists {documented}, the contract {tiers}")
+    return problems
+
+
+def test_tree_contract_and_doc_name_the_same_layers():
+    tiers = contract_tiers()
+    assert len(tiers) <= 16, f"{len(tiers)} tiers: the contract should name folders, not every module"
+    problems = layer_mismatches(tree_entries(), tiers, doc_tiers(DOC.read_text(encoding="utf-8")))
+    assert not problems, "\n".join(problems)
+
+
+def test_layer_check_reports_each_kind_of_disagreement(tmp_path):
+    """The check above can fail: a new package, a stale contract entry and a reordered doc table."""
+    tiers = contract_tiers()
+    doc = doc_tiers(DOC.read_text(encoding="utf-8"))
+    tree = tree_entries()
+    assert layer_mismatches(tree | {"newpkg"}, tiers, doc) == ["snoworm/newpkg is in no tier of the contract"]
+    assert layer_mismatches(tree - {"infra"}, tiers, doc) == ["the contract names 'infra', which is not in snoworm/"]
+    assert len(layer_mismatches(tree, tiers, doc[::-1])) == 1
+    # a package made on disk is found by tree_entries
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "__init__.py").write_text("")
+    (tmp_path / "mod.py").write_text("")
+    (tmp_path / "data").mkdir()              # a data folder is not a package
+    assert tree_entries(tmp_path) == {"pkg", "mod"}

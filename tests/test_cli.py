@@ -63,7 +63,7 @@ def test_validate_ok():
 
 def test_solver_failure_exit_1_nothing_written(tmp_path, monkeypatch):
     import importlib
-    S = importlib.import_module("snoworm.driver")
+    S = importlib.import_module("snoworm.simulation.driver")
 
     def boom(sc, progress=None):
         raise S.SolverError("solve_ivp (LSODA) failed near t = 3 s: test")

@@ -12,9 +12,9 @@ import time
 import pytest
 from click.testing import CliRunner
 
-from snoworm import fileio
+from snoworm.infra import folders
 from snoworm.cli import main
-from snoworm.fileio import MANIFEST
+from snoworm.infra.folders import MANIFEST
 from tests.conftest import SCENARIOS
 
 SHORT = ["--set", "simulation.duration_s=2"]
@@ -67,7 +67,7 @@ def test_disk_full_during_a_run_is_exit_2_naming_the_path_and_nothing_is_written
         if str(dst).endswith("links.csv"):
             raise OSError(28, "No space left on device")
         return real(src, dst)
-    monkeypatch.setattr(fileio.os, "replace", full)
+    monkeypatch.setattr(folders.os, "replace", full)
     out = tmp_path / "o"
     r = run("run", "tow6_uniform", "--out", out, *SHORT, "--no-plot")
     assert r.exit_code == 2, r.output
@@ -106,7 +106,7 @@ def test_run_shows_progress_in_simulated_time_on_stderr(tmp_path):
 
 def test_verbose_logs_solver_fallbacks(tmp_path, monkeypatch):
     import logging
-    from snoworm import driver
+    from snoworm.simulation import driver
     real = driver.solve_ivp
     calls = []
 
@@ -156,9 +156,9 @@ def test_python_dash_m_snoworm_runs_the_cli(tmp_path):
 
 def test_jobs_option_on_every_command_that_runs_cases_in_parallel():
     import inspect
-    from snoworm import calibrate, groundtruth, mobility
-    from snoworm.paper import report
-    from snoworm.sweep import run as sweep_run
+    from snoworm.studies import calibrate, groundtruth, mobility
+    from snoworm.studies.paper import report
+    from snoworm.studies.sweep import run as sweep_run
     parallel = {"sweep": sweep_run, "mobility-map": mobility, "paper": report}
     serial = {"calibrate": calibrate, "groundtruth": groundtruth}
     for name, mod in parallel.items():
@@ -176,7 +176,7 @@ def _sweep(out, *extra):
 
 def test_a_sweep_into_a_locked_folder_exits_2_naming_the_pid(tmp_path):
     import multiprocessing
-    from tests.test_fileio import _hold
+    from tests.test_infra_folders import _hold
     ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
     ready, release = ctx.Event(), ctx.Event()
     out = tmp_path / "s"
@@ -198,8 +198,8 @@ def test_a_sweep_into_a_locked_folder_exits_2_naming_the_pid(tmp_path):
 
 
 def test_an_unreachable_scheduler_writes_nothing(tmp_path, monkeypatch):
-    from snoworm.schema import ScenarioError
-    from snoworm.sweep import run as sweep_run
+    from snoworm.config.schema import ScenarioError
+    from snoworm.studies.sweep import run as sweep_run
     seen = []
 
     def refuse(scheduler, batch, jobs):
@@ -249,14 +249,14 @@ def test_sigterm_ends_a_sweep_with_a_message_keeping_finished_rows(tmp_path):
     assert "terminated (SIGTERM)" in err and "run the same command again to resume" in err
     lines = summary.read_text().splitlines()
     assert len(lines) >= 3 and summary.read_text().endswith("\n")
-    assert not (out / fileio.LOCK).exists()
+    assert not (out / folders.LOCK).exists()
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)     # resumes
     assert r.returncode == 0, r.stderr
     assert f"{len(lines) - 1} resumed" in r.stderr and "40 cases: 40 ok" in r.stdout
 
 
 def test_disk_full_while_appending_sweep_rows_is_exit_2_naming_the_file(tmp_path, monkeypatch):
-    from snoworm.sweep import run as sweep_run
+    from snoworm.studies.sweep import run as sweep_run
     real = os.write
 
     def full(fd, data):
@@ -269,4 +269,4 @@ def test_disk_full_while_appending_sweep_rows_is_exit_2_naming_the_file(tmp_path
     assert r.exit_code == 2, r.output
     assert "No space left on device" in r.output and str(out / "summary.csv") in r.output
     assert "re-run the same command to resume" in r.output and "internal error" not in r.output
-    assert not (out / fileio.LOCK).exists()
+    assert not (out / folders.LOCK).exists()

@@ -1,4 +1,4 @@
-"""Motor envelope at the wheel (docs/model.md section 1); the wheel-speed PI is in test_control.py."""
+"""Motor envelope at the wheel (docs/model.md section 1); the wheel-speed PI is in test_feedback.py."""
 import numpy as np
 import pytest
 

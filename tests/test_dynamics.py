@@ -1,6 +1,6 @@
 """Chain kernel invariants (snoworm.dynamics): momentum of internal forces, named state layout, stacking.
 
-The Jacobian pattern and banded finite differences are in test_jacobian.py."""
+The Jacobian pattern and banded finite differences are in test_model_jacobian.py."""
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st

@@ -23,8 +23,8 @@ def test_every_public_name_resolves_and_is_listed():
     assert set(snoworm.__all__) <= set(dir(snoworm))
     for name in snoworm.__all__:
         assert getattr(snoworm, name) is not None, name
-    assert snoworm.simulate.__module__ == "snoworm.driver"
-    assert snoworm.Result.__module__ == "snoworm.results"
+    assert snoworm.simulate.__module__ == "snoworm.simulation.driver"
+    assert snoworm.Result.__module__ == "snoworm.results.result"
     assert snoworm.modes.MODES["uniform"].__name__ == "UniformMode"
     ns = {}
     exec("from snoworm import *", ns)
@@ -39,23 +39,23 @@ def test_unknown_attribute_is_an_attribute_error():
 
 def test_import_snoworm_imports_no_heavy_module():
     out = fresh("import sys, snoworm; print(sorted(m for m in ('numpy', 'scipy', 'matplotlib', 'yaml', "
-                "'snoworm.driver', 'snoworm.modes', 'snoworm.sweep') if m in sys.modules))")
+                "'snoworm.simulation.driver', 'snoworm.modes', 'snoworm.studies.sweep') if m in sys.modules))")
     assert out.strip() == "[]"
 
 
 def test_names_import_their_module_on_first_use():
     out = fresh("import sys, snoworm\n"
                 "from snoworm import load_scenario\n"
-                "print('snoworm.scenario' in sys.modules, 'snoworm.sweep' in sys.modules)\n"
+                "print('snoworm.config.scenario' in sys.modules, 'snoworm.studies.sweep' in sys.modules)\n"
                 "snoworm.run_sweep\n"
-                "print('snoworm.sweep' in sys.modules)")
+                "print('snoworm.studies.sweep' in sys.modules)")
     assert out.split() == ["True", "False", "True"]
 
 
 def test_a_scenario_finds_the_built_in_modes_without_importing_them_first():
-    # snoworm.scenario sits below the modes: its registry imports them when first read
+    # snoworm.config.scenario sits below the modes: its registry imports them when first read
     out = fresh("import sys\n"
-                "from snoworm.scenario import load_scenario, scenario_from_dict, read_yaml\n"
+                "from snoworm.config.scenario import load_scenario, scenario_from_dict, read_yaml\n"
                 "print('snoworm.modes' in sys.modules)\n"
                 f"sc = load_scenario({str(SCENARIOS / 'inchworm6.yaml')!r})\n"
                 "print(type(sc.mode).__name__, 'snoworm.modes' in sys.modules)")
@@ -75,10 +75,10 @@ def test_a_users_mode_registers_in_a_fresh_process():
 import numpy as np
 from dataclasses import dataclass
 from snoworm import Mode, ModeConfig, register_mode, scenario_from_dict, simulate
-from snoworm.controls import Controls
+from snoworm.model.inputs import Controls
 from snoworm.modes.base import Interval
-from snoworm.scenario import MODE_CONFIGS, apply_overrides, read_yaml
-from snoworm.schema import field
+from snoworm.config.scenario import MODE_CONFIGS, apply_overrides, read_yaml
+from snoworm.config.schema import field
 
 @dataclass(frozen=True)
 class MineConfig(ModeConfig):

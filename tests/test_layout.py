@@ -1,8 +1,11 @@
 """Layout rules of the package (issue #12), checked from the source with ``ast``.
 
-* Tests mirror modules: every module (but the faces and the version string) has
-  ``tests/test_<name>.py`` (a module of a subpackage may instead have
-  ``tests/test_<package>_<name>.py``) defining at least one test.
+* Tests mirror modules: every module (but the faces and the version string) has one test file
+  named after its path in the package, ``/`` becoming ``_``, defining at least one test:
+  ``snoworm/dynamics.py`` -> ``tests/test_dynamics.py``, ``snoworm/config/scenario.py`` ->
+  ``tests/test_config_scenario.py``, ``snoworm/studies/sweep/run.py`` ->
+  ``tests/test_studies_sweep_run.py``.  Test files of no single module (``test_docs.py``,
+  ``test_fuzz.py``, ...) may sit beside them.
 * No module is over 500 lines and no function (or method) over 80 lines.
 * Which layer a module belongs to is the import-linter contract in pyproject.toml (``exhaustive``:
   a new module must be placed there), checked by tests/test_architecture.py; not repeated here.
@@ -39,10 +42,9 @@ def test_every_module_has_a_test_file():
     for mod in modules():
         if mod in EXEMPT:
             continue
-        *pkg, name = mod.split("/")
-        candidates = [TESTS / f"test_{name}.py"] + ([TESTS / f"test_{'_'.join(pkg)}_{name}.py"] if pkg else [])
-        if not any(c.exists() and defines_tests(c) for c in candidates):
-            missing.append(f"snoworm/{mod}.py: none of {[c.name for c in candidates]} defines tests")
+        mirror = TESTS / f"test_{mod.replace('/', '_')}.py"
+        if not (mirror.exists() and defines_tests(mirror)):
+            missing.append(f"snoworm/{mod}.py: tests/{mirror.name} does not exist or defines no test")
     assert not missing, "modules without a mirroring test file:\n  " + "\n  ".join(missing)
 
 

@@ -6,10 +6,10 @@ import pytest
 
 import snoworm
 from snoworm import Mode, ModeConfig, ScenarioError, register_mode, scenario_from_dict, simulate
-from snoworm.controls import Controls
+from snoworm.model.inputs import Controls
 from snoworm.modes.base import MODES, Interval
-from snoworm.scenario import MODE_CONFIGS, apply_overrides, read_yaml
-from snoworm.schema import field
+from snoworm.config.scenario import MODE_CONFIGS, apply_overrides, read_yaml
+from snoworm.config.schema import field
 from tests.conftest import SCENARIOS
 
 

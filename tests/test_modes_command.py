@@ -4,7 +4,7 @@ import pytest
 
 from snoworm.drivetrain import motor_envelope
 from snoworm.modes.command import COMMAND_KEYS, CommandState, observe
-from snoworm.outputs import output_series
+from snoworm.model.quantities import output_series
 from tests.conftest import SCENARIOS, model_for, random_state
 
 

@@ -8,7 +8,7 @@ import yaml
 
 from snoworm import Simulator, load_scenario, simulate
 from snoworm.modes.controller import ControllerError, load_controller
-from snoworm.schema import ScenarioError
+from snoworm.config.schema import ScenarioError
 from tests.conftest import SCENARIOS
 from tests.controller_helpers import schedule
 
@@ -134,7 +134,7 @@ def test_controller_run_equals_simulator_stepped_with_same_commands():
 
 
 def test_sweep_over_mode_params(tmp_path):
-    from snoworm.sweep import run_sweep
+    from snoworm.studies.sweep import run_sweep
     p = _write(tmp_path, GOOD, _mode("Const", v=1.0), sim={"duration_s": 2.0})
     table = run_sweep(p, ["mode.params.v=1.0,1.6"], out_dir=tmp_path / "sw", plot=False)
     rows = table.rows if hasattr(table, "rows") else None
@@ -148,7 +148,7 @@ def test_sweep_over_mode_params(tmp_path):
 
 
 def test_failing_controller_is_a_sweep_case_status(tmp_path):
-    from snoworm.sweep import STATUSES, run_case
+    from snoworm.studies.sweep import STATUSES, run_case
     p = _write(tmp_path, GOOD, _mode("Raises"), sim={"duration_s": 1.0})
     raw = yaml.safe_load(p.read_text())
     out = run_case({"index": 0, "raw": raw, "source": str(p), "base_dir": str(tmp_path), "save_dir": None})

@@ -2,8 +2,8 @@
 import numpy as np
 from matplotlib.figure import Figure
 
-from snoworm.groundtruth import run_groundtruth, run_terrain_curves
-from snoworm.mobility import REGIONS
+from snoworm.studies.groundtruth import run_groundtruth, run_terrain_curves
+from snoworm.studies.mobility import REGIONS
 from snoworm.plotting import studies
 
 

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import pytest
 
 from snoworm import steady
-from snoworm.params import parameter_set, terrain_params
+from snoworm.config.params import parameter_set, terrain_params
 
 SEG = SimpleNamespace(**parameter_set("frostyboy")["segment"])
 TP = terrain_params("frostyboy")

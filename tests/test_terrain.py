@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from snoworm import terrain
-from snoworm.params import terrain_params
+from snoworm.config.params import terrain_params
 from snoworm.terrain import TerrainProfile
 
 TP = terrain_params("frostyboy")

@@ -1,7 +1,7 @@
 """Paper Fig 8 as a discrete controller: the leader's wheel speed drives the link force behind it to 0 N.
 
 The rear segment drives at ``speed_mps`` from ``start_time_s``; the leader runs the built-in
-force-control mode's PI loop (snoworm.control.link_force_pi) as a sampled controller::
+force-control mode's PI loop (snoworm.feedback.link_force_pi) as a sampled controller::
 
     e = F_ref - F_link            (the link behind the leader: more tension -> drive faster)
     v_sp = clip(v_nom + kp e + q, 0, v_max)

@@ -1,11 +1,11 @@
 """The controller contract: what a controller observes and what it may command.
 
 Shared by the ``controller`` mode (:mod:`snoworm.modes.controller`) and the step-by-step
-:class:`snoworm.simulator.Simulator`, so a controller sees the same :class:`Observation` and its
-commands become the same :class:`~snoworm.controls.Controls` either way (docs/controllers.md).
+:class:`snoworm.simulation.stepwise.Simulator`, so a controller sees the same :class:`Observation` and its
+commands become the same :class:`~snoworm.model.inputs.Controls` either way (docs/controllers.md).
 
 * :func:`observe` -- the :class:`Observation` of a state, from the same function the results use
-  (:func:`snoworm.outputs.output_series`), under the controls held while it was reached.
+  (:func:`snoworm.model.quantities.output_series`), under the controls held while it was reached.
 * :class:`CommandState` -- the held command: :meth:`CommandState.apply` merges a command mapping
   (keys of :data:`COMMAND_KEYS`; keys left out keep their value) and returns the controls.
 """
@@ -15,8 +15,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..controls import Controls
-from ..outputs import output_series
+from ..model.inputs import Controls
+from ..model.quantities import output_series
 
 __all__ = ["Observation", "observe", "CommandState", "COMMAND_KEYS"]
 
@@ -41,7 +41,7 @@ class Observation:
 
     Build one from values (``Observation(t_s=0.0, x_m=..., ...)``, e.g. to unit-test a
     controller) or from a state with :func:`observe`; then the arrays are computed by
-    :func:`snoworm.outputs.output_series` when first read (a controller reading only ``t_s``
+    :func:`snoworm.model.quantities.output_series` when first read (a controller reading only ``t_s``
     costs no evaluation of the chain).
 
     Attributes
@@ -49,7 +49,7 @@ class Observation:
     t_s : float
         Time [s].
     x_m, v_mps, wheel_speed_mps, slip, motor_torque_Nm, xt : ndarray (N,)
-        Per segment, as in the results' ``segments`` (:data:`snoworm.results.SEGMENT_COLUMNS`):
+        Per segment, as in the results' ``segments`` (:data:`snoworm.results.result.SEGMENT_COLUMNS`):
         position [m], ground speed [m/s], wheel speed R_w*omega [m/s] and slip (means of the
         axles), motor torque per wheel [N m] and the terrain coefficient X_t under the segment.
     link_force_N, link_length_m, joint_extension_m : ndarray (N-1,)

@@ -2,7 +2,7 @@
 
 ``mode: {type: controller, controller: "controllers/my.py:MyController", period_s: 0.02,
 params: {...}}``.  The class is loaded and constructed once at validation (a missing file or
-class, or a constructor that raises, is bad input: :class:`~snoworm.schema.ScenarioError`), and
+class, or a constructor that raises, is bad input: :class:`~snoworm.config.schema.ScenarioError`), and
 constructed afresh for every run as ``MyController(params, scenario)``.  The run is one
 integration interval per period: at its start ``t`` the controller is called with the
 :class:`~snoworm.modes.command.Observation` of the state at ``t`` and returns a command (a
@@ -23,9 +23,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..schema import ScenarioError, field, quote
-from ..scenario import base_dir
-from ..sections import ModeConfig
+from ..config.schema import ScenarioError, field, quote
+from ..config.scenario import base_dir
+from ..config.sections import ModeConfig
 from .base import Interval, Mode, register_mode
 from .command import CommandState, observe
 

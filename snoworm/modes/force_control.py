@@ -62,7 +62,7 @@ binds; a torque limit below ~43 N m binds instead).  The available drawbar is th
 the two, evaluated at the nominal wheel speed and the terrain under the segment at its start
 position.  A target asking a segment for more (or, braking, for less than its locked-wheel
 limit), or one whose predicted steady set-point exceeds ``max_speed_mps``, is a
-:class:`~snoworm.schema.ScenarioError` when the scenario is validated, never left to wind up.
+:class:`~snoworm.config.schema.ScenarioError` when the scenario is validated, never left to wind up.
 Saturation during the run (a set-point pinned at 0 or ``v_max`` at the end) is reported in
 the mode summary (``force_control.saturated_at_end``).
 
@@ -82,9 +82,9 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .. import steady, terrain
-from ..controls import Controls
-from ..schema import Config, ScenarioError, field, suggest
-from ..sections import FINITE_WHY, ModeConfig
+from ..model.inputs import Controls
+from ..config.schema import Config, ScenarioError, field, suggest
+from ..config.sections import FINITE_WHY, ModeConfig
 from .base import Mode, register_mode, rolling_interval, start_times
 
 __all__ = ["TargetsConfig", "ForceControlConfig", "ForceControlMode", "ForcePlan", "plan",

@@ -47,9 +47,9 @@ from typing import Optional
 import numpy as np
 
 from .. import terrain
-from ..controls import Controls
-from ..schema import ScenarioError, field, suggest
-from ..sections import FINITE_WHY, ModeConfig
+from ..model.inputs import Controls
+from ..config.schema import ScenarioError, field, suggest
+from ..config.sections import FINITE_WHY, ModeConfig
 from .base import Interval, Mode, register_mode
 
 __all__ = ["InchwormConfig", "InchwormMode", "GAITS", "gait_plan", "progress_conditions"]

@@ -49,9 +49,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import steady, terrain
-from ..controls import Controls
-from ..schema import ScenarioError, build, field
-from ..sections import FINITE_WHY, ModeConfig
+from ..model.inputs import Controls
+from ..config.schema import ScenarioError, build, field
+from ..config.sections import FINITE_WHY, ModeConfig
 from .base import Interval, Mode, register_mode
 from .inchworm import InchwormConfig, InchwormMode
 

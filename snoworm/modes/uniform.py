@@ -10,9 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..controls import Controls
-from ..schema import ScenarioError, field
-from ..sections import FINITE_WHY, ModeConfig
+from ..model.inputs import Controls
+from ..config.schema import ScenarioError, field
+from ..config.sections import FINITE_WHY, ModeConfig
 from .base import Mode, register_mode, rolling_interval, start_times
 
 __all__ = ["UniformConfig", "UniformMode"]

@@ -1,4 +1,4 @@
-"""Figures of one run (a :class:`~snoworm.results.Result`): forces, speeds, positions, the
+"""Figures of one run (a :class:`~snoworm.results.result.Result`): forces, speeds, positions, the
 steady-state force diagram.  Each function draws on new or given axes and returns the Figure."""
 from __future__ import annotations
 

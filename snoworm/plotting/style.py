@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..fileio import atomic_path
+from ..infra.folders import atomic_path
 
 __all__ = ["COLOURS", "LINESTYLES", "MARKERS", "PLOT_FORMATS", "DPI", "series_style", "new_figure", "save",
            "quantity_label", "force_text", "legend_outside"]

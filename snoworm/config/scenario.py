@@ -1,0 +1,497 @@
+"""Scenario files: YAML -> validated, frozen, SI configuration objects.
+
+Data flows one way: ``load_scenario(path, overrides)`` reads YAML, applies ``--set`` overrides,
+fills physical values from the named parameter set (``vehicle.parameter_set``), validates every
+key (unknown keys are rejected with suggestions) and returns a frozen :class:`Scenario`.
+``dump_scenario`` writes it back with every value filled in, so it re-runs identically.
+"""
+from __future__ import annotations
+
+import contextvars
+import copy
+import functools
+from importlib import resources
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from . import yamlio
+from ..dynamics import ChainModel
+from .params import PARAMETER_SETS
+from .schema import Config, ScenarioError, build, dump, field, quote, short_key, suggest
+from .sections import (BUILT_IN_MODES, MAX_OUTPUT_SAMPLES, LinkConfig, ModeConfig, ModeRegistry, PatchConfig,
+                       RandomTerrainConfig, SegmentConfig, SimulationConfig, TerrainConfig, TerrainModelConfig,
+                       TowConfig, VehicleConfig)
+
+__all__ = [
+    "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
+    "TerrainModelConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig", "MODE_CONFIGS",
+    "register_mode_config", "load_scenario", "scenario_from_dict", "dump_scenario", "apply_overrides",
+    "parse_set_option", "read_model_file", "read_yaml", "ScenarioError", "base_dir", "shipped_scenarios",
+    "scenario_path", "read_scenario_yaml",
+]
+
+#: The scenario's ``mode.type`` -> its :class:`~snoworm.config.sections.ModeConfig` subclass.  Filled by
+#: :func:`snoworm.modes.register_mode`; a built-in mode's module is imported (by name: the modes sit
+#: above this layer) when the mode is first looked up.
+MODE_CONFIGS = ModeRegistry(BUILT_IN_MODES)
+
+
+def register_mode_config(name: str, cls) -> None:
+    """Make ``mode: {type: name, ...}`` validate against the config class ``cls``."""
+    if not (isinstance(cls, type) and issubclass(cls, ModeConfig)):
+        raise TypeError(f"a mode config must subclass snoworm.config.sections.ModeConfig, got {cls!r}")
+    MODE_CONFIGS[name] = cls
+
+
+def build_mode_config(raw, path="mode") -> ModeConfig:
+    """Validate a ``mode`` mapping against the config class registered for its ``type``."""
+    reg = MODE_CONFIGS
+    if not isinstance(raw, dict):
+        raise ScenarioError(f"{path}: expected a mapping with a 'type' key ({', '.join(reg)}), got {quote(raw)}.")
+    kind = raw.get("type")
+    if kind is None:
+        raise ScenarioError(f"{path}.type: is required but missing. Choose one of: {', '.join(reg)}.")
+    if not isinstance(kind, str):
+        raise ScenarioError(f"{path}.type: expected the name of a mode ({', '.join(reg)}), got "
+                            f"{type(kind).__name__} {quote(kind)}.")
+    if kind not in reg:
+        raise ScenarioError(f"{path}.type: unknown mode {quote(kind)}.{suggest(kind, reg)} Known modes: {', '.join(reg)}.")
+    return build(reg[kind], raw, path)
+
+
+@dataclass(frozen=True)
+class Scenario(Config):
+    """A complete, validated scenario.
+
+    Build with :func:`load_scenario` (a YAML file), :func:`scenario_from_dict` (a mapping) or the
+    constructor (config objects); edit with :meth:`with_` or :func:`dataclasses.replace`, which
+    validate the result too.  Every physical value is filled in from the parameter set.
+    """
+
+    _section = ""
+    name: str = field(doc="scenario name")
+    vehicle: VehicleConfig = field(doc="the vehicle")
+    terrain: TerrainConfig = field(doc="the terrain")
+    tow: TowConfig = field(doc="towed load")
+    mode: object = field(doc="mobility mode (a ModeConfig, or a mapping with its type)")
+    simulation: SimulationConfig = field(doc="numerics")
+    description: str = field("", doc="free text")
+
+    def _check(self, path):
+        mode = self.mode
+        if not isinstance(mode, ModeConfig):
+            mode = build_mode_config(mode)
+            object.__setattr__(self, "mode", mode)
+        sim = self.simulation
+        n_out = (sim.duration_s / sim.output_dt_s + 1) * self.vehicle.segments
+        if n_out > MAX_OUTPUT_SAMPLES:
+            raise ScenarioError(f"simulation.output_dt_s: {sim.duration_s:g} s sampled every {sim.output_dt_s:g} s "
+                                f"for {self.vehicle.segments} segments gives {n_out:.0f} output samples (times x segments), over "
+                                f"the {MAX_OUTPUT_SAMPLES} allowed (memory). Raise output_dt_s or shorten duration_s.")
+        mode.check_vehicle(self.vehicle, "mode")
+        mode.check_scenario(self, "mode")      # checks needing terrain and tow (e.g. force control)
+
+    @functools.cached_property
+    def chain_model(self) -> ChainModel:
+        """The assembled :class:`~snoworm.dynamics.ChainModel` (built once per scenario)."""
+        veh = self.vehicle
+        return ChainModel(veh.segment_arrays(), veh.link_arrays(), self.terrain.model.params(),
+                          self.terrain.compile(), self.tow.force_N, force_loop=self.mode.force_loop)
+
+    @functools.cached_property
+    def mode_plan(self):
+        """The mode's plan (:meth:`ModeConfig.prepare`), computed once per scenario."""
+        return self.mode.prepare(self)
+
+    @functools.cached_property
+    def sources(self) -> dict:
+        """The source tag of every physical value, ``{dotted key: tag}`` (e.g. ``"vehicle.segment.mass_kg":
+        "[Lines] incl. wheels"``): the parameter set's tag, the scenario's ``sources:`` note, or
+        ``[user] scenario`` for a value the scenario changed."""
+        entries = self.__dict__.get("_entries")
+        if entries is None:
+            entries = parameter_entries(self.vehicle.parameter_set)[0]
+        notes = self.__dict__.get("_notes", {})
+        values = {"segment": dump(self.vehicle.segment), "links": dump(self.vehicle.links),
+                  "terrain_model": dump(self.terrain.model)}
+        out = {}
+        for sec, prefix in _SECTIONS.items():
+            for k, (v, tag) in entries[sec].items():
+                key = f"{prefix}.{k}"
+                out[key] = notes.get(key) or (tag if values[sec].get(k) == v else "[user] scenario")
+        for j, ov in sorted(self.vehicle.segment_overrides.items()):
+            for k in ov or {}:
+                key = f"vehicle.segment_overrides.{j}.{k}"
+                out[key] = notes.get(key, "[user] scenario")
+        return out
+
+    def to_dict(self) -> dict:
+        """Plain data of the resolved scenario, every value filled in (what ``scenario.yaml`` holds)."""
+        data = {"name": self.name, "description": self.description, "vehicle": dump(self.vehicle),
+                "terrain": dump(self.terrain), "tow": dump(self.tow), "mode": dump(self.mode),
+                "simulation": dump(self.simulation)}
+        t = data["terrain"]
+        for key in ("xt", "profile", "patches", "random"):
+            if t[key] is None:
+                t.pop(key)
+        for key in ("max_step_s", "max_wall_s"):
+            if data["simulation"][key] is None:
+                data["simulation"].pop(key)
+        if self.__dict__.get("_notes"):
+            data["sources"] = dict(self.__dict__["_notes"])
+        return data
+
+    def with_(self, changes=None, **kw) -> "Scenario":
+        """A new, validated scenario with dotted-key changes applied.
+
+        ``sc.with_({"tow.force_N": 150, "terrain.xt": 0.7})``; keyword arguments set top-level
+        keys (``sc.with_(name="other")``).  Raises :class:`ScenarioError` like a scenario file.
+        """
+        items = list((changes or {}).items()) + list(kw.items())
+        return scenario_from_dict(apply_overrides(self.to_dict(), items), self.name)
+
+
+_TOP_KEYS = ("name", "description", "vehicle", "terrain", "tow", "mode", "simulation", "sources")
+
+
+def _merge(defaults: dict, given):
+    if not isinstance(given, dict):
+        return given
+    out = _copy_tree(defaults)
+    out.update(given)
+    return out
+
+
+_ATOMS = (str, int, float, bool, type(None))
+
+
+def _copy_tree(data):
+    """A copy of YAML-like data (nested dicts and lists of plain scalars, copied level by level;
+    anything else by :func:`copy.deepcopy`), several times faster than ``copy.deepcopy`` of it."""
+    if type(data) is dict:
+        return {k: _copy_tree(v) for k, v in data.items()}
+    if type(data) is list:
+        return [_copy_tree(v) for v in data]
+    if isinstance(data, _ATOMS):
+        return data
+    return copy.deepcopy(data)
+
+
+def read_model_file(mfile, base_dir):
+    """Terrain-model coefficients from a YAML file (e.g. written by ``snoworm calibrate``).
+
+    The file is a mapping of ``terrain.model`` keys, optionally under a ``terrain_model:`` key;
+    a relative path is taken relative to the scenario file.
+    """
+    if not isinstance(mfile, str):
+        raise ScenarioError(f"terrain.model_file: expected a file path, got {quote(mfile)}.")
+    path = Path(mfile)
+    if not path.is_absolute() and base_dir is not None:
+        path = Path(base_dir) / path
+    try:
+        data = read_yaml(path)
+    except ScenarioError as exc:
+        raise ScenarioError(f"terrain.model_file: {exc}") from None
+    if isinstance(data, dict) and "terrain_model" in data:
+        data = data["terrain_model"]
+    if not isinstance(data, dict):
+        raise ScenarioError(f"terrain.model_file: {path} must hold a mapping of terrain-model coefficients "
+                            "(b_tF, b_trF, A, peak_exponent_d, tau0, tau1, ...).")
+    return data
+
+
+def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Scenario:
+    """Validate a scenario mapping (as parsed from YAML) into a :class:`Scenario`.
+
+    Raises
+    ------
+    ScenarioError
+        With a message naming the dotted field and the fix.
+    """
+    if not isinstance(raw, dict):
+        raise ScenarioError(f"{source}: a scenario must be a YAML mapping with keys {', '.join(_TOP_KEYS)}; "
+                            f"got {type(raw).__name__}.")
+    raw = _copy_tree(raw)
+    for key in raw:
+        if key not in _TOP_KEYS:
+            raise ScenarioError(f"{short_key(key)}: unknown key.{suggest(key, _TOP_KEYS)} Known top-level keys: {', '.join(_TOP_KEYS)}.")
+    for key in ("name", "vehicle", "terrain", "tow", "mode", "simulation"):
+        if key not in raw:
+            raise ScenarioError(f"{key}: is required but missing. Add a '{key}:' section to the scenario "
+                                "(see scenarios/tow6_uniform.yaml for an example).")
+    veh = raw["vehicle"]
+    if not isinstance(veh, dict):
+        raise ScenarioError(f"vehicle: expected a mapping, got {quote(veh)}.")
+    entries, veh["parameter_set"] = parameter_entries(veh.get("parameter_set"), base_dir)
+    ps = {sec: {k: v for k, (v, _) in items.items()} for sec, items in entries.items()}
+    notes = _source_notes(raw.pop("sources", None) or {})
+    veh["segment"] = _merge(ps["segment"], veh.get("segment", {}))
+    veh["links"] = _merge(ps["links"], veh.get("links", {}))
+    if isinstance(raw["terrain"], dict):
+        model_defaults = ps["terrain_model"]
+        mfile = raw["terrain"].pop("model_file", None)
+        if mfile is not None:
+            from_file = read_model_file(mfile, base_dir)
+            model_defaults = _merge(model_defaults, from_file)
+            if isinstance(from_file, dict):
+                for k in from_file:
+                    notes.setdefault(f"terrain.model.{k}", f"[user] terrain.model_file {mfile}")
+        raw["terrain"]["model"] = _merge(model_defaults, raw["terrain"].get("model", {}))
+    raw["name"] = _text(raw["name"], "name")
+    raw["description"] = _text(raw.get("description", ""), "description")
+    token = _BASE_DIR.set(None if base_dir is None else Path(base_dir))
+    try:
+        sc = build(Scenario, raw, "")
+    finally:
+        _BASE_DIR.reset(token)
+    object.__setattr__(sc, "_notes", notes)
+    object.__setattr__(sc, "_entries", entries)
+    return sc
+
+
+#: folder of the scenario file being validated (None: the working directory); see :func:`base_dir`
+_BASE_DIR = contextvars.ContextVar("snoworm_scenario_dir", default=None)
+
+
+def base_dir() -> Path:
+    """The folder that relative file paths in the scenario being validated are taken from.
+
+    The scenario file's folder while :func:`load_scenario` validates it, else the working
+    directory.  A config section resolving a file path (e.g. ``mode.controller``) calls it.
+    """
+    d = _BASE_DIR.get()
+    return Path.cwd() if d is None else d
+
+
+#: Source tags a value may carry (docs/model.md; params.py for the built-in sets).
+SOURCE_TAGS = ("[paper]", "[field data]", "[fitted]", "[assumed]", "[user]", "[Lines]", "[derived]")
+#: Sections of a parameter set and their dotted prefixes in a scenario.
+_SECTIONS = {"segment": "vehicle.segment", "links": "vehicle.links", "terrain_model": "terrain.model"}
+
+
+def _tag(value, where):
+    if not isinstance(value, str) or not value.startswith(SOURCE_TAGS):
+        raise ScenarioError(f"{where}: a source must start with one of {', '.join(SOURCE_TAGS)}, e.g. "
+                            f"'[field data] weighed 2026-01'; got {quote(value)}.")
+    return value
+
+
+def _source_notes(notes) -> dict:
+    """The scenario's ``sources:`` block ({dotted key: tag}), checked."""
+    if not isinstance(notes, dict):
+        raise ScenarioError(f"sources: expected a mapping of dotted keys to source tags, got {quote(notes)}.")
+    return {str(k): _tag(v, f"sources.{k}") for k, v in notes.items()}
+
+
+def _entries_copy(entries) -> dict:
+    """A copy of a parameter set's ``{section: {key: (value, source)}}`` (its entries are immutable
+    tuples of scalars, so copying the mappings suffices; a deep copy cost ~2 ms per scenario)."""
+    return {sec: dict(items) for sec, items in entries.items()}
+
+
+def parameter_entries(ps_name, base_dir=None):
+    """``({section: {key: (value, source)}}, name to record)`` of a named set or a parameter-set file.
+
+    ``ps_name`` is a name of :data:`~snoworm.config.params.PARAMETER_SETS` or a path to a YAML file of the
+    user's own vehicle (relative to the scenario file; see :func:`read_parameter_file`).
+    """
+    if ps_name is None:
+        raise ScenarioError("vehicle.parameter_set: is required but missing. Name the set of physical values "
+                            f"to start from, one of: {', '.join(PARAMETER_SETS)}, or a YAML parameter-set file.")
+    if isinstance(ps_name, str) and ps_name in PARAMETER_SETS:
+        return _entries_copy(PARAMETER_SETS[ps_name]), ps_name
+    if isinstance(ps_name, str) and (ps_name.endswith((".yaml", ".yml")) or "/" in ps_name):
+        path = Path(ps_name)
+        if not path.is_absolute() and base_dir is not None:
+            path = Path(base_dir) / path
+        return read_parameter_file(path), str(path.resolve())
+    raise ScenarioError(f"vehicle.parameter_set: unknown set {quote(ps_name)}.{suggest(str(ps_name), PARAMETER_SETS)} "
+                        f"Known sets: {', '.join(PARAMETER_SETS)}; or give a YAML parameter-set file (path ending .yaml).")
+
+
+def read_parameter_file(path) -> dict:
+    """A parameter-set file of the user's own vehicle -> ``{section: {key: (value, source)}}``.
+
+    The file holds ``segment``, ``links`` and ``terrain_model`` mappings with the keys of the
+    built-in sets; each value is a number (source ``[user] <file>``) or ``{value: ..., source:
+    "[field data] ..."}``.  ``base: frostyboy`` starts from a named set (its values keep their
+    sources); without it every key must be given (no silent defaults).
+    """
+    where = f"vehicle.parameter_set: {path}"
+    try:
+        data = read_yaml(path)
+    except ScenarioError as exc:
+        raise ScenarioError(f"vehicle.parameter_set: {exc}") from None
+    if not isinstance(data, dict):
+        raise ScenarioError(f"{where} must hold a mapping with segment, links and terrain_model sections.")
+    ref = PARAMETER_SETS["frostyboy"]
+    for key in data:
+        if key not in ("name", "description", "base", *ref):
+            raise ScenarioError(f"{where}: unknown key {quote(key)}.{suggest(str(key), [*ref, 'base', 'name'])} "
+                                f"Known keys: name, description, base, {', '.join(ref)}.")
+    base = data.get("base")
+    if base is not None and base not in PARAMETER_SETS:
+        raise ScenarioError(f"{where}: base: unknown set {quote(base)}. Known sets: {', '.join(PARAMETER_SETS)}.")
+    out = _entries_copy(PARAMETER_SETS[base]) if base else {sec: {} for sec in ref}
+    for sec in ref:
+        given = data.get(sec) or {}
+        if not isinstance(given, dict):
+            raise ScenarioError(f"{where}: {sec}: expected a mapping of values, got {quote(given)}.")
+        for k, v in given.items():
+            if k not in ref[sec]:
+                raise ScenarioError(f"{where}: {sec}.{k}: unknown key.{suggest(str(k), ref[sec])} "
+                                    f"Known keys: {', '.join(ref[sec])}.")
+            if isinstance(v, dict):
+                if set(v) - {"value", "source"} or "value" not in v:
+                    raise ScenarioError(f"{where}: {sec}.{k}: give a value, or a mapping {{value: ..., source: "
+                                        f"'[tag] note'}}; got {quote(v)}.")
+                out[sec][k] = (v["value"], _tag(v.get("source", f"[user] {Path(path).name}"), f"{where}: {sec}.{k}.source"))
+            else:
+                out[sec][k] = (v, f"[user] {Path(path).name}")
+        missing = [k for k in ref[sec] if k not in out[sec]]
+        if missing:
+            raise ScenarioError(f"{where}: {sec}: missing {', '.join(missing)}. Give every value of the vehicle, or "
+                                "start from a named set with 'base: frostyboy'.")
+    return out
+
+
+def _text(v, path):
+    if not isinstance(v, str):
+        raise ScenarioError(f"{path}: expected text, got {quote(v)}.")
+    return v
+
+
+def parse_set_option(item: str):
+    """Split ``dotted.key=value`` (value parsed as YAML) into ``(key, value)``."""
+    if "=" not in item:
+        raise ScenarioError(f"--set {quote(item)}: expected KEY=VALUE with a dotted scenario key, e.g. terrain.xt=0.5.")
+    key, _, text = item.partition("=")
+    key = key.strip()
+    if not key or any(not p for p in key.split(".")):
+        raise ScenarioError(f"--set {quote(item)}: the key must be a dotted path such as tow.force_N.")
+    try:
+        value = yamlio.load_yaml_text(text, f"--set {key}")
+    except ScenarioError as exc:
+        raise ScenarioError(f"--set {quote(item)}: the value is not valid YAML ({exc}).") from None
+    return key, value
+
+
+def apply_overrides(raw: dict, overrides) -> dict:
+    """Return a copy of ``raw`` with each ``(dotted_key, value)`` set (sections created as needed)."""
+    raw = _copy_tree(raw)
+    for key, value in overrides:
+        parts = key.split(".")
+        node = raw
+        for j, p in enumerate(parts[:-1]):
+            nxt = node.get(p) if isinstance(node, dict) else None
+            if nxt is None:
+                nxt = {}
+                node[p] = nxt
+            if not isinstance(nxt, dict):
+                raise ScenarioError(f"--set {key}: '{'.'.join(parts[:j + 1])}' is a value, not a section; "
+                                    "cannot set a key inside it.")
+            node = nxt
+        leaf = parts[-1]
+        if isinstance(node, dict) and leaf.isdigit() and int(leaf) in node:
+            leaf = int(leaf)
+        node[leaf] = value
+        if isinstance(raw.get("sources"), dict) and parts[0] != "sources":
+            raw["sources"].pop(key, None)          # a changed value's note no longer applies
+        # a constant xt replaces a profile or random profile and vice versa (patches stay on a new xt)
+        if parts[0] == "terrain" and len(parts) == 2 and parts[1] in ("xt", "profile", "random"):
+            for other in ("xt", "profile", "random"):
+                if other != parts[1]:
+                    node.pop(other, None)
+            if parts[1] != "xt":
+                node.pop("patches", None)
+    return raw
+
+
+def read_yaml(path) -> dict:
+    """Parse a YAML file with the hardened reader (:func:`snoworm.config.yamlio.read_yaml`).
+
+    Syntax errors, non-UTF-8 files, duplicate keys, alias bombs, deep nesting, missing or empty
+    files become :class:`ScenarioError` naming the file.
+    """
+    return yamlio.read_yaml(path)
+
+
+def _shipped_dir() -> Path:
+    return Path(str(resources.files("snoworm") / "scenarios"))
+
+
+def shipped_scenarios() -> dict:
+    """The scenarios shipped with snoworm: ``{name: (path, one-line description)}``, sorted by name."""
+    out = {}
+    for p in sorted(_shipped_dir().glob("*.yaml")):
+        try:
+            raw = read_yaml(p)
+        except ScenarioError:      # pragma: no cover - the shipped files are tested
+            continue
+        desc = raw.get("description", "") if isinstance(raw, dict) else ""
+        first = " ".join(str(desc).split())
+        out[p.stem] = (p, first.split(". ")[0].rstrip(".") + "." if first else "")
+    return out
+
+
+def scenario_path(name_or_path) -> Path:
+    """The file of a scenario given as a path or as the name of a shipped scenario.
+
+    A path that exists wins; otherwise a name such as ``inchworm6`` (or ``inchworm6.yaml``)
+    of :func:`shipped_scenarios` gives the shipped file; otherwise the path is returned as given
+    (reading it then reports the missing file, with the shipped names).
+    """
+    path = Path(name_or_path)
+    if path.exists():
+        return path
+    text = str(name_or_path)
+    name = text[:-5] if text.endswith(".yaml") else text
+    if "/" not in text and "\\" not in text:
+        shipped = _shipped_dir() / f"{name}.yaml"
+        if shipped.is_file():
+            return shipped
+    return path
+
+
+def read_scenario_yaml(name_or_path):
+    """(parsed YAML, the file) of a scenario path or shipped name (:func:`scenario_path`)."""
+    path = scenario_path(name_or_path)
+    try:
+        return read_yaml(path), path
+    except ScenarioError as exc:
+        if path.exists():
+            raise
+        names = ", ".join(shipped_scenarios())
+        raise ScenarioError(f"{exc} A shipped scenario is named without a path, one of: {names} "
+                            "(`snoworm scenarios` lists them).") from None
+
+
+def load_scenario(path, overrides=()) -> Scenario:
+    """Load, override and validate a scenario file.
+
+    Parameters
+    ----------
+    path : str or Path
+        YAML scenario file, or the name of a shipped scenario (``"inchworm6"``, see
+        :func:`shipped_scenarios`); an existing path wins over a name.
+    overrides : iterable of (str, object) or of "key=value" strings
+        Dotted-key overrides applied before validation (the CLI's ``--set``).
+    """
+    raw, path = read_scenario_yaml(path)
+    ov = [parse_set_option(o) if isinstance(o, str) else o for o in overrides]
+    if ov:
+        if not isinstance(raw, dict):
+            raise ScenarioError(f"{path}: a scenario must be a YAML mapping.")
+        raw = apply_overrides(raw, ov)
+    return scenario_from_dict(raw, str(path), base_dir=Path(path).parent)
+
+
+def dump_scenario(sc: Scenario) -> str:
+    """The resolved scenario as YAML text, every value filled in (re-runnable), followed by the
+    source of every physical value as comments (:attr:`Scenario.sources`)."""
+    lines = ["", "# Sources of the physical values (parameter set "
+             f"{sc.vehicle.parameter_set}; [user] scenario: changed by the scenario):"]
+    lines += [f"#   {k}: {v}" for k, v in sc.sources.items()]
+    return yaml.safe_dump(sc.to_dict(), sort_keys=False) + "\n".join(lines) + "\n"

@@ -1,0 +1,6 @@
+"""Layer *infra*: small infrastructure any layer may use; imports nothing of snoworm but the version.
+
+:mod:`~snoworm.infra.folders` (atomic files, all-or-nothing output folders, manifests, locks),
+:mod:`~snoworm.infra.csvwriter` (the one CSV writer of result tables), :mod:`~snoworm.infra.pool`
+(the local process pool of studies) and :mod:`~snoworm.infra.progress` (progress bars and logs).
+"""

@@ -1,0 +1,408 @@
+"""Writing results: atomic files, all-or-nothing output folders, folder locks.
+
+* :func:`atomic_path` / :func:`atomic_write_text`: a reader never sees a half-written file, and
+  the file gets the permissions of the user's umask (0644 under umask 022), not the 0600 of the
+  temporary file.
+* :func:`output_folder`: every command's results are written into a temporary sibling folder
+  and moved into place at the end, with a manifest (:data:`MANIFEST`: the files, the snoworm
+  version, the command).  A failure at any point leaves no result files.  An earlier snoworm
+  folder is replaced as a whole; a non-empty folder snoworm did not write is refused unless
+  ``overwrite`` (then same-named files are replaced and the others kept).
+* :func:`folder_lock`: one process at a time in a folder (a sweep appending rows); a lock left
+  by a dead process is taken over.
+
+I/O failures (disk full, read-only, a path under a file) raise :class:`OutputError` naming the
+path and the operating system's reason (the CLI: exit status 2).
+"""
+from __future__ import annotations
+
+import errno
+import json
+import os
+import shlex
+import shutil
+import sys
+import tempfile
+import time
+from contextlib import contextmanager
+from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX
+    fcntl = None
+
+from .._version import __version__
+
+__all__ = ["atomic_write_text", "atomic_path", "OutputError", "output_folder", "check_output_folder",
+           "folder_state", "read_manifest", "write_manifest", "folder_lock", "FolderLocked", "MANIFEST", "LOCK",
+           "os_error_message", "file_mode"]
+
+#: Name of the manifest a snoworm output folder holds.
+MANIFEST = ".snoworm-manifest.json"
+#: Name of the lock file of a folder in use (:func:`folder_lock`).
+LOCK = ".snoworm-lock"
+_STAGE = ".snoworm-tmp-"
+_OLD = ".snoworm-old-"
+
+
+class OutputError(Exception):
+    """An output path cannot be used or written (bad ``--out``, disk full, read-only): bad input
+    or environment, never a bug (the CLI exits with status 2)."""
+
+
+class FolderLocked(OutputError):
+    """Another live process holds the folder's lock (:func:`folder_lock`)."""
+
+
+def os_error_message(exc: OSError, path=None) -> str:
+    """``<path>: <OS reason>`` of an OSError, e.g. ``out/a.csv: No space left on device``."""
+    where = exc.filename if exc.filename is not None else path
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    return f"{where}: {reason}" if where is not None else reason
+
+
+def file_mode(directory: bool = False) -> int:
+    """The mode new files (0666) or folders (0777) get under the current umask."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return (0o777 if directory else 0o666) & ~mask
+
+
+@contextmanager
+def atomic_path(path):
+    """Yield a temporary path beside ``path``; on success rename it onto ``path``.
+
+    The file gets the umask's permissions (:func:`file_mode`).  On an exception the temporary
+    file is removed and ``path`` is left as it was.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.chmod(tmp, file_mode())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+def atomic_write_text(path, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically (temporary file + ``os.replace``); returns the path."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+    return Path(path)
+
+
+# ------------------------------------------------------------------------------ manifest
+def _files(folder: Path) -> list:
+    """Relative paths (POSIX) of every file under ``folder`` but the manifest and the lock."""
+    out = []
+    for root, dirs, names in os.walk(folder):
+        dirs[:] = [d for d in dirs if _STAGE not in d]
+        for n in names:
+            rel = (Path(root) / n).relative_to(folder).as_posix()
+            if rel not in (MANIFEST, LOCK):
+                out.append(rel)
+    return sorted(out)
+
+
+def read_manifest(folder) -> dict | None:
+    """The manifest of a snoworm output folder, or None (no manifest or unreadable)."""
+    try:
+        data = json.loads((Path(folder) / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) and isinstance(data.get("files"), list) else None
+
+
+#: The command recorded in manifests when none is given (the CLI sets it to its own command line).
+COMMAND = None
+
+
+def _command_line() -> str:
+    if COMMAND is not None:
+        return COMMAND
+    prog = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "python"
+    if prog in ("__main__.py", "snoworm"):
+        prog = "snoworm"
+    return shlex.join([prog] + list(sys.argv[1:]))
+
+
+def write_manifest(folder, command: str | None = None, **extra) -> Path:
+    """Write :data:`MANIFEST` listing every file now in ``folder``; returns its path."""
+    folder = Path(folder)
+    doc = {"snoworm_version": __version__, "command": command or _command_line(),
+           "written_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), **extra,
+           "files": _files(folder)}
+    return atomic_write_text(folder / MANIFEST, json.dumps(doc, indent=2) + "\n")
+
+
+def folder_state(path) -> str:
+    """What ``path`` is as an output folder.
+
+    ``"missing"``, ``"empty"``, ``"snoworm"`` (a manifest listing every file in it, or a sweep
+    folder), ``"foreign"`` (non-empty, not all written by snoworm), ``"file"`` (not a folder).
+    """
+    path = Path(path)
+    if not path.exists():
+        return "missing"
+    if not path.is_dir():
+        return "file"
+    entries = [e for e in os.listdir(path) if e != LOCK and _STAGE not in e]
+    if not entries:
+        return "empty"
+    man = read_manifest(path)
+    if man is not None and set(_files(path)) <= set(man["files"]):
+        return "snoworm"
+    return "foreign"
+
+
+def _refusal(path) -> str:
+    return (f"{path} is not empty and was not written by snoworm (it has no {MANIFEST} listing its files). "
+            "Give an empty or new --out folder, or pass --overwrite (overwrite=True in Python) to write into "
+            "it anyway (same-named files are replaced, the others kept).")
+
+
+def check_output_folder(path, overwrite: bool = False) -> str:
+    """Check that results may go to ``path`` before any work; returns :func:`folder_state`.
+
+    Raises
+    ------
+    OutputError
+        ``path`` is empty text, a file, under a file, or a non-empty folder snoworm did not
+        write (unless ``overwrite``).
+    """
+    if str(path).strip() == "":
+        raise OutputError("--out: the output folder is empty text. Name a folder, e.g. --out results/.")
+    path = Path(path)
+    for parent in [path, *path.parents]:
+        if parent.exists() and not parent.is_dir():
+            what = "is a file" if parent == path else f"is under {parent}, which is a file"
+            raise OutputError(f"{path}: {what}, not a folder. Give a folder path for --out.")
+        if parent.exists():
+            break
+    state = folder_state(path)
+    if state == "foreign" and not overwrite:
+        raise OutputError(_refusal(path))
+    return state
+
+
+# ------------------------------------------------------------------------------ output folders
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True
+    return True
+
+
+def _clean_stale(parent: Path, name: str):
+    """Remove staging folders of ``name`` left by killed processes (their PID is in the name)."""
+    try:
+        entries = os.listdir(parent)
+    except OSError:
+        return
+    for e in entries:
+        for tag in (_STAGE, _OLD):
+            prefix = f".{name}{tag}"
+            if e.startswith(prefix):
+                pid = e[len(prefix):].split("-")[0]
+                if pid.isdigit() and not _pid_alive(int(pid)):
+                    shutil.rmtree(parent / e, ignore_errors=True)
+
+
+def _inside_cwd(path: Path) -> bool:
+    try:
+        cwd = Path.cwd().resolve()
+    except OSError:
+        return False
+    p = path.resolve()
+    return p == cwd or p in cwd.parents
+
+
+def _make_stage(target: Path):
+    """(staging folder, in_place): a sibling of ``target``, or inside it when the parent is not writable."""
+    parent = target.parent
+    parent.mkdir(parents=True, exist_ok=True)
+    _clean_stale(parent, target.name)
+    try:
+        stage = Path(tempfile.mkdtemp(prefix=f".{target.name}{_STAGE}{os.getpid()}-", dir=parent))
+        in_place = False
+    except PermissionError:
+        if not target.is_dir():
+            raise
+        stage = Path(tempfile.mkdtemp(prefix=f"{_STAGE}{os.getpid()}-", dir=target))
+        in_place = True
+    os.chmod(stage, file_mode(directory=True))
+    return stage, in_place
+
+
+def _commit_swap(stage: Path, target: Path):
+    """Replace ``target`` (missing, empty or an earlier snoworm folder) by ``stage`` as a whole."""
+    if not target.exists():
+        os.rename(stage, target)
+        return
+    old = Path(tempfile.mkdtemp(prefix=f".{target.name}{_OLD}{os.getpid()}-", dir=target.parent))
+    os.rmdir(old)
+    os.rename(target, old)
+    try:
+        os.rename(stage, target)
+    except BaseException:
+        os.rename(old, target)
+        raise
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def _commit_in_place(stage: Path, target: Path):
+    """Move the staged entries into ``target`` one by one (files of an earlier manifest removed first)."""
+    target.mkdir(parents=True, exist_ok=True)
+    man = read_manifest(target)
+    for rel in (man or {}).get("files", []):
+        p = target / rel
+        if isinstance(rel, str) and ".." not in Path(rel).parts and p.is_file():
+            p.unlink()
+    for e in sorted(os.listdir(stage), key=lambda n: n == MANIFEST):   # the manifest last
+        dst = target / e
+        if dst.is_dir() and not dst.is_symlink():
+            shutil.rmtree(dst)
+        os.replace(stage / e, dst)
+    shutil.rmtree(stage, ignore_errors=True)
+
+
+@contextmanager
+def output_folder(path, overwrite: bool = False, command: str | None = None):
+    """Yield a staging folder for a command's results; on success they replace ``path``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output folder (created with its parents if missing).
+    overwrite : bool
+        Write into a non-empty folder snoworm did not write (same-named files replaced, other
+        files kept) instead of refusing it.
+    command : str, optional
+        Recorded in the manifest (default: this process's command line).
+
+    The staged files get a manifest and move into place only when the block ends without an
+    exception; on an exception (solver failure, disk full, Ctrl-C) the staging folder is removed
+    and ``path`` is left as it was.  An earlier snoworm folder (:func:`folder_state`
+    ``"snoworm"``) is replaced as a whole, so none of its files remain beside the new ones.
+
+    Raises
+    ------
+    OutputError
+        See :func:`check_output_folder`; or an I/O failure, naming the path and the reason.
+    """
+    check_output_folder(path, overwrite)
+    target = Path(os.path.abspath(path))
+    try:
+        stage, in_place = _make_stage(target)
+    except OSError as exc:
+        raise OutputError(f"cannot write results: {os_error_message(exc, target)}") from None
+    try:
+        yield stage
+        write_manifest(stage, command)
+        state = check_output_folder(target, overwrite)           # again: it may have changed meanwhile
+        if in_place or state == "foreign" or target.is_symlink() or _inside_cwd(target):
+            _commit_in_place(stage, target)
+        else:
+            _commit_swap(stage, target)
+    except OSError as exc:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise OutputError(f"cannot write results: {os_error_message(exc, target)}; nothing was written "
+                          f"to {target}.") from None
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+
+
+def relocate(paths, stage, target) -> list:
+    """The final paths of files written under ``stage`` once it has become ``target``."""
+    stage, target = Path(stage), Path(target)
+    return [target / Path(p).relative_to(stage) for p in paths]
+
+
+# ------------------------------------------------------------------------------ folder locks
+def _holder(lock_path: Path) -> str:
+    try:
+        text = lock_path.read_text(encoding="utf-8").strip()
+    except OSError:
+        text = ""
+    return f"process {text}" if text else "another process"
+
+
+@contextmanager
+def folder_lock(folder):
+    """Hold ``folder``'s lock (:data:`LOCK`, with this process's PID) for the block.
+
+    A lock whose holder is dead is taken over (the kernel's ``flock`` ends with its process;
+    without ``fcntl`` a PID check decides).
+
+    Raises
+    ------
+    FolderLocked
+        Another live process holds it; the message names its PID.
+    """
+    folder = Path(folder)
+    lp = folder / LOCK
+    try:
+        fd = _acquire(lp)
+    except OSError as exc:         # FolderLocked is not an OSError: it passes unchanged
+        raise OutputError(f"cannot lock the folder: {os_error_message(exc, lp)}") from None
+    try:
+        yield lp
+    finally:
+        try:
+            os.unlink(lp)
+        except OSError:
+            pass
+        os.close(fd)
+
+
+def _busy(lp):
+    return FolderLocked(f"{lp.parent} is in use by {_holder(lp)} (lock file {lp}): another snoworm run is "
+                        "writing there. Wait for it to finish, or give another --out folder.")
+
+
+def _acquire(lp: Path) -> int:
+    for _ in range(20):
+        if fcntl is None:   # pragma: no cover - not POSIX
+            try:
+                fd = os.open(lp, os.O_CREAT | os.O_EXCL | os.O_RDWR, 0o644)
+            except FileExistsError:
+                pid = _holder(lp).split()[-1]
+                if pid.isdigit() and not _pid_alive(int(pid)):
+                    os.unlink(lp)
+                    continue
+                raise _busy(lp) from None
+        else:
+            fd = os.open(lp, os.O_CREAT | os.O_RDWR, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                os.close(fd)
+                if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                    raise _busy(lp) from None
+                raise
+            try:                               # the file may have been unlinked by its releasing holder
+                same = os.path.samestat(os.fstat(fd), os.stat(lp))
+            except FileNotFoundError:
+                same = False
+            if not same:
+                os.close(fd)
+                continue
+        os.ftruncate(fd, 0)
+        os.write(fd, str(os.getpid()).encode())
+        return fd
+    raise _busy(lp)

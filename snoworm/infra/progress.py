@@ -1,0 +1,169 @@
+"""Progress of long commands: a bar on a terminal, one line per ~10 % in a log file.
+
+:class:`Progress` draws with ``tqdm`` when it is installed (``pip install 'snoworm[progress]'``)
+and with a plain one-line bar otherwise; when the stream is not a terminal (a batch job's log)
+it prints one line each time another ~10 % is done, so logs show how far a job got.
+
+The library's functions take a ``progress`` callable ``progress(done, total)`` (e.g.
+:func:`snoworm.simulation.driver.simulate` in simulated seconds); :meth:`Progress.set` is one.
+
+Solver fallbacks and retries are logged to ``logging.getLogger("snoworm")`` (:data:`logger`).
+"""
+from __future__ import annotations
+
+import logging
+import sys
+import time
+
+__all__ = ["Progress", "logger", "hms"]
+
+#: The package's logger: solver fallbacks and retries (INFO), runs falling back to one by one (INFO).
+logger = logging.getLogger("snoworm")
+
+
+def hms(s: float) -> str:
+    """``m:ss`` (or ``h:mm:ss``) of a duration in seconds."""
+    s = int(round(s))
+    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60}:{s % 60:02d}"
+
+
+def _num(v: float):
+    """An integral float as int (tqdm then counts 3/3, not 3.0/3.0)."""
+    return int(v) if float(v).is_integer() else v
+
+
+def _isatty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
+
+
+def _tqdm():
+    try:
+        from tqdm import tqdm  # lazy: optional extra `progress`; the plain bar stands in without it
+    except ImportError:
+        return None
+    return tqdm
+
+
+class Progress:
+    """A progress report of ``total`` units of work.
+
+    Parameters
+    ----------
+    total : float
+        Work to do (cases, cells, simulated seconds).
+    desc : str
+        What is being done (start of the line).
+    unit : str
+        Unit of the work (``"cases"``, ``"s simulated"``).
+    stream : file, optional
+        Where to draw (default: ``sys.stderr``).
+    mode : {"auto", "bar", "lines", "off"}
+        ``auto``: a bar on a terminal, lines otherwise.
+    use_tqdm : bool
+        Draw the bar with tqdm when it is installed.
+    """
+
+    def __init__(self, total, desc, unit="", stream=None, mode="auto", use_tqdm=True):
+        self.total, self.desc, self.unit = float(total), desc, unit
+        self.stream = sys.stderr if stream is None else stream
+        if mode == "auto":
+            mode = "bar" if _isatty(self.stream) else "lines"
+        if mode not in ("bar", "lines", "off"):
+            raise ValueError(f"mode must be auto, bar, lines or off, got {mode!r}")
+        self.mode = mode
+        self.value, self.info = 0.0, ""
+        self.t0 = time.perf_counter()
+        self._last, self._decile, self._closed, self._printed = 0.0, 0, False, 0.0
+        tq = _tqdm() if (mode == "bar" and use_tqdm) else None
+        self._bar = tq(total=_num(self.total), desc=desc, unit=f" {unit}" if unit else "it", file=self.stream,
+                       leave=True, dynamic_ncols=True) if tq is not None else None
+
+    # ---------------------------------------------------------------- updates
+    def update(self, n=1, info=None):
+        """``n`` more units done; ``info``: short text shown after the count."""
+        self.set(self.value + n, info=info)
+
+    def set(self, value, total=None, info=None):
+        """``value`` units done in all (``total`` may change it)."""
+        if total is not None and float(total) != self.total:
+            self.total = float(total)
+            if self._bar is not None:
+                self._bar.total = _num(self.total)
+        self.value = min(float(value), self.total) if self.total > 0 else float(value)
+        if info is not None:
+            self.info = info
+        self._draw()
+
+    __call__ = set
+
+    def close(self, info=None):
+        """End the report (the bar's final state, or the last line if not yet printed)."""
+        if self._closed:
+            return
+        self._closed = True
+        if info is not None:
+            self.info = info
+        if self._bar is not None:
+            self._bar.set_postfix_str(self.info, refresh=False)
+            self._bar.close()
+        elif self.mode == "bar":
+            self._plain(force=True)
+            self._write("\n")
+        elif self.mode == "lines" and self.value > self._printed:
+            self._line()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+    # ---------------------------------------------------------------- drawing
+    def _write(self, text):
+        self.stream.write(text)
+        self.stream.flush()
+
+    def _frac(self):
+        return self.value / self.total if self.total > 0 else 1.0
+
+    def _count(self):
+        ints = float(self.total).is_integer() and float(self.value).is_integer()
+        fmt = (lambda v: f"{v:.0f}") if ints else (lambda v: f"{v:.4g}")
+        return f"{fmt(self.value)}/{fmt(self.total)}" + (f" {self.unit}" if self.unit else "")
+
+    def _draw(self):
+        if self.mode == "off" or self._closed:
+            return
+        if self._bar is not None:
+            if self.info:
+                self._bar.set_postfix_str(self.info, refresh=False)
+            self._bar.update(_num(self.value) - self._bar.n)
+        elif self.mode == "bar":
+            self._plain()
+        elif int(10 * self._frac() + 1e-9) > self._decile:
+            self._decile = int(10 * self._frac() + 1e-9)
+            self._line()
+
+    def _plain(self, force=False):
+        now = time.perf_counter()
+        if not force and now - self._last < 0.1 and self.value < self.total:
+            return
+        self._last = now
+        width = 24
+        fill = int(width * self._frac())
+        el = now - self.t0
+        left = self.total - self.value
+        eta = f", ~{hms(el / self.value * left)} left" if self.value > 0 and left > 0 else ""
+        info = f", {self.info}" if self.info else ""
+        self._write(f"\r{self.desc} [{'#' * fill}{'.' * (width - fill)}] {self._count()}{info}, "
+                    f"{hms(el)} elapsed{eta}   ")
+
+    def _line(self):
+        self._printed = self.value
+        info = f", {self.info}" if self.info else ""
+        self._write(f"{self.desc}: {100 * self._frac():3.0f} % ({self._count()}{info}), "
+                    f"{hms(time.perf_counter() - self.t0)} elapsed\n")

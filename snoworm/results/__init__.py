@@ -1,0 +1,6 @@
+"""Layer *results*: what a run produced, on disk and in memory.
+
+:mod:`~snoworm.results.result` (:class:`~snoworm.results.result.Result`, its folder, ``load_result``),
+:mod:`~snoworm.results.energy` (energy metrics and balance) and :mod:`~snoworm.results.frames`
+(results as pandas tables and xarray datasets).
+"""

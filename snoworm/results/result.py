@@ -1,0 +1,286 @@
+"""Results of a simulation: time series per segment and per link, summary, files on disk.
+
+Every output quantity is recomputed from the solved states after the solve, in one vectorised
+pass of the same force kernel the right-hand side uses (:meth:`ChainModel.evaluate`).
+"""
+from __future__ import annotations
+
+import io
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import frames
+from .._version import __version__
+from .energy import energy_metrics
+from ..infra.folders import atomic_write_text, output_folder, relocate
+from ..model.quantities import output_series
+from ..config.scenario import dump_scenario, load_scenario
+
+__all__ = ["Result", "SEGMENT_COLUMNS", "LINK_COLUMNS", "load_result"]
+
+#: Columns of ``segments.csv`` (after ``t_s, segment``): name -> description.
+SEGMENT_COLUMNS = {
+    "x_m": "position of the segment's reference point [m]",
+    "v_mps": "ground speed [m/s]",
+    "wheel_speed_mps": "wheel circumferential speed R_w*omega, mean of the axles [m/s]",
+    "slip": "slip (Eq. 1, regularised), mean of the axles",
+    "traction_N": "tractive force F_t summed over the segment's wheels [N]",
+    "resistance_N": "terrain resistance force F_tr summed over the segment's wheels [N]",
+    "net_force_N": "traction - resistance, summed over the wheels [N]",
+    "motor_torque_Nm": "motor torque per wheel at the wheel, mean of the axles [N m]",
+    "speed_setpoint_mps": "wheel-speed set-point R_w*omega_ref [m/s]",
+    "connector_net_N": "net force of the links (and tow) on the segment, forward positive [N]",
+    "xt": "terrain coefficient X_t under the segment, mean of the axles",
+    "motor_power_W": "mechanical motor power at the wheels, summed over the wheels [W]",
+    "terrain_dissipation_W": "power dissipated at the wheel-terrain contacts of the segment [W]",
+    "motor_electrical_power_W": "electrical power drawn by the segment's motors: motoring power / drivetrain "
+                                "efficiency, braking not recovered [W]",
+}
+
+#: Columns of ``links.csv`` (after ``t_s, link``).
+LINK_COLUMNS = {
+    "force_N": "link force, tension positive [N]",
+    "length_m": "centre-to-centre distance of the two segments [m]",
+    "extension_m": "prismatic joint extension (0 for a fixed link) [m]",
+    "joint_power_W": "mechanical power delivered by the prismatic joint actuator [W]",
+    "spring_force_N": "force of the link spring (in series with the damper and the actuator), tension positive [N]",
+    "damper_power_W": "power dissipated in the link damper [W]",
+}
+
+
+@dataclass
+class Result:
+    """A finished simulation.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The resolved scenario.
+    t : ndarray (n_t,)
+        Output times [s].
+    segments : dict of str -> ndarray (n_t, N)
+        Per-segment series, exactly the keys of :data:`SEGMENT_COLUMNS`.
+    links : dict of str -> ndarray (n_t, N-1)
+        Per-link series, exactly the keys of :data:`LINK_COLUMNS`.
+    phases : list of dict
+        Integration intervals (start, end, label).
+    events : list of dict
+        Mode events (gait phase changes, switches), with time and cause.
+    stats : dict
+        Solver statistics (nfev, njev, nlu, intervals, wall_time_s).
+    mode_summary : dict
+        Mode-specific metrics.
+    """
+
+    scenario: object
+    t: np.ndarray
+    segments: dict
+    links: dict
+    phases: list
+    events: list
+    stats: dict
+    mode_summary: dict = field(default_factory=dict)
+
+    @classmethod
+    def from_pieces(cls, sc, model, mode, pieces, phases, stats):
+        seg_parts, link_parts, ts = [], [], []
+        for t, ys, ctl in pieces:
+            seg, lk = output_series(model, ys, ctl)
+            seg_parts.append(seg)
+            link_parts.append(lk)
+            ts.append(t)
+        t = np.concatenate(ts)
+        segments = {k: np.concatenate([p[k] for p in seg_parts]) for k in seg_parts[0]}
+        links = {k: np.concatenate([p[k] for p in link_parts]) for k in link_parts[0]}
+        segments = {k: segments[k] for k in SEGMENT_COLUMNS}     # the documented columns, in order
+        links = {k: links[k] for k in LINK_COLUMNS}
+        res = cls(sc, t, segments, links, phases, list(mode.log), stats)
+        res.mode_summary = mode.summary(res)
+        return res
+
+    # ------------------------------------------------------------------ metrics
+    @property
+    def n_segments(self) -> int:
+        return self.segments["x_m"].shape[1]
+
+    def energy(self, metrics: dict | None = None) -> dict:
+        """Energy used [J]: motors (mechanical and electrical, with the drivetrain loss) and joints.
+
+        Electrical energy counts only motoring power (``T w > 0``) divided by the drivetrain
+        efficiency; braking and holding power are not recovered.  Joint energy counts the
+        positive mechanical work of the prismatic actuators, and its electrical energy that work
+        divided by ``vehicle.links.joint_efficiency``.  ``total_J`` is the electrical total
+        (definitions in :mod:`snoworm.results.energy`).  ``metrics``: an already computed
+        :func:`snoworm.results.energy.energy_metrics` of this result, to select from.
+        """
+        e = energy_metrics(self) if metrics is None else metrics
+        return {"motor_electrical_J": e["motor_electrical_J"], "motor_mechanical_J": e["motor_mechanical_J"],
+                "joint_work_J": e["joint_mechanical_J"], "joint_electrical_J": e["joint_electrical_J"],
+                "total_J": e["total_electrical_J"]}
+
+    def summary(self) -> dict:
+        """The metrics written to ``summary.json``."""
+        x = self.segments["x_m"]
+        dist = float(np.mean(x[-1] - x[0]))
+        dur = float(self.t[-1] - self.t[0]) if self.t.size > 1 else 0.0
+        metrics = energy_metrics(self)
+        e = self.energy(metrics)
+        s = {
+            "scenario": self.scenario.name,
+            "snoworm_version": __version__,
+            "segments": self.n_segments,
+            "duration_s": dur,
+            "distance_m": dist,
+            "mean_speed_mps": dist / dur if dur > 0 else 0.0,
+            "final_link_forces_N": self.links["force_N"][-1].tolist(),
+            "final_net_forces_N": self.segments["net_force_N"][-1].tolist(),
+            "final_slip": self.segments["slip"][-1].tolist(),
+            "final_speed_mps": self.segments["v_mps"][-1].tolist(),
+            "max_abs_link_force_N": float(np.max(np.abs(self.links["force_N"]))) if self.links["force_N"].size else 0.0,
+            "energy": e,
+            "energy_per_metre_J_per_m": e["total_J"] / dist if dist > 1e-9 else None,
+            "energy_metrics": metrics,
+            "solver": dict(self.stats),
+            "events": self.events,
+            "sources": self.scenario.sources,
+        }
+        s.update(self.mode_summary)
+        return s
+
+    # ------------------------------------------------------------------ data and figures
+    @property
+    def columns(self) -> dict:
+        """``{"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS}``: quantity -> description [unit]."""
+        return {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS}
+
+    def to_pandas(self) -> dict:
+        """``{"segments": DataFrame, "links": DataFrame}``: tidy tables (``t_s``, ``segment`` or
+        ``link``, one column per quantity with its unit suffix), as in the CSV files.
+
+        Needs pandas (``pip install 'snoworm[data]'``); see :func:`snoworm.results.frames.to_pandas`.
+        """
+        return frames.to_pandas(self)
+
+    def to_xarray(self):
+        """The run as an :class:`xarray.Dataset`: dims ``time x segment`` and ``time x link``, units
+        in each variable's attrs, the resolved scenario (YAML) and package versions in the
+        Dataset's attrs.  Needs xarray (``pip install 'snoworm[data]'``); see
+        :func:`snoworm.results.frames.to_xarray`.
+        """
+        return frames.to_xarray(self)
+
+    def plot(self, kind: str = "speeds", ax=None, fig=None, **kwargs):
+        """Draw one of the run's figures and return the :class:`~matplotlib.figure.Figure`.
+
+        ``kind``: ``forces``, ``speeds``, ``positions``, ``force_diagram`` or ``groups`` (see
+        :mod:`snoworm.plotting`).  ``ax``: your own axes (as many as the figure has panels), or
+        ``fig``: a figure to draw in; neither: a new figure.  The matplotlib backend is not changed.
+        """
+        from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+        if kind not in plotting.PLOT_KINDS:
+            raise ValueError(f"unknown plot kind {kind!r}; kinds: {', '.join(plotting.PLOT_KINDS)}")
+        return plotting.PLOT_KINDS[kind](self, ax=ax, fig=fig, **kwargs)
+
+    # ------------------------------------------------------------------ tables
+    def segments_csv(self) -> str:
+        n_t, n = self.segments["x_m"].shape
+        cols = ["t_s", "segment"] + list(SEGMENT_COLUMNS)
+        data = np.column_stack([np.repeat(self.t, n), np.tile(np.arange(n), n_t)]
+                               + [self.segments[c].reshape(-1) for c in SEGMENT_COLUMNS])
+        return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
+
+    def links_csv(self) -> str:
+        n_t, n = self.links["force_N"].shape
+        cols = ["t_s", "link"] + list(LINK_COLUMNS)
+        data = np.column_stack([np.repeat(self.t, n), np.tile(np.arange(n), n_t)]
+                               + [self.links[c].reshape(-1) for c in LINK_COLUMNS])
+        return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
+
+    def write(self, out_dir, plot: bool = True, plot_format: str = "png", overwrite: bool = False) -> list:
+        """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots,
+        ``plot_format`` files: png at 200 dpi, pdf or svg).
+
+        All or nothing (:func:`snoworm.infra.folders.output_folder`): the files are written into a
+        temporary sibling folder that replaces ``out_dir`` at the end, with a manifest; an earlier
+        snoworm folder there is replaced as a whole, a non-empty folder snoworm did not write is
+        refused unless ``overwrite``.  Returns the paths.  :func:`load_result` reads the folder back.
+
+        Raises
+        ------
+        snoworm.infra.folders.OutputError
+            Unusable ``out_dir`` or an I/O failure (nothing is written then).
+        """
+        with output_folder(out_dir, overwrite) as stage:
+            paths = [
+                atomic_write_text(stage / "segments.csv", self.segments_csv()),
+                atomic_write_text(stage / "links.csv", self.links_csv()),
+                atomic_write_text(stage / "summary.json", json.dumps(self.summary(), indent=2) + "\n"),
+                atomic_write_text(stage / "scenario.yaml", dump_scenario(self.scenario)),
+            ]
+            if plot:
+                from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+                paths += plotting.plot_result(self, stage, plot_format)
+        return relocate(paths, stage, out_dir)
+
+
+def time_decimals(output_dt_s: float) -> int:
+    """Decimals of ``t_s`` in the CSVs: 4, or enough that times ``output_dt_s`` apart print apart
+    (one digit below the sampling interval's leading digit; at most 12)."""
+    return int(min(12, max(4, 1 - math.floor(math.log10(output_dt_s)))))
+
+
+#: Keys of ``summary.json`` that are not the mode's own (the rest is ``Result.mode_summary``).
+_SUMMARY_KEYS = ("scenario", "snoworm_version", "segments", "duration_s", "distance_m", "mean_speed_mps",
+                 "final_link_forces_N", "final_net_forces_N", "final_slip", "final_speed_mps", "max_abs_link_force_N",
+                 "energy", "energy_per_metre_J_per_m", "energy_metrics", "solver", "events", "sources")
+
+
+def _read_table(path, index, columns, n_t_hint=None):
+    """(t, {column: ndarray (n_t, n)}) of a ``segments.csv`` / ``links.csv``."""
+    with open(path, encoding="utf-8") as fh:
+        header = fh.readline().strip().split(",")
+    expected = ["t_s", index] + list(columns)
+    if header != expected:
+        raise ValueError(f"{path}: unexpected columns {header}; expected {expected}")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    n = int(data[:, 1].max()) + 1 if data.shape[0] else 0
+    if n == 0:        # no links (a single segment): n_t rows of nothing
+        return None, {c: np.zeros((n_t_hint or 0, 0)) for c in columns}
+    t = data[::n, 0]
+    return t, {c: data[:, 2 + j].reshape(t.size, n) for j, c in enumerate(columns)}
+
+
+def load_result(run_dir) -> Result:
+    """Read a run folder written by :meth:`Result.write` (or ``snoworm run``) back into a Result.
+
+    The series come from ``segments.csv`` and ``links.csv``, so they carry the files' precision:
+    6 significant digits (times: 4 decimals, more for an ``output_dt_s`` below 1e-3).  The scenario is ``scenario.yaml`` (validated
+    again); ``stats``, ``events`` and the mode's metrics come from ``summary.json``.  The
+    integration intervals (``phases``) are not written to disk and come back empty.
+    """
+    d = Path(run_dir)
+    missing = [f for f in ("segments.csv", "links.csv", "summary.json", "scenario.yaml") if not (d / f).is_file()]
+    if missing:
+        raise FileNotFoundError(f"{d} is not a snoworm run folder: {', '.join(missing)} missing")
+    sc = load_scenario(d / "scenario.yaml")
+    t, segments = _read_table(d / "segments.csv", "segment", SEGMENT_COLUMNS)
+    _, links = _read_table(d / "links.csv", "link", LINK_COLUMNS, n_t_hint=t.size)
+    summary = json.loads((d / "summary.json").read_text(encoding="utf-8"))
+    mode_summary = {k: v for k, v in summary.items() if k not in _SUMMARY_KEYS}
+    return Result(sc, t, segments, links, [], list(summary.get("events", [])), dict(summary.get("solver", {})),
+                  mode_summary)
+
+
+def _csv(cols, data, int_cols=(), t_decimals=4):
+    buf = io.StringIO()
+    buf.write(",".join(cols) + "\n")
+    fmt = ["%.6g"] * data.shape[1]
+    fmt[0] = f"%.{t_decimals}f"
+    for c in int_cols:
+        fmt[c] = "%d"
+    np.savetxt(buf, data, fmt=fmt, delimiter=",")
+    return buf.getvalue()

@@ -1,0 +1,117 @@
+"""Step-by-step simulation: advance a scenario's chain by commands held for ``dt`` (docs/controllers.md).
+
+::
+
+    sim = snoworm.Simulator(scenario)
+    obs = sim.reset()                                   # Observation at t = 0
+    obs = sim.step({"wheel_speed_mps": [1.8] * 6}, 0.02)  # command held for 20 ms
+    res = sim.result()                                  # a Result, as simulate() returns
+
+The chain, its initial state, the solver, its tolerances and the output grid are those of
+:func:`snoworm.simulate` for the same scenario (the scenario's ``mode`` only gives the initial
+state; the commands replace its control).  Each step is one interval of the driver's solver
+(:func:`snoworm.simulation.driver.solve_interval`); the ``controller`` mode
+(:mod:`snoworm.modes.controller`) runs the same intervals with the same observations and
+commands (:mod:`snoworm.modes.command`), so a controller gives the same result either way.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .driver import assemble, output_grid, solve_interval
+from ..modes import Mode
+from ..modes.command import COMMAND_KEYS, CommandState, Observation, observe
+from ..results.result import Result
+
+__all__ = ["Simulator", "Observation", "COMMAND_KEYS"]
+
+
+class Simulator:
+    """A scenario's chain advanced step by step with held commands.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The validated scenario (vehicle, terrain, tow, solver settings; its mode's initial state).
+        ``simulation.duration_s`` does not limit stepping.
+
+    Attributes
+    ----------
+    t_s : float
+        Time reached [s].
+    last_step : tuple or None
+        ``(ts, ys, controls)`` of the last step: its output times, flat states and controls.
+    """
+
+    def __init__(self, scenario):
+        self.scenario = scenario
+        case = assemble(scenario)
+        self.model = case.model
+        self._y0 = np.array(case.mode.initial_state(), float)
+        self.reset()
+
+    def reset(self) -> Observation:
+        """Back to t = 0 at the initial state, motors off and joints holding; the first observation."""
+        self.t_s = 0.0
+        self._y = self._y0.copy()
+        self.commands = CommandState(self.model)
+        self._pieces, self._phases = [], []
+        self._stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "wall_time_s": 0.0}
+        self._opts = {"continue": True}     # VODE (simulation.method) carries its history across steps
+        self.last_step = None
+        return self.observation()
+
+    def observation(self) -> Observation:
+        """The :class:`Observation` at the time reached (under the command held up to it)."""
+        return observe(self.model, self._y, self.commands.controls, self.t_s)
+
+    def step(self, command, dt) -> Observation:
+        """Hold ``command`` for ``dt`` seconds and return the observation at the end.
+
+        Parameters
+        ----------
+        command : mapping or None
+            Keys of :data:`~snoworm.modes.command.COMMAND_KEYS`; keys left out keep their value.
+        dt : float
+            Step length [s], > 0.  The solver chooses its own steps inside it with the
+            scenario's tolerances, whatever ``dt`` is.
+
+        Raises
+        ------
+        ValueError
+            Unknown command key, wrong length, non-finite value, or a bad ``dt`` (nothing changes).
+        SolverError
+            If every solver method fails (the simulator stays at the start of the step).
+        """
+        if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating, np.integer)) \
+                or not math.isfinite(dt) or dt <= 0:
+            raise ValueError(f"dt: the step length must be a positive number of seconds, got {dt!r}")
+        wall0 = time.perf_counter()
+        saved = self.commands.snapshot()
+        ctl = self.commands.apply(command)
+        t, t1 = self.t_s, self.t_s + float(dt)
+        sim = self.scenario.simulation
+        t_eval = output_grid(t, t1, sim.output_dt_s, include_start=not self._phases)
+        try:
+            ts, ys, t_next, y_next, _ = solve_interval(self.model, ctl, t, t1, self._y, [], sim, t_eval,
+                                                       self._stats, "step", self._opts)
+        except Exception:
+            self.commands.restore(saved)
+            raise
+        self._pieces.append((ts, ys, ctl))
+        self.last_step = (ts, ys, ctl)
+        self._phases.append({"t_start_s": t, "t_end_s": t_next, "label": "step"})
+        self.t_s, self._y = t_next, y_next
+        self._stats["wall_time_s"] += time.perf_counter() - wall0
+        return self.observation()
+
+    def result(self) -> Result:
+        """A :class:`~snoworm.results.result.Result` of everything stepped since the last reset."""
+        if not self._pieces:
+            raise ValueError("Simulator.result: nothing simulated yet; call step() first")
+        sc = self.scenario
+        return Result.from_pieces(sc, self.model, Mode(sc.mode, sc, self.model), self._pieces,
+                                  [dict(p) for p in self._phases], dict(self._stats))

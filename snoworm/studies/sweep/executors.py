@@ -1,0 +1,182 @@
+"""Sweep executors: where the cases run.
+
+An executor is any object with ``map_unordered(fn, tasks)`` yielding ``fn(task)`` for every task
+in any order, and ``close()``.  :class:`SerialExecutor` runs them in this process,
+:class:`~snoworm.infra.pool.ProcessExecutor` (shared with the other studies) in local processes,
+:class:`DaskExecutor` on a Dask cluster, and :class:`BatchExecutor` stacks cases of one batch key
+(:func:`snoworm.simulation.driver.batch_key`) into one solve (:func:`snoworm.simulation.driver.simulate_batch`),
+running every other case one by one through the sweep's per-case function.
+"""
+from __future__ import annotations
+
+import functools
+import itertools
+import time
+
+from ...simulation.driver import batch_key, simulate_batch
+from ...infra.pool import ProcessExecutor
+from ...config.scenario import scenario_from_dict
+from ...config.schema import ScenarioError
+from .series import save_series
+from .metrics import case_metrics
+
+__all__ = ["SweepExecutionError", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "BatchExecutor",
+           "run_chunk"]
+
+
+class SweepExecutionError(RuntimeError):
+    """The executor failed (not a case): e.g. a worker process died or the Dask cluster was lost."""
+
+
+class SerialExecutor:
+    """Run the cases one after the other in this process."""
+
+    def map_unordered(self, fn, tasks):
+        for task in tasks:
+            yield fn(task)
+
+    def close(self):
+        pass
+
+
+#: Seconds to wait for a Dask scheduler before the sweep stops with exit 2 (a reachable
+#: scheduler answers in milliseconds; Dask's own default would wait 30 s).
+CONNECT_TIMEOUT_S = 5
+
+
+class DaskExecutor:
+    """Run the cases on a Dask distributed cluster at ``address`` (``tcp://host:port``).
+
+    The workers need snoworm installed; ``save_cases`` and a relative ``terrain.model_file``
+    need a file system shared with the workers.  At most ``4 * workers`` cases are in flight.
+    Connecting waits at most :data:`CONNECT_TIMEOUT_S` seconds.
+    """
+
+    def __init__(self, address):
+        try:
+            from distributed import Client   # optional dependency (snoworm[dask]): imported only when used
+        except ImportError:
+            raise ScenarioError(f"--scheduler {address}: Dask is not installed. Install it with "
+                                "pip install 'snoworm[dask]' (or pip install 'dask[distributed]').") from None
+        self.address = address
+        try:
+            self.client = address if hasattr(address, "submit") else Client(address, timeout=f"{CONNECT_TIMEOUT_S}s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise ScenarioError(f"--scheduler {address}: cannot connect to the Dask scheduler ({exc}). "
+                                "Check the address (tcp://host:port) and that the scheduler is running.") from None
+        self._own = not hasattr(address, "submit")
+
+    def map_unordered(self, fn, tasks):
+        from distributed import as_completed   # optional dependency, see __init__
+        n_workers = max(len(self.client.scheduler_info().get("workers", {})), 1)
+        window = 4 * n_workers
+        it = iter(tasks)
+        first = [self.client.submit(fn, t, pure=False) for t in itertools.islice(it, window)]
+        if not first:
+            return
+        ac = as_completed(first)
+        for fut in ac:
+            nxt = next(it, None)
+            if nxt is not None:
+                ac.add(self.client.submit(fn, nxt, pure=False))
+            result = fut.result()
+            fut.release()
+            yield result
+
+    def close(self):
+        if self._own:
+            self.client.close()
+
+
+def _run_group(tasks, scs, fallback, metrics):
+    """Rows of one group of batchable tasks (one stacked solve; failing members reported per member)."""
+    wall0 = time.perf_counter()
+    members = simulate_batch(scs)
+    wall = (time.perf_counter() - wall0) / len(tasks)
+    out = []
+    for task, mem in zip(tasks, members):
+        if mem.status != "ok":
+            out.append({"index": task["index"], "status": mem.status, "error": mem.error, "wall_time_s": wall})
+            continue
+        row = {"index": task["index"], "status": "ok", "error": ""}
+        try:
+            row.update(metrics(mem.result))
+            if task.get("save_dir"):
+                save_series(mem.result, task["save_dir"])
+        except Exception:  # noqa: BLE001 - let the one-by-one path report the case's error
+            row = fallback(task)
+        row.setdefault("wall_time_s", wall)
+        out.append(row)
+    return out
+
+
+def run_chunk(tasks, fn, metrics, max_group=None) -> list:
+    """Run a chunk of sweep tasks: batchable groups stacked, the rest through ``fn`` one by one."""
+    groups, results = {}, []
+    for task in tasks:
+        try:
+            sc = task.get("scenario") or scenario_from_dict(task["raw"], task.get("source", "scenario"),
+                                                            base_dir=task.get("base_dir"))
+            key = batch_key(sc)
+            task = {**task, "scenario": sc}          # validated once: fn (run_case) reuses it
+        except (ScenarioError, ValueError):
+            key = None
+        if key is None:
+            results.append(fn(task))
+        else:
+            groups.setdefault(key, []).append((task, sc))
+    for members in groups.values():
+        size = max_group or len(members)
+        for j in range(0, len(members), size):
+            part = members[j:j + size]
+            if len(part) == 1:
+                results.append(fn(part[0][0]))
+            else:
+                tasks_, scs = zip(*part)
+                results.extend(_run_group(list(tasks_), list(scs), fn, metrics))
+    return results
+
+
+class BatchExecutor:
+    """Sweep executor that stacks batchable cases (see the module docstring).
+
+    Parameters
+    ----------
+    batch_size : int
+        Cases per stacked solve (100-500 is the measured sweet spot).
+    jobs : int
+        Local worker processes, each integrating whole chunks (1: in this process).
+    pool : object, optional
+        A process executor with ``map_unordered`` (made by the caller when ``jobs > 1``).
+    metrics : callable, optional
+        ``metrics(result) -> dict``, the per-case metrics (default: :func:`snoworm.studies.sweep.metrics.case_metrics`).
+    """
+
+    def __init__(self, batch_size: int = 100, jobs: int = 1, pool=None, metrics=None):
+        if int(batch_size) < 1:
+            raise ValueError(f"batch size must be at least 1, got {batch_size}")
+        self.batch_size = int(batch_size)
+        self.jobs = int(jobs)
+        self._pool = pool
+        self._metrics = case_metrics if metrics is None else metrics
+
+    def _chunks(self, tasks):
+        it = iter(tasks)
+        while True:
+            chunk = list(itertools.islice(it, self.batch_size))
+            if not chunk:
+                return
+            yield chunk
+
+    def map_unordered(self, fn, tasks):
+        run = functools.partial(run_chunk, fn=fn, metrics=self._metrics)
+        if self._pool is None:
+            for chunk in self._chunks(tasks):
+                yield from run(chunk)
+        else:
+            for rows in self._pool.map_unordered(run, self._chunks(tasks)):
+                yield from rows
+
+    def close(self):
+        if self._pool is not None:
+            self._pool.close()

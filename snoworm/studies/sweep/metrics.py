@@ -1,0 +1,157 @@
+"""Per-case work of a sweep: run one case (:func:`run_case`) and reduce it to scalar metrics.
+
+The ``immobilised`` flag: the chain's mean forward ground speed over the last 25 % of the run
+is below ``max(0.05 m/s, 5 * terrain.model.sign_eps_mps)``.  The smooth sign of the terrain
+resistance (``tanh(V / sign_eps_mps)``) lets a stuck vehicle creep: with the default
+``sign_eps_mps = 0.01 m/s`` a free-rolling FrostyBoy creeps at 0.006 m/s at X_t = 0.5 and
+0.032 m/s at X_t = 0.586, while at X_t = 0.59 it already rolls at 0.2 m/s.  Below the threshold
+``tanh(V / sign_eps_mps) > tanh(5) = 0.9999``: the terrain resistance is saturated, so the motion
+is the regularisation's creep, not rolling.
+"""
+from __future__ import annotations
+
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+
+from ...simulation.driver import SolverError, simulate
+from ...modes.controller import ControllerError
+from ...config.scenario import scenario_from_dict
+from ...config.schema import ScenarioError
+from .series import save_series
+
+__all__ = ["case_metrics", "run_case", "one_line", "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR",
+           "LATE_FRACTION", "SLIP_FRACTION", "METRIC_COLUMNS", "STATUSES", "MAX_ERROR_CHARS"]
+
+#: Absolute floor of the immobilised speed threshold [m/s].
+IMMOBILISED_SPEED_MPS = 0.05
+#: The threshold is at least this multiple of ``terrain.model.sign_eps_mps``.
+IMMOBILISED_SIGN_FACTOR = 5.0
+#: Fraction of the run (at its end) over which the immobilised speed is measured.
+LATE_FRACTION = 0.25
+#: Fraction of the run (at its end) over which slip is averaged.
+SLIP_FRACTION = 0.5
+
+#: Case statuses: ``ok``; ``solver_failure`` (SolverError); ``invalid`` (the case's scenario is
+#: rejected, ScenarioError); ``error`` (any other exception in the case, a bug: please report it);
+#: ``controller_failure`` (the user's controller raised or returned a bad command, ControllerError).
+STATUSES = ("ok", "solver_failure", "invalid", "error", "controller_failure")
+
+#: Metric columns of ``summary.csv`` (the final link forces come between ``max_link_force_N``
+#: and ``energy_per_m_J``, one column ``final_link_force_<j>_N`` per link).
+METRIC_COLUMNS = {
+    "n_segments": "number of segments N",
+    "distance_m": "distance travelled, mean over the segments [m]",
+    "mean_speed_mps": "distance_m / duration [m/s]",
+    "late_speed_mps": "mean forward ground speed over the segments and the last 25 % of the run [m/s]",
+    "mean_slip": "slip (Eq. 1, signed) averaged over the segments and the second half of the run",
+    "max_slip": "largest slip (signed) over the segments and the second half of the run",
+    "max_link_force_N": "largest |link force| over the links and the whole run (0 for one segment) [N]",
+    "energy_per_m_J": "energy used (electrical motor + joint work) per metre travelled [J/m] (empty if no distance)",
+    "immobilised": "late_speed_mps < max(0.05 m/s, 5 sign_eps_mps): only smooth-sign creep is left",
+}
+
+#: Longest error message kept in a row (longer ones are cut).
+MAX_ERROR_CHARS = 500
+
+
+def case_metrics(result) -> dict:
+    """Scalar metrics of one finished run (the numeric columns of ``summary.csv``).
+
+    Parameters
+    ----------
+    result : Result
+        A finished simulation.
+
+    Returns
+    -------
+    dict
+        ``n_segments``, ``distance_m`` and ``mean_speed_mps`` (as in ``Result.summary()``),
+        ``late_speed_mps`` (mean forward ground speed over the segments and the last 25 % of
+        the run, from the displacement), ``mean_slip`` and ``max_slip`` (signed slip, mean and
+        maximum over the segments and the output samples of the second half of the run),
+        ``max_link_force_N`` (largest absolute link force over the whole run, 0 without links),
+        ``final_link_forces_N`` (list, tension positive), ``energy_per_m_J`` (total energy of
+        ``Result.energy()`` per metre, None if the distance is below 1 micrometre),
+        ``immobilised`` (``late_speed_mps`` below ``max(0.05 m/s, 5 sign_eps_mps)``, see the
+        module docstring) and ``immobilised_threshold_mps``.
+    """
+    t = np.asarray(result.t, float)
+    x = result.segments["x_m"]
+    t0, t1 = float(t[0]), float(t[-1])
+    dur = t1 - t0
+    dist = float(np.mean(x[-1] - x[0]))
+    # late window: displacement-based mean speed (independent of output sampling)
+    j_late = int(np.searchsorted(t, t1 - LATE_FRACTION * dur - 1e-9))
+    j_late = min(j_late, max(len(t) - 2, 0))
+    dt_late = t1 - float(t[j_late])
+    late = float(np.mean(x[-1] - x[j_late])) / dt_late if dt_late > 0 else 0.0
+    half = t >= t1 - SLIP_FRACTION * dur - 1e-9
+    slip = result.segments["slip"][half]
+    F = result.links["force_N"]
+    e = result.energy()
+    eps = result.scenario.terrain.model.sign_eps_mps
+    thr = max(IMMOBILISED_SPEED_MPS, IMMOBILISED_SIGN_FACTOR * eps)
+    return {
+        "n_segments": int(x.shape[1]),
+        "distance_m": dist,
+        "mean_speed_mps": dist / dur if dur > 0 else 0.0,
+        "late_speed_mps": late,
+        "mean_slip": float(np.mean(slip)),
+        "max_slip": float(np.max(slip)),
+        "max_link_force_N": float(np.max(np.abs(F))) if F.size else 0.0,
+        "final_link_forces_N": [float(f) for f in F[-1]] if F.size else [],
+        "energy_per_m_J": float(e["total_J"] / dist) if dist > 1e-6 else None,
+        "immobilised": bool(late < thr),
+        "immobilised_threshold_mps": thr,
+    }
+
+
+def one_line(text: str) -> str:
+    """``text`` on one line (line breaks become `` | ``), cut to :data:`MAX_ERROR_CHARS`."""
+    text = " | ".join(s.strip() for s in str(text).splitlines() if s.strip())
+    return text if len(text) <= MAX_ERROR_CHARS else text[:MAX_ERROR_CHARS - 3] + "..."
+
+
+def run_case(task: dict) -> dict:
+    """Run one case (the function executors call; top-level so it pickles).
+
+    Parameters
+    ----------
+    task : dict
+        ``index``, ``source``, ``base_dir``, ``save_dir`` (None, or where to write the time series:
+        a folder or a ``.npz`` file, see :func:`~snoworm.studies.sweep.series.save_series`) and either
+        ``scenario``, the case's :class:`~snoworm.config.scenario.Scenario` already validated (by the
+        sweep's plan, or the batched executor's grouping), or ``raw``, the scenario mapping with
+        the case's overrides applied, validated here.
+
+    Returns
+    -------
+    dict
+        ``index``, ``status``, ``error`` and, for ``ok``, the :func:`case_metrics` and
+        ``wall_time_s``.  Never raises for a failing case; the time series stay in the worker.
+    """
+    wall0 = time.perf_counter()
+    out = {"index": task["index"], "status": "ok", "error": ""}
+    try:
+        sc = task.get("scenario") or scenario_from_dict(task["raw"], task.get("source", "scenario"),
+                                                        base_dir=task.get("base_dir"))
+        res = simulate(sc)
+        out.update(case_metrics(res))
+        if task.get("save_dir"):
+            save_series(res, task["save_dir"])
+        del res
+    except ScenarioError as exc:
+        out.update(status="invalid", error=one_line(exc))
+    except SolverError as exc:
+        out.update(status="solver_failure", error=one_line(exc))
+    except ControllerError as exc:
+        out.update(status="controller_failure", error=one_line(exc))
+    except Exception as exc:  # noqa: BLE001 - a case must never stop the sweep
+        tb = traceback.extract_tb(exc.__traceback__)
+        where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
+        out.update(status="error", error=one_line(f"{type(exc).__name__}: {exc}{where}"))
+    out["wall_time_s"] = time.perf_counter() - wall0
+    return out

@@ -1,0 +1,397 @@
+"""Running a sweep: :func:`run_sweep` and its steps.
+
+Data flow: the axes -> :func:`~snoworm.studies.sweep.cases.build_cases` -> every case validated up front
+(invalid ones are recorded, not run) -> tasks (small plain dicts: the overridden scenario
+mapping, never a big object) -> an executor running :func:`~snoworm.studies.sweep.metrics.run_case` ->
+one row per case, appended to ``summary.csv`` as it finishes -> a :class:`SweepTable` sorted
+by case id (and a plot).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import sys
+from contextlib import ExitStack
+from dataclasses import dataclass, field as dc_field
+from pathlib import Path
+
+import numpy as np
+
+from ...results.frames import require_xarray
+from ...results.result import LINK_COLUMNS, SEGMENT_COLUMNS
+from ...config.scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
+from ...infra.folders import OutputError, check_output_folder, folder_lock, os_error_message, write_manifest
+from ...infra.progress import Progress
+from ...config.schema import ScenarioError
+from ...infra.csvwriter import FULL, canonical_json, format_cell
+from .cases import build_cases
+from .executors import BatchExecutor, DaskExecutor, ProcessExecutor, SerialExecutor, SweepExecutionError
+from .metrics import METRIC_COLUMNS, case_metrics, one_line, run_case
+from .series import SERIES_FORMATS, case_series_path, combine_series
+from .spec import as_axes
+from .summary import SweepTable, prepare_dir, summary_columns
+
+__all__ = ["run_sweep"]
+
+
+# ---------------------------------------------------------------------------------- progress
+class _Progress:
+    """Cases done, failures, time left: a bar on a terminal, a line per ~10 % otherwise
+    (:class:`snoworm.infra.progress.Progress`)."""
+
+    def __init__(self, total, already, stream, enabled):
+        self.already, self.done, self.failed = already, 0, 0
+        self.bar = Progress(total, "sweep", "cases", stream, mode="auto" if enabled else "off")
+        self.bar.value = float(already)
+
+    def _info(self):
+        return f"{self.failed} failed" + (f", {self.already} resumed" if self.already else "")
+
+    def update(self, failed: bool):
+        self.done += 1
+        self.failed += int(failed)
+        self.bar.set(self.already + self.done, info=self._info())
+
+    def show(self):
+        self.bar.set(self.already + self.done, info=self._info())
+
+    def close(self):
+        self.bar.close(info=self._info())
+
+
+# ---------------------------------------------------------------------------------- driver
+def _base(scenario):
+    """(raw mapping, source name, base_dir) of a path or a Scenario object."""
+    if isinstance(scenario, Scenario):
+        return scenario.to_dict(), scenario.name, None
+    if isinstance(scenario, dict):
+        return scenario, "scenario", None
+    raw, path = read_scenario_yaml(scenario)
+    return raw, str(path), str(path.resolve().parent)
+
+
+def _definition(raw, axes, zip_):
+    return json.loads(json.dumps({
+        "scenario_sha256": hashlib.sha256(canonical_json(raw).encode()).hexdigest(),
+        "axes": [{"key": a.key, "values": list(a.values)} for a in axes],
+        "zip": bool(zip_),
+    }, default=str))
+
+
+def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
+              save_cases: bool = False, progress=None, plot: bool = True, executor=None,
+              batch: int = 0, series: str = "folders", plot_format: str = "png",
+              overwrite: bool = False) -> SweepTable:
+    """Run a scenario over a grid (or zip) of values and return the summary table.
+
+    Parameters
+    ----------
+    scenario : str, Path, Scenario or dict
+        The base scenario (a YAML path, as for ``snoworm run``, or a scenario object/mapping).
+    sets : sequence
+        Axes: ``"KEY=SPEC"`` strings (see :func:`parse_spec`), ``(key, spec)`` pairs or
+        :class:`Axis` objects.  Several axes form a full grid (first axis slowest).
+    out_dir : str or Path, optional
+        Where ``sweep.json``, ``summary.csv`` and the plot go.  A re-run with the same
+        definition resumes; with another definition it is refused (unless ``overwrite``).  None:
+        nothing is written.  The folder is locked while the sweep runs (a second sweep into it
+        raises :class:`snoworm.infra.folders.FolderLocked` naming the process holding it).
+    jobs : int
+        Local worker processes (1: run in this process).
+    scheduler : str or distributed.Client, optional
+        Address of a Dask scheduler (``tcp://host:port``); overrides ``jobs``.
+    zip_ : bool
+        Pair the axes element by element (equal lengths) instead of a grid.
+    save_cases : bool
+        Keep each case's time series (needs ``out_dir``), as ``series`` says.
+    series : {"folders", "netcdf"}
+        ``folders``: a run folder per case, ``out_dir/cases/<case_id>/``; ``netcdf``: every case in
+        one file ``out_dir/series.nc`` (dims: swept keys x time x segment/link, see
+        :mod:`snoworm.studies.sweep.series`; needs xarray).  ``netcdf`` implies ``save_cases``.
+    progress : bool, optional
+        Progress on stderr (default True): a bar on a terminal, one line per ~10 % otherwise.
+    plot : bool
+        Write ``sweep.png`` (one varying axis, or zipped axes) or ``heatmap.png`` (two).
+    plot_format : {"png", "pdf", "svg"}
+        File format of the plot.
+    executor : object, optional
+        Anything with ``map_unordered(fn, tasks)`` and ``close()``; overrides jobs/scheduler.
+    batch : int
+        With ``batch > 1`` (and no scheduler or executor): integrate up to ``batch`` cases of the
+        same structure as one stacked system (:class:`~snoworm.studies.sweep.executors.BatchExecutor`, ``jobs``
+        processes); other cases run one by one.  Same metrics within the solver tolerance.
+    overwrite : bool
+        Start afresh in a folder holding another sweep (its files are removed), or write into a
+        non-empty folder snoworm did not write.
+
+    Returns
+    -------
+    SweepTable
+        Every case (resumed and new), sorted by case id.
+
+    Raises
+    ------
+    ScenarioError
+        A malformed SPEC, unequal zip lengths, every case invalid, or an output directory
+        holding another sweep.
+    """
+    if series not in SERIES_FORMATS:
+        raise ScenarioError(f"series: expected one of {', '.join(SERIES_FORMATS)}, got {series!r}.")
+    if series == "netcdf":
+        save_cases = True
+        try:
+            require_xarray()       # before any case runs
+        except ImportError:
+            raise ScenarioError("--series netcdf needs xarray: pip install 'snoworm[data]' "
+                                "(or keep the default --series folders).") from None
+    local = executor is None and scheduler is None     # this process or its own pool: pass scenarios on
+    plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=local)
+    out = Path(out_dir) if out_dir is not None else None
+    if out is not None and not (out / "sweep.json").exists():
+        check_output_folder(out, overwrite)
+    own = executor is None
+    if own:                         # before anything is written: an unreachable scheduler writes nothing
+        executor = _make_executor(scheduler, batch, jobs)
+    try:
+        return _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases and series, overwrite,
+                          plot_format)
+    except OSError as exc:            # writing sweep.json, the manifest or the plot
+        raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
+
+
+def _in_folder(plan, out, executor, own, progress, plot, zip_, keep_series, overwrite, plot_format) -> SweepTable:
+    """Run the sweep with ``out`` (or None) locked and prepared; ``keep_series``: False or the series format."""
+    with ExitStack() as stack:
+        done = {}
+        if out is not None:
+            try:
+                _mkdir(out)
+                stack.enter_context(folder_lock(out))
+                done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source,
+                                   overwrite=overwrite)
+                write_manifest(out, status="running")
+            except BaseException:
+                if own:
+                    executor.close()
+                raise
+        table = _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_format)
+        if out is not None:
+            write_manifest(out, status="complete")
+        return table
+
+
+def _mkdir(out: Path):
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot write results: {os_error_message(exc, out)}") from None
+
+
+def _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_format) -> SweepTable:
+    bar = _Progress(len(plan.cases), len(done), sys.stderr, progress is None or bool(progress))
+    rows = dict(done)
+    todo = [c for c in plan.cases if c.index not in done]
+    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, keep_series)
+    table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys, out_dir=out)
+    if keep_series == "netcdf":
+        combine_series(out, plan.axes, plan.cases, zip_, {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS},
+                       {"scenario": plan.source, "sweep_definition": json.dumps(plan.definition)})
+    if out is not None and plot:
+        _plot(table, plan.axes, zip_, out, plot_format)
+    return table
+
+
+@dataclass
+class _Plan:
+    """A sweep's cases, validated, and what its files record."""
+
+    axes: list
+    raw: dict
+    source: str
+    base_dir: str | None
+    cases: list
+    invalid: dict          # case index -> one-line error of the cases whose scenario is rejected
+    n_links: int
+    columns: list
+    definition: dict
+    #: case index -> its validated Scenario, kept for local executors (see _plan)
+    scenarios: dict = dc_field(default_factory=dict)
+
+    @property
+    def keys(self):
+        return [a.key for a in self.axes]
+
+
+#: Most validated scenarios a sweep keeps for its local executor (about 5 KiB each; a worker
+#: process receives them pickled, ~0.05 ms against ~0.6 ms to validate again), so that a case is
+#: not validated twice; larger sweeps validate again in the executor to bound memory.
+KEEP_VALIDATED_MAX = 20_000
+
+
+def _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=False) -> _Plan:
+    """Parse the axes, build the cases and validate each one (about 2 ms a case).
+
+    ``keep``: the cases run in this process or its own worker pool; keep their validated
+    scenarios (up to :data:`KEEP_VALIDATED_MAX` cases) for the tasks."""
+    axes = as_axes(sets)
+    raw, source, base_dir = _base(scenario)
+    if not isinstance(raw, dict):
+        raise ScenarioError(f"{source}: a scenario must be a YAML mapping.")
+    cases = build_cases(axes, zip_)
+    if save_cases and out_dir is None:
+        raise ScenarioError("--save-cases needs --out: the time series are written under DIR/cases/.")
+    if int(jobs) < 1:
+        raise ScenarioError(f"-j/--jobs must be at least 1, got {jobs}.")
+    invalid, n_links, kept = {}, 0, {}
+    keep = keep and len(cases) <= KEEP_VALIDATED_MAX
+    for c in cases:
+        try:
+            sc = scenario_from_dict(apply_overrides(raw, c.overrides(axes)), source, base_dir=base_dir)
+            n_links = max(n_links, sc.vehicle.segments - 1)
+            if keep:
+                kept[c.index] = sc
+        except ScenarioError as exc:
+            invalid[c.index] = one_line(exc)
+    if len(invalid) == len(cases):
+        first = invalid[cases[0].index]
+        raise ScenarioError(f"every case of the sweep is invalid, e.g. case {cases[0].case_id} "
+                            f"({', '.join(f'{a.key}={v}' for a, v in zip(axes, cases[0].values))}): {first}")
+    return _Plan(axes, raw, source, base_dir, cases, invalid, n_links, summary_columns(axes, n_links),
+                 _definition(raw, axes, zip_), kept)
+
+
+def _make_executor(scheduler, batch, jobs):
+    """The executor of ``scheduler`` / ``batch`` / ``jobs`` (see :func:`run_sweep`)."""
+    if scheduler is not None:
+        return DaskExecutor(scheduler)
+    if int(batch) > 1:
+        return BatchExecutor(int(batch), int(jobs), ProcessExecutor(int(jobs)) if int(jobs) > 1 else None,
+                             metrics=case_metrics)
+    if int(jobs) > 1:
+        return ProcessExecutor(int(jobs))
+    return SerialExecutor()
+
+
+class _Recorder:
+    """Turns each case's result into a row: kept in ``rows``, appended to ``summary.csv`` (one
+    ``write`` and ``fsync`` per case) and counted on the progress line."""
+
+    def __init__(self, plan: _Plan, rows: dict, out, bar):
+        self.plan, self.rows, self.bar = plan, rows, bar
+        self.table = SweepTable(plan.columns, [], plan.keys)
+        self.path = out / "summary.csv" if out is not None else None
+        self.fd = None
+
+    def open(self):
+        if self.path is not None:
+            self.fd = os.open(self.path, os.O_WRONLY | os.O_APPEND)
+
+    def close(self):
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+
+    def record(self, c, result):
+        row = {"case_id": c.case_id, "case_key": c.key, **dict(zip(self.plan.keys, c.values))}
+        row.update(status=result["status"], error=result["error"])
+        for m in list(METRIC_COLUMNS)[:7] + ["energy_per_m_J", "immobilised"]:
+            row[m] = result.get(m)
+        links = result.get("final_link_forces_N") or []
+        for j in range(self.plan.n_links):
+            row[f"final_link_force_{j}_N"] = links[j] if j < len(links) else None
+        row["wall_time_s"] = result.get("wall_time_s")
+        if self.fd is not None:
+            try:
+                os.write(self.fd, self.table.csv_line(row).encode("utf-8"))
+                os.fsync(self.fd)
+            except OSError as exc:
+                raise OutputError(f"cannot append to the summary: {os_error_message(exc, self.path)}; the "
+                                  f"{len(self.rows)} finished cases are kept, re-run the same command to "
+                                  "resume.") from None
+        self.rows[c.index] = row
+        self.bar.update(row["status"] != "ok")
+
+
+def _tasks(plan: _Plan, todo, out, keep_series):
+    """The tasks of the cases still to run (small plain dicts, made one at a time).
+
+    ``keep_series``: False, or where the cases' series go ("folders" or "netcdf")."""
+    for c in todo:
+        if c.index in plan.invalid:
+            continue
+        save = case_series_path(out, c.case_id, keep_series) if keep_series else None
+        task = {"index": c.index, "source": plan.source, "base_dir": plan.base_dir, "save_dir": save}
+        sc = plan.scenarios.pop(c.index, None)        # validated by _plan: not again
+        if sc is not None:
+            task["scenario"] = sc
+        else:
+            task["raw"] = apply_overrides(plan.raw, c.overrides(plan.axes))
+        yield task
+
+
+def _execute(plan: _Plan, todo, executor, rec: _Recorder, own: bool, out, keep_series):
+    """Record the invalid cases, run the others on ``executor``, record each as it finishes; then
+    close the progress line, the executor (if the sweep made it) and ``summary.csv``."""
+    try:
+        rec.open()
+        rec.bar.show()
+        _run_cases(plan, todo, executor, rec, out, keep_series)
+    finally:
+        rec.bar.close()
+        if own:
+            executor.close()
+        rec.close()
+
+
+def _run_cases(plan: _Plan, todo, executor, rec: _Recorder, out, keep_series):
+    by_index = {c.index: c for c in plan.cases}
+    try:
+        for c in todo:
+            if c.index in plan.invalid:
+                rec.record(c, {"status": "invalid", "error": plan.invalid[c.index], "wall_time_s": 0.0})
+        for result in executor.map_unordered(run_case, _tasks(plan, todo, out, keep_series)):
+            rec.record(by_index[result["index"]], result)
+    except (KeyboardInterrupt, ScenarioError, OutputError):
+        raise
+    except Exception as exc:  # the executor itself failed (a worker died, the cluster went away)
+        n = len(rec.rows)
+        where = f"; the {n} finished cases are in {out / 'summary.csv'}, re-run to resume" if out is not None else ""
+        raise SweepExecutionError(f"the sweep's executor failed ({type(exc).__name__}: {one_line(exc)}){where}.") from exc
+
+
+def _plot_positions(values):
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        return [float(v) for v in values], None
+    return list(range(len(values))), [format_cell(v, FULL) for v in values]
+
+
+def _plot(table, axes, zip_, out, plot_format="png"):
+    from ... import plotting   # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
+    varying = [a for a in axes if len(a.values) > 1]
+    ok = [r["status"] == "ok" for r in table.rows]
+    if zip_ or len(varying) == 1:
+        ax = varying[0] if varying else axes[0]
+        x, labels = _plot_positions(table.column(ax.key))
+        metrics = {m: table.column(m) for m in ("mean_speed_mps", "mean_slip", "max_link_force_N", "energy_per_m_J")}
+        fig = plotting.plot_sweep(x, metrics, ax.key, immobilised=table.column("immobilised"), ok=ok,
+                                  tick_labels=labels)
+        plotting.save(fig, out / f"sweep.{plot_format}", plot_format)
+    elif len(varying) == 2:
+        ax_x, ax_y = varying
+        xi = {canonical_json(v): j for j, v in enumerate(ax_x.values)}
+        yi = {canonical_json(v): j for j, v in enumerate(ax_y.values)}
+        grid = np.full((len(ax_y.values), len(ax_x.values)), np.nan)
+        imm = np.zeros(grid.shape, bool)
+        fail = np.zeros(grid.shape, bool)
+        for r in table.rows:
+            j, k = yi[canonical_json(r[ax_y.key])], xi[canonical_json(r[ax_x.key])]
+            if r["status"] == "ok":
+                grid[j, k] = r["mean_speed_mps"]
+                imm[j, k] = bool(r["immobilised"])
+            else:
+                fail[j, k] = True
+        fig = plotting.plot_sweep_heatmap([format_cell(v, FULL) for v in ax_x.values],
+                                          [format_cell(v, FULL) for v in ax_y.values], grid, ax_x.key, ax_y.key,
+                                          "mean speed [m/s]", immobilised=imm, failed=fail)
+        plotting.save(fig, out / f"heatmap.{plot_format}", plot_format)

@@ -1,0 +1,165 @@
+"""Every case's time series in one netCDF file (``series.nc``) instead of a folder per case.
+
+With ``run_sweep(..., save_cases=True, series="netcdf")`` (CLI ``--save-cases --series
+netcdf``) each worker writes its case's arrays to ``cases/<case_id>.npz`` (numpy only, no
+xarray in the workers) and, once the cases have run, :func:`combine_series` gathers them into
+``series.nc`` and removes the ``.npz`` files.  A resumed sweep keeps the series of the cases
+already in ``series.nc``.
+
+Layout of ``series.nc`` (netCDF3, written with xarray's ``engine="scipy"``)
+----------------------------------------------------------------------------
+Dimensions: one per swept key (named by the key, e.g. ``terrain.xt``, coordinates its values;
+with ``zip`` a single ``case`` dimension with each key as a coordinate along it), then ``time``
+(the output sample; its coordinate is the output time [s] when every case has the same times),
+``segment`` and ``link``.  Variables: ``t_s`` (swept x time), every column
+of ``segments.csv`` (swept x time x segment) and of ``links.csv`` (swept x time x link), with
+``units`` and ``long_name`` attrs; ``ok`` (1 where the case has a series) and ``case_index``.
+Cases with fewer samples or segments, and failed cases, are padded with NaN.  Attrs: the base
+scenario, the sweep definition (JSON) and the package versions.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ...results.frames import require_xarray, units_of, versions
+from ...infra.folders import atomic_path
+
+__all__ = ["SERIES_FORMATS", "SERIES_FILE", "save_series", "case_series_path", "combine_series", "load_series"]
+
+#: Where a sweep keeps its cases' time series: a folder per case, or one netCDF file.
+SERIES_FORMATS = ("folders", "netcdf")
+#: Name of the combined file in the sweep's output directory.
+SERIES_FILE = "series.nc"
+
+
+def case_series_path(out: Path, case_id: str, series: str) -> str:
+    """Where a case's series go: ``cases/<case_id>/`` (folders) or ``cases/<case_id>.npz`` (netcdf)."""
+    return str(out / "cases" / (case_id + (".npz" if series == "netcdf" else "")))
+
+
+def save_series(result, save_dir) -> None:
+    """Write a case's time series: a run folder (:meth:`Result.write`, no plots) or, for a
+    ``.npz`` path, the arrays (``t_s``, ``segments/<column>``, ``links/<column>``) atomically."""
+    path = Path(save_dir)
+    if path.suffix != ".npz":
+        result.write(path, plot=False)
+        return
+    arrays = {"t_s": np.asarray(result.t, float)}
+    arrays.update({f"segments/{k}": np.asarray(v, float) for k, v in result.segments.items()})
+    arrays.update({f"links/{k}": np.asarray(v, float) for k, v in result.links.items()})
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+def _from_old(path: Path, n_cases: int) -> dict:
+    """Case index -> arrays of the cases already in an earlier ``series.nc`` (padding trimmed)."""
+    xr = require_xarray()
+    out = {}
+    with xr.open_dataset(path, engine="scipy") as ds:
+        ds = ds.load()
+    flat = lambda v: np.asarray(ds[v].values).reshape((n_cases,) + ds[v].shape[ds["ok"].ndim:])
+    ok, nt, ns = flat("ok"), flat("n_time"), flat("n_segments")
+    names = [v for v in ds.data_vars if "time" in ds[v].dims and v != "t_s"]
+    for i in np.nonzero(ok)[0]:
+        a = {"t_s": flat("t_s")[i, :nt[i]]}
+        for v in names:
+            kind = "segments" if "segment" in ds[v].dims else "links"
+            a[f"{kind}/{ds[v].attrs['column']}"] = flat(v)[i, :nt[i], :ns[i] - (kind == "links")]
+        out[int(i)] = a
+    return out
+
+
+def _gather(out: Path, cases) -> dict:
+    """Case index -> arrays, from the ``.npz`` files and an earlier ``series.nc``."""
+    old = out / SERIES_FILE
+    per_case = _from_old(old, len(cases)) if old.exists() else {}
+    for c in cases:
+        f = out / "cases" / f"{c.case_id}.npz"
+        if f.exists():
+            with np.load(f) as z:
+                per_case[c.index] = {k: z[k] for k in z.files}
+    return per_case
+
+
+def _coord(values):
+    if all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool) for v in values):
+        return np.asarray(values, float)
+    return np.asarray([json.dumps(v) if not isinstance(v, str) else v for v in values])
+
+
+def _stack(per_case, n_cases, columns):
+    """(t_s, {variable: (array (n_cases, n_t, n), dim, column)}, n_time, n_segments), NaN-padded."""
+    nt = np.zeros(n_cases, np.int32)
+    ns = np.zeros(n_cases, np.int32)
+    for i, a in per_case.items():
+        nt[i], ns[i] = a["t_s"].size, a["segments/x_m"].shape[1]
+    T, S = max(int(nt.max()), 1), max(int(ns.max()), 1)
+    t = np.full((n_cases, T), np.nan)
+    data = {}
+    for kind, cols, dim, width in (("segments", columns["segments"], "segment", S),
+                                   ("links", columns["links"], "link", S - 1)):
+        for col in cols:
+            name = col if kind == "segments" or col not in columns["segments"] else f"link_{col}"
+            data[name] = (np.full((n_cases, T, width), np.nan), dim, col, kind)
+    for i, a in per_case.items():
+        t[i, :nt[i]] = a["t_s"]
+        for name, (arr, _, col, kind) in data.items():
+            v = a[f"{kind}/{col}"]
+            arr[i, :v.shape[0], :v.shape[1]] = v
+    return t, data, nt, ns
+
+
+def combine_series(out, axes, cases, zip_, columns, attrs) -> Path:
+    """Gather every case's series into ``out/series.nc`` (see the module's docstring) and remove
+    the per-case ``.npz`` files.  ``columns``: ``Result.columns`` (descriptions with units)."""
+    xr = require_xarray()
+    out = Path(out)
+    n = len(cases)
+    per_case = _gather(out, cases)
+    t, data, nt, ns = _stack(per_case, n, columns)
+    if zip_:
+        shape, dims = (n,), ("case",)
+        coords = {a.key: ("case", _coord(a.values)) for a in axes}
+    else:
+        shape, dims = tuple(len(a.values) for a in axes), tuple(a.key for a in axes)
+        coords = {a.key: (a.key, _coord(a.values)) for a in axes}
+    units = {**units_of(columns["segments"]), **units_of(columns["links"])}
+    ok = np.zeros(n, np.int8)
+    ok[list(per_case)] = 1
+    variables = {
+        "t_s": (dims + ("time",), t.reshape(shape + t.shape[1:]), {"units": "s", "long_name": "output time"}),
+        "ok": (dims, ok.reshape(shape), {"long_name": "1 where the case has a time series"}),
+        "case_index": (dims, np.arange(n, dtype=np.int32).reshape(shape), {"long_name": "case id as an integer"}),
+        "n_time": (dims, nt.reshape(shape), {"long_name": "output samples of the case (the rest is NaN padding)"}),
+        "n_segments": (dims, ns.reshape(shape), {"long_name": "segments of the case (the rest is NaN padding)"}),
+    }
+    for name, (arr, dim, col, kind) in data.items():
+        doc = columns[kind][col]
+        variables[name] = (dims + ("time", dim), arr.reshape(shape + arr.shape[1:]),
+                           {"units": units[col], "long_name": doc, "column": col})
+    rows = [t[i, :nt[i]] for i in per_case]
+    if rows and all(r.shape == rows[0].shape and np.array_equal(r, rows[0]) for r in rows) and rows[0].size == t.shape[1]:
+        coords["time"] = ("time", rows[0], {"units": "s", "long_name": "output time (the same for every case)"})
+    S = data["x_m"][0].shape[2]
+    coords.update(segment=("segment", np.arange(S, dtype=np.int32)), link=("link", np.arange(S - 1, dtype=np.int32)))
+    ds = xr.Dataset(variables, coords=coords, attrs={**attrs, **{f"version_{k}": v for k, v in versions().items()}})
+    path = out / SERIES_FILE
+    with atomic_path(path) as tmp:
+        ds.to_netcdf(tmp, engine="scipy")
+    for c in cases:
+        (out / "cases" / f"{c.case_id}.npz").unlink(missing_ok=True)
+    try:
+        (out / "cases").rmdir()
+    except OSError:
+        pass
+    return path
+
+
+def load_series(path):
+    """The ``series.nc`` of a sweep as an :class:`xarray.Dataset` (loaded into memory, file closed)."""
+    xr = require_xarray()
+    with xr.open_dataset(path, engine="scipy") as ds:
+        return ds.load()

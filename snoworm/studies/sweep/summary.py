@@ -1,0 +1,241 @@
+"""The summary of a sweep: :class:`SweepTable`, ``summary.csv`` and ``sweep.json``, resumption.
+
+``summary.csv`` holds one line per finished case (appended as cases finish, in completion
+order; cells formatted by :mod:`snoworm.infra.csvwriter` at full precision).  ``sweep.json`` holds the
+sweep's definition and columns: :func:`prepare_dir` refuses an output directory holding another
+sweep and returns the cases already finished there, dropping a truncated last line.
+"""
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from pathlib import Path
+
+import yaml
+
+from ..._version import __version__
+from ...results.frames import require_pandas
+from ...infra.folders import MANIFEST, atomic_write_text, folder_state, read_manifest
+from ...config.schema import ScenarioError
+from ...infra.csvwriter import FULL, csv_line, csv_text, write_csv
+from .metrics import METRIC_COLUMNS
+from .series import SERIES_FILE, load_series
+from .spec import parse_scalar
+
+__all__ = ["SweepTable", "summary_columns", "read_summary", "prepare_dir", "load_sweep"]
+
+
+def summary_columns(axes, n_links) -> list:
+    """Columns of ``summary.csv``: ids, swept keys, status, metrics, link forces, wall time."""
+    return (["case_id", "case_key"] + [a.key for a in axes] + ["status", "error"]
+            + list(METRIC_COLUMNS)[:7] + [f"final_link_force_{j}_N" for j in range(n_links)]
+            + ["energy_per_m_J", "immobilised", "wall_time_s"])
+
+
+
+def _parse_cell(col, text, swept):
+    if col in ("case_id", "case_key", "status", "error"):
+        return text
+    if text == "":
+        return None
+    if col in swept:
+        return parse_scalar(text)
+    if col == "n_segments":
+        return int(text)
+    if col == "immobilised":
+        return text == "true"
+    return float(text)
+
+
+
+class SweepTable:
+    """The summary of a sweep: one row (a dict) per case, sorted by case id.
+
+    Attributes
+    ----------
+    columns : list of str
+        Column names, in ``summary.csv`` order.
+    rows : list of dict
+        One mapping column -> value per case (None where empty).
+    keys : list of str
+        The swept keys (columns after ``case_key``).
+    out_dir : Path or None
+        The sweep's output directory (None for a sweep run without one).
+    """
+
+    def __init__(self, columns, rows, keys=(), out_dir=None):
+        self.columns = list(columns)
+        self.keys = list(keys)
+        self.rows = sorted(rows, key=lambda r: r["case_id"])
+        self.out_dir = Path(out_dir) if out_dir is not None else None
+
+    def __len__(self):
+        return len(self.rows)
+
+    def __iter__(self):
+        return iter(self.rows)
+
+    def __getitem__(self, name):
+        """A column as a list (``table["mean_speed_mps"]``)."""
+        return self.column(name)
+
+    def column(self, name) -> list:
+        if name not in self.columns:
+            raise KeyError(f"no column {name!r}; columns: {', '.join(self.columns)}")
+        return [r.get(name) for r in self.rows]
+
+    def to_pandas(self):
+        """The table as a :class:`pandas.DataFrame`, one row per case (sorted by case id), the
+        columns of ``summary.csv`` (the swept keys under their dotted names).  Needs pandas
+        (``pip install 'snoworm[data]'``)."""
+        pd = require_pandas()
+        df = pd.DataFrame([[r.get(c) for c in self.columns] for r in self.rows], columns=self.columns)
+        df.attrs["keys"] = list(self.keys)
+        return df
+
+    def series(self):
+        """Every case's time series as an :class:`xarray.Dataset` (the sweep's ``series.nc``,
+        written by ``run_sweep(..., series="netcdf")``; see :mod:`snoworm.studies.sweep.series`)."""
+        path = self.out_dir / SERIES_FILE if self.out_dir is not None else None
+        if path is None or not path.exists():
+            raise FileNotFoundError(f"no {SERIES_FILE} in {self.out_dir}: run the sweep with --save-cases "
+                                    "--series netcdf (series='netcdf') to keep every case's series in one file")
+        return load_series(path)
+
+    def failures(self) -> list:
+        """Rows whose status is not ``ok``."""
+        return [r for r in self.rows if r["status"] != "ok"]
+
+    def csv_line(self, row) -> str:
+        """One ``summary.csv`` line (with its newline) of a row."""
+        return csv_line([row.get(c) for c in self.columns], FULL)
+
+    def to_csv(self, path=None) -> str:
+        """The table as CSV text (sorted by case id); written atomically to ``path`` if given."""
+        text = csv_text(self.columns, self.rows, FULL)
+        if path is not None:
+            atomic_write_text(path, text)
+        return text
+
+    @classmethod
+    def from_csv(cls, path, keys=None):
+        """Read a ``summary.csv`` (a truncated last line is ignored)."""
+        header, rows, _ = read_summary(Path(path), keys)
+        return cls(header, rows, keys or _keys_from_header(header))
+
+    def __repr__(self):
+        ok = sum(r["status"] == "ok" for r in self.rows)
+        return f"SweepTable({len(self.rows)} cases, {ok} ok, keys={self.keys})"
+
+
+def load_sweep(out_dir) -> SweepTable:
+    """Read a sweep's output directory (``sweep.json`` and ``summary.csv``) back into a :class:`SweepTable`.
+
+    The swept values are parsed as in ``--set`` (numbers stay numbers); a truncated last line of
+    an interrupted sweep is ignored.  ``table.series()`` opens ``series.nc`` when the sweep kept
+    its series there.
+    """
+    out = Path(out_dir)
+    spath, dpath = out / "summary.csv", out / "sweep.json"
+    if not spath.is_file() or not dpath.is_file():
+        raise FileNotFoundError(f"{out} is not a sweep's output directory (it needs sweep.json and summary.csv)")
+    definition = json.loads(dpath.read_text(encoding="utf-8")).get("definition", {})
+    keys = [a["key"] for a in definition.get("axes", [])] or None
+    header, rows, _ = read_summary(spath, keys)
+    return SweepTable(header, rows, keys or _keys_from_header(header), out_dir=out)
+
+
+def _keys_from_header(header):
+    try:
+        return header[2:header.index("status")]
+    except ValueError:
+        return []
+
+
+def read_summary(path: Path, keys=None):
+    """(header, complete rows, number of dropped lines) of a summary.csv."""
+    data = path.read_bytes().decode("utf-8", errors="replace")
+    lines = data.split("\n")
+    complete, dropped = lines[:-1], (1 if lines[-1] else 0)   # no final newline: truncated
+    if not complete:
+        return [], [], dropped
+    header = next(csv.reader([complete[0]]))
+    swept = set(keys if keys is not None else _keys_from_header(header))
+    rows = []
+    for line in complete[1:]:
+        try:
+            cells = next(csv.reader([line]))
+            if len(cells) != len(header):
+                raise ValueError("wrong number of fields")
+            rows.append({c: _parse_cell(c, t, swept) for c, t in zip(header, cells)})
+        except (ValueError, StopIteration, yaml.YAMLError, csv.Error):
+            dropped += 1
+    return header, rows, dropped
+
+
+def _clear(out: Path):
+    """Remove an earlier snoworm folder's files (its manifest's, a sweep's files and case folders)."""
+    man = read_manifest(out) or {}
+    names = set(man.get("files", [])) | {"summary.csv", "sweep.json", "sweep.png", "heatmap.png", MANIFEST}
+    for rel in names:
+        p = out / rel
+        if isinstance(rel, str) and ".." not in Path(rel).parts and p.is_file():
+            p.unlink()
+    shutil.rmtree(out / "cases", ignore_errors=True)
+
+
+def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: bool = False) -> dict:
+    """Create or check ``out``; return the rows already finished, by case index.
+
+    A folder written by another snoworm command is cleared first; one holding another sweep is
+    refused, or cleared if ``overwrite``.
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    spath, dpath = out / "summary.csv", out / "sweep.json"
+    if not dpath.exists() and folder_state(out) == "snoworm":
+        _clear(out)
+    if dpath.exists() and overwrite:
+        try:
+            same = json.loads(dpath.read_text(encoding="utf-8")).get("definition") == definition
+        except (OSError, ValueError, AttributeError):
+            same = False
+        if not same:
+            _clear(out)
+    if dpath.exists():
+        try:
+            old = json.loads(dpath.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise ScenarioError(f"{dpath}: unreadable ({exc}). Use another --out or delete the directory.") from None
+        if old.get("definition") != definition:
+            what = [k for k in definition if old.get("definition", {}).get(k) != definition[k]]
+            raise ScenarioError(f"{out} holds another sweep (its {', '.join(what) or 'definition'} differs from "
+                                f"this one, see {dpath}). Re-run the original command to resume it, give a "
+                                "new --out directory, or pass --overwrite to replace it.")
+    elif spath.exists():
+        raise ScenarioError(f"{spath} exists but {dpath} does not, so the sweep it belongs to is unknown. "
+                            "Give a new --out directory (or delete the old one).")
+    atomic_write_text(dpath, json.dumps({
+        "snoworm_version": __version__, "scenario": source, "definition": definition,
+        "n_cases": len(cases), "columns": columns,
+        "immobilised": METRIC_COLUMNS["immobilised"]}, indent=2) + "\n")
+    if not spath.exists():
+        write_csv(spath, columns, [], FULL)
+        return {}
+    keys = [a.key for a in axes]
+    header, rows, dropped = read_summary(spath, keys)
+    if header != columns:
+        raise ScenarioError(f"{spath}: its columns differ from this sweep's. Give a new --out directory.")
+    by_id = {c.case_id: c for c in cases}
+    done = {}
+    for r in rows:
+        c = by_id.get(r["case_id"])
+        if c is None or c.key != r["case_key"] or c.index in done:
+            dropped += 1
+            continue
+        r.update(dict(zip(keys, c.values)))
+        done[c.index] = r
+    if dropped:   # rewrite without the truncated or foreign lines, so appends start on a fresh line
+        keep = SweepTable(columns, list(done.values()), keys)
+        keep.to_csv(spath)
+    return done

@@ -1,0 +1,243 @@
+"""Atomic file writing (snoworm.infra.folders): a reader never sees a half-written file."""
+import pytest
+
+from snoworm.infra.folders import atomic_path, atomic_write_text
+
+
+def test_atomic_write_text_writes_and_replaces(tmp_path):
+    p = tmp_path / "sub" / "out.csv"
+    assert atomic_write_text(p, "a,b\n1,2\n") == p          # creates the directory
+    assert p.read_text() == "a,b\n1,2\n"
+    atomic_write_text(p, "new\n")
+    assert p.read_text() == "new\n"
+    assert sorted(x.name for x in p.parent.iterdir()) == ["out.csv"]
+
+
+def test_failure_leaves_no_temp_file_and_the_old_file_intact(tmp_path):
+    p = tmp_path / "summary.json"
+    p.write_text("old")
+    with pytest.raises(RuntimeError, match="disk full"):
+        with atomic_path(p) as tmp:
+            tmp.write_text("half of the new conte")
+            assert tmp.parent == p.parent and tmp.exists()
+            raise RuntimeError("disk full")
+    assert p.read_text() == "old"
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["summary.json"]
+
+
+def test_failure_before_any_file_leaves_nothing(tmp_path):
+    p = tmp_path / "new.txt"
+    with pytest.raises(KeyboardInterrupt):           # BaseException too: interrupted writes clean up
+        with atomic_path(p):
+            raise KeyboardInterrupt
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_failure_of_text_encoding_leaves_no_temp_file(tmp_path):
+    p = tmp_path / "bad.txt"
+    with pytest.raises(UnicodeEncodeError):
+        atomic_write_text(p, "surrogate \udcff")
+    assert list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------------ file modes
+import errno  # noqa: E402
+import json  # noqa: E402
+import multiprocessing  # noqa: E402
+import os  # noqa: E402
+import stat  # noqa: E402
+
+from snoworm.infra import folders  # noqa: E402
+from snoworm.infra.folders import (LOCK, MANIFEST, FolderLocked, OutputError, check_output_folder,  # noqa: E402
+                            folder_lock, folder_state, output_folder, read_manifest)
+
+
+@pytest.fixture
+def umask022():
+    old = os.umask(0o022)
+    yield
+    os.umask(old)
+
+
+def mode(p):
+    return stat.S_IMODE(os.stat(p).st_mode)
+
+
+def test_files_honour_the_umask_not_the_temp_files_0600(tmp_path, umask022):
+    p = atomic_write_text(tmp_path / "a.csv", "x\n")
+    assert mode(p) == 0o644
+    os.umask(0o077)
+    assert mode(atomic_write_text(tmp_path / "b.csv", "x\n")) == 0o600
+
+
+def _write(folder, names):
+    with output_folder(folder, command="test") as stage:
+        for n in names:
+            atomic_write_text(stage / n, n)
+    return folder
+
+
+def test_output_folder_writes_a_manifest_and_the_umask_modes(tmp_path, umask022):
+    out = _write(tmp_path / "run", ["segments.csv", "sub/x.txt"])
+    man = read_manifest(out)
+    assert man["files"] == ["segments.csv", "sub/x.txt"] and man["command"] == "test"
+    assert man["snoworm_version"] == folders.__version__
+    assert mode(out) == 0o755 and mode(out / "segments.csv") == 0o644
+    assert folder_state(out) == "snoworm"
+    assert sorted(os.listdir(tmp_path)) == ["run"]                 # no staging folder left
+
+
+def test_an_earlier_runs_files_never_remain_beside_the_new_ones(tmp_path):
+    out = _write(tmp_path / "run", ["segments.csv", "force_diagram.png"])
+    _write(out, ["segments.csv", "links.csv"])
+    assert sorted(os.listdir(out)) == sorted([MANIFEST, "segments.csv", "links.csv"])
+    assert (out / "segments.csv").read_text() == "segments.csv"
+    assert sorted(os.listdir(tmp_path)) == ["run"]
+
+
+def test_a_foreign_folder_is_refused_naming_it_and_overwrite(tmp_path):
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "notes.txt").write_text("keep me")
+    with pytest.raises(OutputError) as err:
+        _write(out, ["a.csv"])
+    assert str(out) in str(err.value) and "--overwrite" in str(err.value)
+    assert sorted(os.listdir(tmp_path)) == ["mine"] and os.listdir(out) == ["notes.txt"]
+    with output_folder(out, overwrite=True) as stage:              # overwrite: same-named replaced, others kept
+        atomic_write_text(stage / "a.csv", "new")
+    assert sorted(os.listdir(out)) == sorted(["notes.txt", "a.csv", MANIFEST])
+    assert (out / "notes.txt").read_text() == "keep me"
+
+
+def test_a_snoworm_folder_with_a_users_extra_file_counts_as_foreign(tmp_path):
+    out = _write(tmp_path / "run", ["a.csv"])
+    (out / "my_notes.md").write_text("x")
+    assert folder_state(out) == "foreign"
+    with pytest.raises(OutputError, match="--overwrite"):
+        _write(out, ["a.csv"])
+
+
+def test_a_failure_at_any_point_leaves_no_result_files(tmp_path):
+    out = tmp_path / "run"
+    with pytest.raises(RuntimeError):
+        with output_folder(out) as stage:
+            atomic_write_text(stage / "segments.csv", "half")
+            raise RuntimeError("solver failed after the first file")
+    assert list(tmp_path.iterdir()) == []
+    old = _write(out, ["old.csv"])                                  # an earlier run stays whole
+    with pytest.raises(KeyboardInterrupt):
+        with output_folder(old) as stage:
+            atomic_write_text(stage / "new.csv", "x")
+            raise KeyboardInterrupt
+    assert sorted(os.listdir(old)) == sorted(["old.csv", MANIFEST])
+
+
+def test_disk_full_is_one_output_error_naming_the_path_and_reason(tmp_path, monkeypatch):
+    real_replace = os.replace
+
+    def full(src, dst):
+        if str(dst).endswith("summary.json"):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real_replace(src, dst)
+    monkeypatch.setattr(folders.os, "replace", full)
+    out = tmp_path / "run"
+    with pytest.raises(OutputError) as err:
+        _write(out, ["segments.csv", "summary.json"])
+    msg = str(err.value)
+    assert "No space left on device" in msg and str(out) in msg and "\n" not in msg
+    assert list(tmp_path.iterdir()) == []                           # nothing half-written
+
+
+def test_unusable_paths_are_refused_before_any_work(tmp_path):
+    (tmp_path / "f").write_text("a file")
+    for bad, needle in [(tmp_path / "f", "is a file"), (tmp_path / "f" / "sub", "which is a file"), ("", "empty")]:
+        with pytest.raises(OutputError, match=needle):
+            check_output_folder(bad)
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_a_read_only_parent_is_an_output_error(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        with pytest.raises(OutputError, match="Permission denied"):
+            _write(ro / "run", ["a.csv"])
+    finally:
+        ro.chmod(0o755)
+
+
+def test_the_current_folder_is_written_in_place_not_renamed(tmp_path, monkeypatch):
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    _write(".", ["a.csv"])
+    _write(".", ["b.csv"])
+    assert sorted(os.listdir(here)) == sorted(["b.csv", MANIFEST])  # a.csv of the earlier run removed
+    assert sorted(os.listdir(tmp_path)) == ["here"]
+
+
+def test_stale_staging_folders_of_dead_processes_are_removed(tmp_path):
+    dead = tmp_path / f".run{folders._STAGE}999999999-abc"
+    dead.mkdir()
+    _write(tmp_path / "run", ["a.csv"])
+    assert sorted(os.listdir(tmp_path)) == ["run"]
+
+
+# ------------------------------------------------------------------ folder locks
+def _hold(folder, ready, release):
+    with folder_lock(folder):
+        ready.set()
+        release.wait(20)
+
+
+def test_a_second_locker_is_refused_naming_the_pid_and_a_dead_holders_lock_is_taken_over(tmp_path):
+    ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+    ready, release = ctx.Event(), ctx.Event()
+    p = ctx.Process(target=_hold, args=(tmp_path, ready, release))
+    p.start()
+    try:
+        assert ready.wait(20)
+        with pytest.raises(FolderLocked) as err:
+            with folder_lock(tmp_path):
+                pass
+        assert f"process {p.pid}" in str(err.value) and str(tmp_path) in str(err.value)
+    finally:
+        p.kill()                                                    # dies holding the lock
+        p.join()
+    assert (tmp_path / LOCK).exists()                               # stale lock file left behind
+    with folder_lock(tmp_path) as lp:                               # taken over
+        assert lp.read_text() == str(os.getpid())
+    assert not (tmp_path / LOCK).exists()
+
+
+def test_manifest_json_is_plain_data(tmp_path):
+    out = _write(tmp_path / "r", ["a"])
+    doc = json.loads((out / MANIFEST).read_text())
+    assert set(doc) >= {"snoworm_version", "command", "written_utc", "files"}
+
+
+def test_a_symlinked_output_folder_stays_a_link(tmp_path):
+    real = tmp_path / "scratch"
+    real.mkdir()
+    link = tmp_path / "out"
+    link.symlink_to(real)
+    _write(link, ["a.csv"])
+    _write(link, ["b.csv"])
+    assert link.is_symlink() and sorted(os.listdir(real)) == sorted(["b.csv", MANIFEST])
+    assert sorted(os.listdir(tmp_path)) == ["out", "scratch"]
+
+
+def test_an_unwritable_parent_stages_inside_the_output_folder(tmp_path, monkeypatch):
+    out = tmp_path / "shared" / "mine"
+    out.mkdir(parents=True)
+    real = folders.tempfile.mkdtemp
+
+    def no_siblings(prefix="", dir=None):
+        if os.path.samefile(dir, out.parent):
+            raise PermissionError(errno.EACCES, "Permission denied", str(out.parent))
+        return real(prefix=prefix, dir=dir)
+    monkeypatch.setattr(folders.tempfile, "mkdtemp", no_siblings)
+    _write(out, ["a.csv"])
+    _write(out, ["b.csv"])
+    assert sorted(os.listdir(out)) == sorted(["b.csv", MANIFEST]) and os.listdir(out.parent) == ["mine"]

@@ -1,0 +1,88 @@
+"""snoworm.infra.progress: a bar on a terminal, one line per ~10 % otherwise, tqdm optional."""
+import io
+import sys
+
+import pytest
+
+from snoworm.infra import progress as P
+
+
+class TTY(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_lines_mode_prints_one_line_per_tenth_when_not_a_terminal():
+    s = io.StringIO()
+    bar = P.Progress(200, "sweep", "cases", stream=s)
+    assert bar.mode == "lines"
+    for _ in range(200):
+        bar.update(info="0 failed")
+    bar.close()
+    lines = s.getvalue().splitlines()
+    assert len(lines) == 10                                  # 10 %, 20 %, ... 100 %, no duplicate at close
+    assert lines[0].startswith("sweep:  10 % (20/200 cases, 0 failed)")
+    assert lines[-1].startswith("sweep: 100 % (200/200 cases")
+
+
+def test_simulated_time_counts_as_floats_and_a_jump_prints_one_line():
+    s = io.StringIO()
+    bar = P.Progress(56.0, "traverse_patch", "s simulated", stream=s)
+    bar.set(0.5)                                             # under 10 %: nothing yet
+    assert s.getvalue() == ""
+    bar.set(30.0, 56.0)                                      # 54 %: one line, not five
+    bar.set(31.0)                                            # still in the same tenth: no line
+    bar.close()                                              # the state at the end: one more line
+    lines = s.getvalue().splitlines()
+    assert len(lines) == 2 and "54 % (30/56 s simulated)" in lines[0]
+    assert "55 % (31/56 s simulated)" in lines[1]            # closed where it was: no fake 100 %
+
+
+def test_nothing_is_printed_when_off_or_when_nothing_was_done():
+    s = io.StringIO()
+    with P.Progress(10, "x", stream=s, mode="off") as bar:
+        bar.update(10)
+    with P.Progress(10, "y", stream=s):
+        pass
+    assert s.getvalue() == ""
+
+
+def test_plain_bar_on_a_terminal_without_tqdm(monkeypatch):
+    monkeypatch.setattr(P, "_tqdm", lambda: None)
+    s = TTY()
+    with P.Progress(4, "map", "runs", stream=s) as bar:
+        assert bar.mode == "bar"
+        for _ in range(4):
+            bar.update()
+    out = s.getvalue()
+    assert out.startswith("\rmap [") and "4/4 runs" in out and out.endswith("\n")
+
+
+def test_tqdm_draws_the_bar_on_a_terminal_when_installed():
+    pytest.importorskip("tqdm")
+    s = TTY()
+    with P.Progress(3, "sweep", "cases", stream=s) as bar:
+        bar.update(info="1 failed")
+        bar.set(3, 3)
+    out = s.getvalue()
+    assert "sweep" in out and "3/3" in out and "1 failed" in out
+
+
+def test_total_may_grow_and_bad_mode_is_refused():
+    s = io.StringIO()
+    bar = P.Progress(1, "m", stream=s)
+    bar(5, 10)                                               # callable as progress(done, total)
+    assert bar.total == 10 and "50 % (5/10)" in s.getvalue()
+    with pytest.raises(ValueError, match="mode"):
+        P.Progress(1, "m", mode="loud")
+
+
+def test_hms():
+    assert P.hms(59.6) == "1:00" and P.hms(3725) == "1:02:05"
+
+
+def test_default_stream_is_stderr(capsys):
+    with P.Progress(1, "z", mode="lines") as bar:
+        bar.update()
+    assert "z: 100 %" in capsys.readouterr().err
+    assert sys.stderr is not None

@@ -1,0 +1,113 @@
+"""Results of a run (snoworm.results.result): documented columns only, CSV files that match the arrays."""
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+import yaml
+
+from snoworm import load_scenario, scenario_from_dict, simulate
+from snoworm.results.result import LINK_COLUMNS, SEGMENT_COLUMNS, load_result
+from tests.conftest import SCENARIOS
+
+#: ``%.6g`` in the CSV files: half a unit in the 6th significant digit, relative
+CSV_RTOL = 5e-6 * (1 + 1e-9)
+
+
+@pytest.fixture(scope="module", params=["tow6_uniform", "inchworm2"])
+def short_run(request):
+    """A short run with fixed links (tow6_uniform) and with prismatic joints (inchworm2)."""
+    return simulate(load_scenario(SCENARIOS / f"{request.param}.yaml", ["simulation.duration_s=1.5"]))
+
+
+def test_series_keys_are_exactly_the_documented_columns(short_run):
+    assert list(short_run.segments) == list(SEGMENT_COLUMNS)
+    assert list(short_run.links) == list(LINK_COLUMNS)
+    assert not any(k.startswith("_") for k in [*short_run.segments, *short_run.links])
+    n_t, n = short_run.t.size, short_run.scenario.vehicle.segments
+    assert all(a.shape == (n_t, n) for a in short_run.segments.values())
+    assert all(a.shape == (n_t, n - 1) for a in short_run.links.values())
+
+
+def _parse(text):
+    rows = list(csv.reader(io.StringIO(text)))
+    return rows[0], np.array(rows[1:], dtype=float)
+
+
+@pytest.mark.parametrize("table, columns, index", [("segments", SEGMENT_COLUMNS, "segment"),
+                                                   ("links", LINK_COLUMNS, "link")])
+def test_csv_round_trip(short_run, tmp_path, table, columns, index):
+    """The written CSV parses back to the arrays at the printed precision (%.6g; t_s %.4f)."""
+    short_run.write(tmp_path, plot=False)
+    header, data = _parse((tmp_path / f"{table}.csv").read_text())
+    assert header == ["t_s", index, *columns]
+    series = getattr(short_run, table)
+    n_t, n = series[next(iter(columns))].shape
+    assert data.shape == (n_t * n, len(header))
+    np.testing.assert_allclose(data[:, 0], np.repeat(short_run.t, n), rtol=0, atol=5e-5 * (1 + 1e-9))
+    np.testing.assert_array_equal(data[:, 1], np.tile(np.arange(n), n_t))
+    for j, name in enumerate(columns, start=2):
+        np.testing.assert_allclose(data[:, j], series[name].reshape(-1), rtol=CSV_RTOL, atol=0, err_msg=name)
+
+
+def test_written_summary_and_scenario(short_run, tmp_path):
+    paths = short_run.write(tmp_path, plot=False)
+    assert sorted(p.name for p in paths) == ["links.csv", "scenario.yaml", "segments.csv", "summary.json"]
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["final_link_forces_N"] == pytest.approx(short_run.links["force_N"][-1].tolist(), rel=1e-12)
+    assert s["energy"]["total_J"] == pytest.approx(short_run.summary()["energy"]["total_J"], rel=1e-12)
+    # the resolved scenario re-loads to the same scenario
+    again = scenario_from_dict(yaml.safe_load((tmp_path / "scenario.yaml").read_text()))
+    assert again == short_run.scenario
+    assert not list(tmp_path.glob(".*.tmp*"))               # no temporary files left behind
+
+
+def test_time_stamps_resolve_the_output_interval(scenario_path):
+    """output_dt_s = 1e-5: every printed t_s distinct (4 decimals used to print 180 000 duplicates)."""
+    from snoworm.results.result import time_decimals
+    assert time_decimals(0.05) == 4 and time_decimals(0.02) == 4 and time_decimals(1e-5) == 6
+    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.output_dt_s", 1e-5),
+                                                       ("simulation.duration_s", 0.002)])
+    res = simulate(sc)
+    rows = list(csv.reader(io.StringIO(res.segments_csv())))[1:]
+    t = [r[0] for r in rows if r[1] == "0"]
+    assert len(t) == len(set(t)) == res.t.size
+    np.testing.assert_allclose([float(x) for x in t], res.t, atol=1e-6)   # printed to 6 decimals
+
+
+@pytest.mark.parametrize("name", ["tow6_uniform", "inchworm2"])
+def test_load_result_round_trip(tmp_path, name):
+    """simulate -> write -> load_result gives the arrays back within the CSV's printed precision
+    (values 6 significant digits: rtol CSV_RTOL; times 4 decimals: atol 5e-5 s), the same
+    scenario, solver statistics, events and mode metrics."""
+    res = simulate(load_scenario(SCENARIOS / f"{name}.yaml", ["simulation.duration_s=2"]))
+    res.write(tmp_path, plot=False)
+    back = load_result(tmp_path)
+    assert back.scenario == res.scenario
+    np.testing.assert_allclose(back.t, res.t, rtol=0, atol=5e-5 * (1 + 1e-9))
+    for table, columns in (("segments", SEGMENT_COLUMNS), ("links", LINK_COLUMNS)):
+        got, want = getattr(back, table), getattr(res, table)
+        assert list(got) == list(columns)
+        for c in columns:
+            assert got[c].shape == want[c].shape, c
+            np.testing.assert_allclose(got[c], want[c], rtol=CSV_RTOL, atol=0, err_msg=c)
+    assert back.stats == json.loads(json.dumps(res.stats))
+    assert back.events == json.loads(json.dumps(res.events))
+    assert back.mode_summary == json.loads(json.dumps(res.mode_summary))
+    assert back.summary()["distance_m"] == pytest.approx(res.summary()["distance_m"], rel=1e-5)
+
+
+def test_load_result_of_a_folder_that_is_not_a_run(tmp_path):
+    (tmp_path / "segments.csv").write_text("t_s,segment\n")
+    with pytest.raises(FileNotFoundError, match="links.csv, summary.json, scenario.yaml missing"):
+        load_result(tmp_path)
+
+
+def test_result_plot_returns_the_figure(short_run):
+    from matplotlib.figure import Figure
+    ax = Figure().subplots()
+    assert short_run.plot("positions", ax=ax) is ax.figure
+    assert isinstance(short_run.plot("forces"), Figure)
+    with pytest.raises(ValueError, match="unknown plot kind 'nope'; kinds: forces, speeds"):
+        short_run.plot("nope")

@@ -1,0 +1,124 @@
+"""Step-by-step simulation (snoworm.simulation.stepwise.Simulator)."""
+import numpy as np
+import pytest
+
+from snoworm import Result, Simulator, load_scenario, simulate
+from tests.conftest import SCENARIOS
+
+
+@pytest.fixture
+def tow6():
+    return load_scenario(SCENARIOS / "tow6_uniform.yaml").with_({"simulation.duration_s": 3.0})
+
+
+def test_reset_step_result(tow6):
+    sim = Simulator(tow6)
+    obs = sim.reset()
+    assert obs.t_s == 0.0 and np.all(obs.v_mps == 0) and np.all(obs.motor_torque_Nm == 0)
+    for _ in range(10):
+        obs = sim.step({"wheel_speed_mps": [1.8] * 6}, 0.1)
+    assert obs.t_s == pytest.approx(1.0, abs=1e-12) and sim.t_s == obs.t_s
+    assert np.all(obs.v_mps > 0.1)
+    res = sim.result()
+    assert isinstance(res, Result)
+    assert res.t[0] == 0.0 and res.t[-1] == pytest.approx(1.0)
+    assert np.all(np.diff(res.t) > 0)
+    np.testing.assert_array_equal(res.segments["x_m"][-1], obs.x_m)
+    s = res.summary()
+    assert s["distance_m"] > 0.3 and s["solver"]["intervals"] == 10
+    obs = sim.reset()                                    # back to the start, nothing kept
+    assert obs.t_s == 0.0 and np.all(obs.x_m == sim.observation().x_m)
+    with pytest.raises(ValueError, match="step"):
+        sim.result()
+
+
+def test_matches_simulate_for_the_same_schedule(tow6):
+    """Motors on at 1 s at 1.8 m/s: tow6_uniform's run, up to solver tolerance."""
+    ref = simulate(tow6)
+    sim = Simulator(tow6)
+    sim.reset()
+    sim.step(None, 1.0)
+    sim.step({"wheel_speed_mps": [1.8] * 6}, 2.0)
+    res = sim.result()
+    np.testing.assert_allclose(res.t, ref.t, atol=1e-12)
+    assert np.max(np.abs(res.links["force_N"] - ref.links["force_N"])) < 0.05
+
+
+@pytest.mark.parametrize("dt", [0.004, 0.5])
+def test_small_or_large_steps_keep_the_accuracy(tow6, dt):
+    sims = []
+    for step in (dt, 2.0):
+        sim = Simulator(tow6)
+        sim.reset()
+        sim.step({"wheel_speed_mps": [1.5] * 6}, 0.5)
+        n = int(round(2.0 / step))
+        for _ in range(n):
+            obs = sim.step(None, step)
+        sims.append(obs)
+    a, b = sims
+    assert a.t_s == pytest.approx(b.t_s, abs=1e-9)
+    np.testing.assert_allclose(a.x_m, b.x_m, atol=1e-4)
+    np.testing.assert_allclose(a.link_force_N, b.link_force_N, atol=0.05)
+
+
+@pytest.mark.parametrize("dt", [0, -0.1, np.nan, np.inf, "0.1", True])
+def test_bad_dt(tow6, dt):
+    sim = Simulator(tow6)
+    with pytest.raises(ValueError, match="dt"):
+        sim.step(None, dt)
+
+
+def test_bad_command_changes_nothing(tow6):
+    sim = Simulator(tow6)
+    sim.step({"wheel_speed_mps": [1.0] * 6}, 0.2)
+    with pytest.raises(ValueError, match="'wheel_lok'"):
+        sim.step({"wheel_lok": [True] * 6}, 0.2)
+    assert sim.t_s == pytest.approx(0.2)
+    np.testing.assert_array_equal(sim.commands.controls.speed_sp_mps, 1.0)
+
+
+def test_wheel_lock_holds_the_wheels(tow6):
+    sim = Simulator(tow6)
+    sim.step({"wheel_speed_mps": [1.5] * 6}, 1.0)
+    obs = sim.step({"wheel_lock": [True] * 6}, 2.0)
+    assert np.max(np.abs(obs.wheel_speed_mps)) < 0.01
+
+
+def test_joint_force_and_length_commands_through_the_actuator():
+    sc = load_scenario(SCENARIOS / "inchworm2.yaml")     # starts fully extended
+    L = sc.chain_model.links
+    sim = Simulator(sc)
+    s0 = sim.reset().joint_extension_m[0]
+    assert s0 == pytest.approx(L.stroke_max_m[0])
+    sim.step({"wheel_lock": [True, True]}, 0.5)
+    for ref in (80.0, 200.0):                               # tension: the joint pulls
+        obs = sim.step({"joint_force_N": [ref]}, 1.0)
+        assert obs.link_force_N[0] == pytest.approx(ref, abs=1.0)
+    # length command: the extension moves towards it no faster than the actuator's rate limit
+    s0 = obs.joint_extension_m[0]
+    obs = sim.step({"joint_length_m": [0.1]}, 0.1)
+    assert 0 < s0 - obs.joint_extension_m[0] <= L.rate_max_mps[0] * 0.1 + 1e-6
+    obs = sim.step(None, 2.0)
+    assert obs.joint_extension_m[0] == pytest.approx(0.1, abs=0.005)
+    obs = sim.step({"joint_force_N": [-120.0]}, 0.5)       # compression, away from the end stops
+    assert obs.link_force_N[0] == pytest.approx(-120.0, abs=1.0)
+    obs = sim.step({"joint_length_m": [-5.0]}, 3.0)        # beyond the stroke: held at the end stop
+    assert obs.joint_extension_m[0] >= L.stroke_min_m[0] - 0.01
+
+
+def test_solver_failure_leaves_the_simulator_at_the_step_start(tow6, monkeypatch):
+    import snoworm.simulation.stepwise as S
+    from snoworm.simulation.driver import SolverError
+    sim = Simulator(tow6)
+    sim.step({"wheel_speed_mps": [1.0] * 6}, 0.2)
+    before = sim.observation()
+
+    def boom(*a, **k):
+        raise SolverError("every method failed (test)")
+    monkeypatch.setattr(S, "solve_interval", boom)
+    with pytest.raises(SolverError):
+        sim.step({"wheel_speed_mps": [2.0] * 6}, 0.2)
+    assert sim.t_s == before.t_s
+    np.testing.assert_array_equal(sim.observation().x_m, before.x_m)
+    np.testing.assert_array_equal(sim.commands.controls.speed_sp_mps, 1.0)   # the failed step's command undone
+    assert sim.result().t[-1] == pytest.approx(0.2)

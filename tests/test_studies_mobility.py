@@ -1,0 +1,130 @@
+"""Mobility map (snoworm.studies.mobility): which modes move the vehicle over X_t and tow (beyond the paper)."""
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from snoworm import steady
+from snoworm.cli import main
+from snoworm.studies.mobility import mobility_map
+from snoworm.config.scenario import load_scenario
+
+
+def test_map_rolling_boundary_matches_steady_limit(scenario_path):
+    sc = load_scenario(scenario_path("traverse_patch"))
+    xts = np.linspace(0.2, 1.0, 33)                     # grid step 0.025
+    dx = xts[1] - xts[0]
+    m = mobility_map(sc, xts, [0.0, 200.0], wheel_speed_mps=1.8, inching=False)
+    for tow, expected in ((0.0, 0.586), (200.0, m["rolling_limit_xt"][200.0])):
+        roll = [r["xt"] for r in m["rows"] if r["tow_N"] == tow and r["rolling"]]
+        first = min(roll)
+        assert first - dx < expected <= first + 1e-12              # boundary within one grid step
+        assert all(x >= first for x in roll) and len(roll) == sum(xts >= first - 1e-12)   # one boundary
+    # docs/model.md section 2: 0.586 without tow; a 200 N tow (33 N per segment) raises it
+    assert m["rolling_limit_xt"][0.0] == pytest.approx(0.586, abs=5e-4)
+    seg = sc.vehicle.segment_params()[0]
+    assert m["rolling_limit_xt"][200.0] == pytest.approx(
+        steady.immobilisation_limit_xt(seg, sc.chain_model.tp, drawbar_N=200.0 / 6, wheel_speed_mps=1.8), abs=1e-9)
+    assert m["rolling_limit_xt"][200.0] > m["rolling_limit_xt"][0.0] + 0.01
+
+
+def test_cli_mobility_map_regions(scenario_path, tmp_path):
+    r = CliRunner().invoke(main, ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.3,0.9",
+                                  "--tow", "0", "--inch-duration", "4", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "mobility_map.png").stat().st_size > 10000
+    lines = (tmp_path / "mobility_map.csv").read_text().splitlines()
+    rows = [dict(zip(lines[0].split(","), ln.split(","))) for ln in lines[1:]]
+    assert [(float(x["xt"]), x["region"]) for x in rows] == [(0.3, "inching only"), (0.9, "rolling")]
+    assert float(rows[0]["inching_speed_mps"]) > 0.02
+    assert float(rows[1]["rolling_speed_mps"]) == pytest.approx(1.8 * (1 - 0.039), abs=0.01)   # slip 3.9 %
+
+
+def test_cli_mobility_map_bad_grid(scenario_path, tmp_path):
+    r = CliRunner().invoke(main, ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.2:1.0",
+                                  "--out", str(tmp_path)])
+    assert r.exit_code == 2 and "START:STOP:COUNT" in r.output
+
+
+def test_progress_counts_the_inching_runs(scenario_path):
+    sc = load_scenario(scenario_path("traverse_patch"))
+    seen = []
+    m = mobility_map(sc, [0.3, 0.9], [0.0], wheel_speed_mps=1.8, inch_duration_s=1.0, every_cell=True,
+                     progress=lambda n, total: seen.append((n, total)))
+    assert seen == [(1, 2), (2, 2)] and len(m["rows"]) == 2
+    seen.clear()                                                     # default: the rolling cell is not run
+    m = mobility_map(sc, [0.3, 0.9], [0.0], wheel_speed_mps=1.8, inch_duration_s=1.0,
+                     progress=lambda n, total: seen.append((n, total)))
+    assert seen == [(1, 1)] and [r["rolling"] for r in m["rows"]] == [False, True]
+
+
+def test_cli_mobility_map_replaces_its_folder_and_refuses_a_foreign_one(scenario_path, tmp_path):
+    out = tmp_path / "m"
+    args = ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.9", "--no-inching", "--out", str(out)]
+    assert CliRunner().invoke(main, args).exit_code == 0
+    assert CliRunner().invoke(main, args + ["--no-plot"]).exit_code == 0
+    assert sorted(p.name for p in out.iterdir()) == [".snoworm-manifest.json", "mobility_map.csv"]
+    (out / "mine.txt").write_text("x")
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 2 and "--overwrite" in r.output
+
+
+def _cells(m):
+    return {(round(r["xt"], 9), r["tow_N"]): r for r in m["rows"]}
+
+
+@pytest.mark.slow
+def test_default_map_equals_the_every_cell_map_on_the_issue_grid(scenario_path):
+    """Skipping the inching runs of rolling cells leaves every region and every computed number
+    as the full computation has them (the grid of issue 16 and docs/beyond.md)."""
+    sc = load_scenario(scenario_path("traverse_patch"))
+    xts, tows = np.linspace(0.2, 1.0, 9), [0.0, 100.0, 200.0]
+    full = _cells(mobility_map(sc, xts, tows, wheel_speed_mps=1.8, jobs=2, every_cell=True))
+    fast = _cells(mobility_map(sc, xts, tows, wheel_speed_mps=1.8, jobs=2))
+    assert full.keys() == fast.keys() and len(full) == 27
+    assert {r["region"] for r in full.values()} == {"rolling", "inching only"}   # both regions on the grid
+    skipped = 0
+    for key, f in full.items():
+        g = fast[key]
+        assert g["region"] == f["region"], key
+        assert g["rolling_speed_mps"] == f["rolling_speed_mps"]           # steady state: same code path
+        if g["inching"] is None:                                          # skipped: only rolling cells
+            assert f["rolling"] and g["inching_cheaper"] is None and g["inching_speed_mps"] is None
+            skipped += 1
+            continue
+        assert g["inching"] == f["inching"] and g["inching_note"] == f["inching_note"]
+        assert g["inching_speed_mps"] == pytest.approx(f["inching_speed_mps"], rel=1e-9, abs=0)
+        assert g["inching_energy_per_metre_J_per_m"] == pytest.approx(f["inching_energy_per_metre_J_per_m"],
+                                                                       rel=1e-9, abs=0)
+        assert g["inching_cheaper"] == f["inching_cheaper"]
+    assert skipped == sum(r["rolling"] for r in full.values()) > 0
+    # the full map still answers where inching is cheaper than rolling (docs/beyond.md): next to the limit
+    assert full[(0.6, 0.0)]["inching_cheaper"] and not full[(1.0, 0.0)]["inching_cheaper"]
+
+
+def test_order_of_the_runs_does_not_change_the_map(scenario_path):
+    sc = load_scenario(scenario_path("traverse_patch"))
+    kw = dict(wheel_speed_mps=1.8, inch_duration_s=1.0, every_cell=True)
+    serial = mobility_map(sc, [0.3, 0.5, 0.9], [0.0], jobs=1, **kw)["rows"]
+    pooled = mobility_map(sc, [0.3, 0.5, 0.9], [0.0], jobs=2, **kw)["rows"]   # started highest X_t first
+    assert [r["xt"] for r in pooled] == [0.3, 0.5, 0.9]
+    for a, b in zip(serial, pooled):
+        assert a["inching_speed_mps"] == pytest.approx(b["inching_speed_mps"], rel=1e-12, abs=0)
+        assert a["region"] == b["region"]
+
+
+def test_cli_every_cell_simulates_the_rolling_cells_too(scenario_path, tmp_path):
+    base = ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.3,0.9", "--tow", "0",
+            "--inch-duration", "2", "--no-plot"]
+    r = CliRunner().invoke(main, base + ["--out", str(tmp_path / "a")])
+    assert r.exit_code == 0, r.output
+    assert "--every-cell" in r.output
+    rows = (tmp_path / "a" / "mobility_map.csv").read_text().splitlines()
+    hdr = rows[0].split(",")
+    rolling = dict(zip(hdr, rows[2].split(",")))
+    assert rolling["region"] == "rolling" and rolling["inching"] == "" and rolling["inching_cheaper"] == ""
+    r = CliRunner().invoke(main, base + ["--every-cell", "--out", str(tmp_path / "b")])
+    assert r.exit_code == 0, r.output
+    assert "--every-cell" not in r.output
+    rows = (tmp_path / "b" / "mobility_map.csv").read_text().splitlines()
+    rolling = dict(zip(hdr, rows[2].split(",")))
+    assert rolling["region"] == "rolling" and rolling["inching"] in ("0", "1") and rolling["inching_cheaper"] in ("0", "1")

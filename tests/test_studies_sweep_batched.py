@@ -1,0 +1,81 @@
+"""The batched sweep path (snoworm.studies.sweep.executors.BatchExecutor, run_chunk): batched sweeps equal serial ones.
+
+The solver work budgets and the batched-vs-one-by-one driver test are in test_simulation_driver.py.
+"""
+import pytest
+
+from snoworm.studies.sweep import BatchExecutor, run_chunk
+from snoworm.config.scenario import apply_overrides, read_yaml
+from snoworm.studies.sweep import case_metrics, run_sweep
+from tests.conftest import assert_metrics_close
+
+
+def test_batched_sweep_matches_serial_sweep(scenario_path):
+    sets = ["terrain.xt=0.6,0.9", "tow.force_N=0,150", "simulation.duration_s=3"]
+    serial = run_sweep(scenario_path("tow6_uniform"), sets, plot=False)
+    batched = run_sweep(scenario_path("tow6_uniform"), sets, plot=False, batch=10)
+    assert len(serial) == len(batched) == 4
+    for a, b in zip(serial.rows, batched.rows):
+        assert a["case_id"] == b["case_id"] and b["status"] == "ok"
+        b_links = [b[f"final_link_force_{j}_N"] for j in range(5)]
+        a_links = [a[f"final_link_force_{j}_N"] for j in range(5)]
+        assert_metrics_close({**a, "final_link_forces_N": a_links}, {**b, "final_link_forces_N": b_links})
+
+
+def test_unbatchable_cases_run_one_by_one(scenario_path):
+    """Event-driven modes and lone cases go through the ordinary per-case function."""
+    uni = read_yaml(scenario_path("tow6_uniform"))
+    inch = read_yaml(scenario_path("inchworm6"))
+    tasks = [{"index": 0, "raw": apply_overrides(uni, [("simulation.duration_s", 2)])},
+             {"index": 1, "raw": apply_overrides(uni, [("simulation.duration_s", 2), ("tow.force_N", 50)])},
+             {"index": 2, "raw": inch},
+             {"index": 3, "raw": apply_overrides(uni, [("simulation.duration_s", 3)])}]   # its own group of one
+    seen = []
+
+    def one(task):
+        seen.append(task["index"])
+        return {"index": task["index"], "status": "stub"}
+    rows = {r["index"]: r for r in run_chunk(tasks, fn=one, metrics=case_metrics)}
+    assert sorted(seen) == [2, 3]
+    assert rows[0]["status"] == rows[1]["status"] == "ok"
+    with pytest.raises(ValueError):
+        BatchExecutor(0)
+
+
+@pytest.mark.parametrize("batch", [0, 10])
+def test_in_process_sweep_validates_each_case_once(scenario_path, monkeypatch, batch):
+    """A sweep run in this process hands the scenarios it validated while planning to the executor."""
+    import snoworm.studies.sweep.executors as executors
+    import snoworm.studies.sweep.metrics as metrics
+    import snoworm.studies.sweep.run as run
+    calls = []
+
+    def counting(original):
+        def wrapped(*args, **kwargs):
+            calls.append(1)
+            return original(*args, **kwargs)
+        return wrapped
+    monkeypatch.setattr(run, "scenario_from_dict", counting(run.scenario_from_dict))
+    monkeypatch.setattr(executors, "scenario_from_dict", counting(executors.scenario_from_dict))
+    monkeypatch.setattr(metrics, "scenario_from_dict", counting(metrics.scenario_from_dict))
+    table = run_sweep(scenario_path("tow6_uniform"), ["tow.force_N=0,100,200", "simulation.duration_s=1"],
+                      plot=False, batch=batch)
+    assert [r["status"] for r in table.rows] == ["ok"] * 3
+    assert len(calls) == 3
+
+
+def test_local_pool_tasks_carry_the_validated_scenarios(scenario_path):
+    """For a local executor (this process or its own pool) the tasks carry the scenarios validated
+    while planning, and no mapping to validate again; each equals a fresh validation of its case."""
+    from snoworm.config.scenario import load_scenario
+    from snoworm.studies.sweep.run import _plan, _tasks
+    sets = ["tow.force_N=0,100", "simulation.duration_s=1"]
+    plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=True)
+    tasks = list(_tasks(plan, plan.cases, None, False))
+    assert [t["index"] for t in tasks] == [0, 1] and all("raw" not in t for t in tasks)
+    for t, f in zip(tasks, (0.0, 100.0)):
+        assert t["scenario"] == load_scenario(scenario_path("tow6_uniform"),
+                                              [("tow.force_N", f), ("simulation.duration_s", 1)])
+    plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=False)
+    assert all("scenario" not in t and t["raw"]["tow"]["force_N"] in (0, 100)
+               for t in _tasks(plan, plan.cases, None, False))

@@ -1,0 +1,74 @@
+"""snoworm.studies.sweep.metrics: per-case metrics, statuses and failure handling."""
+from __future__ import annotations
+
+import pytest
+
+from snoworm import SolverError, simulate
+from snoworm.config.scenario import load_scenario, read_yaml
+from snoworm.studies.sweep import case_metrics, run_case, run_sweep
+from tests.sweep_helpers import TOW6, SHORT, csv_rows
+
+
+def test_case_metrics_match_a_direct_run():
+    table = run_sweep(TOW6, ["terrain.xt=0.8", "tow.force_N=100", SHORT], plot=False)
+    direct = case_metrics(simulate(load_scenario(TOW6, [("terrain.xt", 0.8), ("tow.force_N", 100),
+                                                       ("simulation.duration_s", 6)])))
+    row = table.rows[0]
+    for k in ("distance_m", "mean_speed_mps", "late_speed_mps", "mean_slip", "max_slip", "max_link_force_N",
+              "energy_per_m_J"):
+        assert row[k] == pytest.approx(direct[k], rel=1e-12), k
+    for j, f in enumerate(direct["final_link_forces_N"]):
+        assert row[f"final_link_force_{j}_N"] == pytest.approx(f, rel=1e-12)
+    # steady state after 6 s: link tensions close to 100 N * (j+1)/6 (force balance)
+    assert row["final_link_force_4_N"] == pytest.approx(100 * 5 / 6, rel=0.05)
+    assert row["immobilised"] is False and row["n_segments"] == 6
+
+def test_a_failing_case_does_not_stop_the_others(tmp_path, monkeypatch):
+    import sys
+    simmod = sys.modules["snoworm.studies.sweep.metrics"]        # where run_case looks simulate up
+    real = simmod.simulate
+
+    def flaky(sc):
+        if sc.terrain.xt == 0.8:
+            raise SolverError("forced failure for the test")
+        return real(sc)
+
+    monkeypatch.setattr(simmod, "simulate", flaky)
+    table = run_sweep(TOW6, ["terrain.xt=-1,0.8,0.9", SHORT], out_dir=tmp_path, plot=False)
+    st = {r["terrain.xt"]: r for r in table}
+    assert st[-1]["status"] == "invalid" and "terrain.xt" in st[-1]["error"]
+    assert st[0.8]["status"] == "solver_failure" and "forced failure" in st[0.8]["error"]
+    assert st[0.9]["status"] == "ok" and st[0.9]["distance_m"] > 1.0
+    assert st[-1]["distance_m"] is None and st[-1]["immobilised"] is None
+    assert len(csv_rows(tmp_path / "summary.csv")) == 3
+
+def test_rolling_speed_falls_with_xt_and_immobilised_below_0586():
+    xts = [0.5, 0.55, 0.62, 0.7, 0.8, 0.9, 1.0]
+    table = run_sweep(TOW6, [f"terrain.xt={','.join(map(str, xts))}", "tow.force_N=0", "vehicle.segments=1",
+                             "simulation.duration_s=10"], plot=False)
+    assert [r["terrain.xt"] for r in table] == xts
+    speed = table["mean_speed_mps"]
+    assert all(a < b for a, b in zip(speed, speed[1:]))
+    imm = dict(zip(xts, table["immobilised"]))
+    assert imm[0.5] and imm[0.55]
+    assert not any(imm[x] for x in xts if x >= 0.62)
+    late = dict(zip(xts, table["late_speed_mps"]))
+    assert late[0.55] < 0.05 and late[0.62] > 0.5
+    # free rolling on neve: slip ~2 % (docs/model.md section 2), the wheels near 1.8 m/s
+    assert table.rows[-1]["mean_slip"] == pytest.approx(0.0213, abs=0.003)
+
+
+def test_run_case_reports_each_status_without_raising(monkeypatch):
+    raw = read_yaml(TOW6)
+    raw["simulation"]["duration_s"] = 1
+    ok = run_case({"index": 3, "raw": raw})
+    assert ok["index"] == 3 and ok["status"] == "ok" and ok["error"] == "" and ok["wall_time_s"] > 0
+    bad = run_case({"index": 4, "raw": {**raw, "terrain": {"xt": -1}}})
+    assert bad["status"] == "invalid" and "terrain.xt" in bad["error"] and "distance_m" not in bad
+
+    def buggy(sc):
+        raise ZeroDivisionError("line one\nline two")
+    monkeypatch.setattr("snoworm.studies.sweep.metrics.simulate", buggy)
+    err = run_case({"index": 5, "raw": raw})
+    assert err["status"] == "error"
+    assert err["error"].startswith("ZeroDivisionError: line one | line two at test_studies_sweep_metrics.py:")

@@ -1,0 +1,57 @@
+"""snoworm.studies.sweep.run: run_sweep end to end, the CLI, files, plots and progress."""
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+from click.testing import CliRunner
+
+from snoworm.cli import main
+from snoworm.config.scenario import load_scenario
+from snoworm.config.schema import ScenarioError
+from snoworm.studies.sweep import run_sweep
+from tests.sweep_helpers import TOW6, SHORT, SMALL, csv_rows
+
+
+def test_cli_writes_summary_plot_and_cases(tmp_path):
+    out = tmp_path / "o"
+    r = CliRunner().invoke(main, ["sweep", TOW6, "--set", "terrain.xt=0.7,0.9", "--set", SHORT,
+                                  "--out", str(out), "--save-cases"])
+    assert r.exit_code == 0, r.output
+    assert "2 cases: 2 ok" in r.output
+    assert "sweep [" not in r.output                     # no progress bar when not a terminal
+    assert (out / "sweep.png").stat().st_size > 1000
+    s = json.loads((out / "cases" / "0001" / "summary.json").read_text())
+    rows = sorted(csv_rows(out / "summary.csv"), key=lambda r: r["case_id"])
+    assert float(rows[1]["distance_m"]) == pytest.approx(s["distance_m"], rel=1e-12)
+
+def test_two_keys_write_a_heatmap(tmp_path):
+    table = run_sweep(TOW6, SMALL, out_dir=tmp_path)
+    assert (tmp_path / "heatmap.png").stat().st_size > 1000
+    assert not (tmp_path / "sweep.png").exists()
+    assert math.isfinite(table.rows[0]["mean_speed_mps"])
+
+def test_progress_line_reports_cases_and_failures(capsys):
+    run_sweep(TOW6, ["terrain.xt=-1,0.9", SHORT], progress=True, plot=False)
+    err = capsys.readouterr().err
+    assert "2/2 cases" in err and "1 failed" in err
+
+def test_a_scenario_object_sweeps_like_its_file():
+    from_file = run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], plot=False)
+    from_obj = run_sweep(load_scenario(TOW6), ["terrain.xt=0.7,0.9", SHORT], plot=False)
+    for a, b in zip(from_file, from_obj):
+        assert b["distance_m"] == pytest.approx(a["distance_m"], rel=1e-9)
+        assert b["case_key"] == a["case_key"]
+
+
+@pytest.mark.parametrize("kwargs, needle", [
+    ({"save_cases": True}, "--save-cases needs --out"),
+    ({"jobs": 0}, "at least 1, got 0"),
+    ({"sets": ["terrain.xt=-1,-2", SHORT]}, "every case of the sweep is invalid, e.g. case 0000 (terrain.xt=-1"),
+])
+def test_bad_arguments_are_refused_before_anything_runs(tmp_path, kwargs, needle):
+    sets = kwargs.pop("sets", ["terrain.xt=0.7,0.9", SHORT])
+    with pytest.raises(ScenarioError) as err:
+        run_sweep(TOW6, sets, plot=False, **kwargs)
+    assert needle in str(err.value)

@@ -1,0 +1,72 @@
+"""snoworm.studies.sweep.summary: SweepTable, summary.csv / sweep.json, resumption and refusal."""
+from __future__ import annotations
+
+import csv
+import json
+
+from click.testing import CliRunner
+
+import snoworm.studies.sweep as sweep_mod
+import snoworm.studies.sweep.run as run_mod
+from snoworm.cli import main
+from snoworm.studies.sweep import run_sweep
+from tests.sweep_helpers import TOW6, SHORT, comparable, csv_rows
+
+
+def test_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch):
+    sets = ["terrain.xt=0.7,0.8,0.9", "tow.force_N=0,200", SHORT]
+    full = run_sweep(TOW6, sets, out_dir=tmp_path, plot=False)
+    summary = tmp_path / "summary.csv"
+    lines = summary.read_text().splitlines(keepends=True)
+    assert len(lines) == 7
+    # an interrupted sweep: header, two finished rows and half of the third
+    summary.write_text("".join(lines[:3]) + lines[3][: len(lines[3]) // 2])
+    kept = {next(csv.reader([ln]))[0] for ln in lines[1:3]}
+
+    calls = []
+    real = run_mod.run_case                                  # where run_sweep looks run_case up
+
+    def counting(task):
+        calls.append(task["index"])
+        return real(task)
+
+    monkeypatch.setattr(run_mod, "run_case", counting)
+    resumed = run_sweep(TOW6, sets, out_dir=tmp_path, plot=False)
+    assert len(calls) == 4                                   # 6 cases - 2 kept
+    assert not {f"{i:04d}" for i in calls} & kept
+    assert comparable(resumed) == comparable(full)
+    rows = csv_rows(summary)
+    assert sorted(r["case_id"] for r in rows) == [f"{i:04d}" for i in range(6)]
+    # complete now: a third run computes nothing
+    calls.clear()
+    run_sweep(TOW6, sets, out_dir=tmp_path, plot=False)
+    assert calls == []
+
+def test_another_sweep_in_the_same_directory_is_refused(tmp_path):
+    run_sweep(TOW6, ["terrain.xt=0.8,0.9", SHORT], out_dir=tmp_path, plot=False)
+    r = CliRunner().invoke(main, ["sweep", TOW6, "--set", "terrain.xt=0.7,0.9", "--set", SHORT,
+                                  "--out", str(tmp_path)])
+    assert r.exit_code == 2 and "holds another sweep" in r.output
+    assert json.loads((tmp_path / "sweep.json").read_text())["definition"]["axes"][0]["values"] == [0.8, 0.9]
+
+def test_table_round_trips_through_csv(tmp_path):
+    table = run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], out_dir=tmp_path, plot=False)
+    back = sweep_mod.SweepTable.from_csv(tmp_path / "summary.csv")
+    assert comparable(back) == comparable(table)
+    assert table.to_csv().splitlines()[0].startswith("case_id,case_key,terrain.xt,simulation.duration_s,status")
+
+
+def test_summary_cells_full_precision_and_empty_for_none(tmp_path):
+    cols = ["case_id", "case_key", "mode.speed_mps", "status", "error", "distance_m", "immobilised", "n_segments"]
+    table = sweep_mod.SweepTable(cols, [
+        {"case_id": "0001", "case_key": "k1", "mode.speed_mps": [1.8, 1.5], "status": "ok", "error": "",
+         "distance_m": 0.1 + 0.2, "immobilised": False, "n_segments": 6},
+        {"case_id": "0000", "case_key": "k0", "mode.speed_mps": [1.0, 1.0], "status": "invalid",
+         "error": "a, b", "distance_m": None, "immobilised": None, "n_segments": None}], ["mode.speed_mps"])
+    assert table.to_csv(tmp_path / "summary.csv") == (
+        "case_id,case_key,mode.speed_mps,status,error,distance_m,immobilised,n_segments\n"
+        '0000,k0,"[1.0,1.0]",invalid,"a, b",,,\n'
+        '0001,k1,"[1.8,1.5]",ok,,0.30000000000000004,false,6\n')
+    back = sweep_mod.SweepTable.from_csv(tmp_path / "summary.csv")
+    assert back.rows[1]["distance_m"] == 0.1 + 0.2 and back.rows[1]["mode.speed_mps"] == [1.8, 1.5]
+    assert back.rows[0]["immobilised"] is None and back.rows[1]["immobilised"] is False
