@@ -1,6 +1,7 @@
-"""Chain kernel invariants (snoworm.dynamics): momentum of internal forces, named state layout, stacking.
+"""Chain kernel invariants (snoworm.dynamics): momentum of internal forces, stacking.
 
-The Jacobian pattern and banded finite differences are in test_model_jacobian.py."""
+The named state layout is in test_model_arrays.py; the Jacobian pattern and banded finite
+differences are in test_model_jacobian.py."""
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -18,13 +19,6 @@ def test_internal_link_forces_cancel(seed):
     Y = m.unpack(random_state(m, rng))
     _, out = m.evaluate(Y, busy_controls(m, rng), outputs=True)
     assert out["link_net_N"].sum() == pytest.approx(-m.tow_force_N, abs=1e-9 * (1 + np.abs(out["link_force_N"]).sum()))
-
-
-def test_state_layout_named(scenario_path):
-    m = model_for(scenario_path("tow6_uniform"))
-    assert m.layout.fields[:2] == ("x_m", "v_mps")
-    Y = m.unpack(m.initial_state())
-    assert np.allclose(np.diff(Y[:, m.layout.index["x_m"]]), -1.5)   # rest spacing, leader in front
 
 
 def test_stacked_model_is_the_members_side_by_side(scenario_path):

@@ -16,7 +16,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..dynamics import LinkArrays, SegmentArrays
+from ..model.arrays import LinkArrays, SegmentArrays
 from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
 from ..terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
 

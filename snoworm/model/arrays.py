@@ -1,0 +1,123 @@
+"""The chain as arrays: parameters per segment and per link, and the named state vector.
+
+:class:`SegmentArrays` and :class:`LinkArrays` are what the config (``Scenario.chain_model``)
+hands the kernel (:class:`snoworm.dynamics.ChainModel`), one value per segment or link in SI
+units; :class:`StateLayout` names the fields of the state (docs/model.md section 4): one block of
+``n_s`` fields per segment, interleaved so the Jacobian is banded.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["LinkArrays", "SegmentArrays", "StateLayout"]
+
+
+@dataclass(frozen=True)
+class SegmentArrays:
+    """Per-segment physical parameters as arrays of length N (SI units)."""
+
+    mass_kg: np.ndarray
+    wheel_radius_m: np.ndarray
+    wheel_inertia_kgm2: np.ndarray
+    wheelbase_m: np.ndarray
+    wheels_per_axle: np.ndarray
+    gravity_mps2: np.ndarray
+    motor_slope_Nms_per_rad: np.ndarray
+    no_load_speed_radps: np.ndarray
+    torque_limit_Nm: np.ndarray
+    drivetrain_efficiency: np.ndarray
+    speed_kp_Nms_per_rad: np.ndarray
+    speed_ki_Nm_per_rad: np.ndarray
+
+    @classmethod
+    def from_list(cls, segments) -> "SegmentArrays":
+        """Stack a list of per-segment parameter objects (with the same attribute names)."""
+        names = cls.__dataclass_fields__
+        return cls(**{n: np.array([float(getattr(s, n)) for s in segments]) for n in names})
+
+    @property
+    def normal_force_N(self) -> np.ndarray:
+        """Static normal load per wheel, ``m g / (2 n_w)`` (no load transfer)."""
+        return self.mass_kg * self.gravity_mps2 / (2.0 * self.wheels_per_axle)
+
+
+@dataclass(frozen=True)
+class LinkArrays:
+    """Per-link parameters as arrays of length N-1."""
+
+    stiffness_N_per_m: np.ndarray
+    damping_Ns_per_m: np.ndarray
+    rest_spacing_m: np.ndarray
+    prismatic: np.ndarray          # 1.0 for an active prismatic joint, 0.0 for a fixed link
+    stroke_min_m: np.ndarray
+    stroke_max_m: np.ndarray
+    force_max_N: np.ndarray
+    rate_max_mps: np.ndarray
+    force_gain_per_s: np.ndarray
+
+
+class StateLayout:
+    """Names of the chain state: which field of which segment sits where.
+
+    Parameters
+    ----------
+    n : int
+        Number of segments.
+    force_loop : bool
+        Whether each segment carries the outer force-loop integral ``q_mps``.
+    joints : bool
+        Whether each segment carries the extension ``s_m`` of the joint behind it.
+    batch_shape : tuple of int
+        Leading shape of stacked chains (``()`` for one chain).
+
+    Attributes
+    ----------
+    fields : tuple of str
+        Field names of one segment's block, in order.
+    index : dict of str -> int
+        Position of each field within a block.
+    x, v : int
+        Positions of ``x_m`` and ``v_mps``.
+    omega, integral : slice
+        The wheel speeds (front, rear axle) and the wheel-speed PI integrals.
+    q, s : int or None
+        Positions of ``q_mps`` and ``s_m`` when present.
+    """
+
+    def __init__(self, n: int, force_loop: bool, joints: bool, batch_shape=()):
+        fields = ["x_m", "v_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm"]
+        if force_loop:
+            fields.append("q_mps")
+        if joints:
+            fields.append("s_m")
+        self.fields = tuple(fields)
+        self.index = {f: j for j, f in enumerate(fields)}
+        self.n = int(n)
+        self.n_s = len(fields)
+        self.batch_shape = tuple(batch_shape)
+        self.n_batch = int(np.prod(self.batch_shape, dtype=int))
+        self.size = self.n_batch * self.n * self.n_s
+        self.shape = self.batch_shape + (self.n, self.n_s)
+        self.x, self.v = 0, 1
+        self.omega, self.integral = slice(2, 4), slice(4, 6)
+        self.q = self.index.get("q_mps")
+        self.s = self.index.get("s_m")
+
+    def unpack(self, y):
+        """View a flat state (or a stack of states, leading dims) as ``(..., N, n_s)``."""
+        y = np.asarray(y)
+        return y.reshape(y.shape[:-1] + self.shape)
+
+    def get(self, Y, name):
+        """One named field of an unpacked state, shape ``(..., N)``."""
+        return Y[..., self.index[name]]
+
+    def flat_index(self, segment: int, name: str) -> int:
+        """Index of field ``name`` of ``segment`` in the flat state of one chain."""
+        return int(segment) * self.n_s + self.index[name]
+
+    def per_state(self, per_field: dict) -> np.ndarray:
+        """A flat array over the whole state from one value per field name (e.g. tolerances)."""
+        return np.tile([per_field[f] for f in self.fields], self.n_batch * self.n)
