@@ -30,7 +30,7 @@ from ._version import __version__
 #: ``import snoworm`` and the command line start without SciPy, the sweeps or matplotlib; a
 #: command pays only for the modules it uses (``snoworm --help`` imports none of them).
 _EXPORTS = {
-    "BatchMember": "simulation.driver", "SolverError": "simulation.driver", "simulate": "simulation.driver",
+    "BatchMember": "simulation.driver", "SolverError": "simulation.guard", "simulate": "simulation.driver",
     "simulate_batch": "simulation.driver",
     "OutputError": "infra.folders",
     "Mode": "modes", "register_mode": "modes",
@@ -48,7 +48,8 @@ __all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Observation", "O
 
 if TYPE_CHECKING:  # for type checkers and editors; at run time the names come from __getattr__
     from . import modes as modes
-    from .simulation.driver import BatchMember, SolverError, simulate, simulate_batch
+    from .simulation.driver import BatchMember, simulate, simulate_batch
+    from .simulation.guard import SolverError
     from .infra.folders import OutputError
     from .modes import Mode, register_mode
     from .results.result import Result, load_result

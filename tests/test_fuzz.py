@@ -28,7 +28,7 @@ from hypothesis import strategies as st
 
 from snoworm import load_scenario
 from snoworm.cli import main
-from snoworm.simulation.driver import WORK_BASE_NFEV, work_rate
+from snoworm.simulation.guard import WORK_BASE_NFEV, work_rate
 from tests.conftest import SCENARIOS
 
 SHIPPED = sorted(SCENARIOS.glob("*.yaml"))

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import logging
 import time
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,15 +20,11 @@ from ..model.inputs import Controls
 from ..dynamics import ChainModel
 from ..modes import mode_class
 from ..results.result import Result
+from .guard import SolverError, check_sane, guarded
 from .vode import VodeStepper
 
-__all__ = ["SolverError", "WORK_BASE_NFEV", "WORK_NFEV_PER_S", "work_rate", "SPEED_SANITY_FACTOR", "AssembledRun",
-           "assemble", "simulate", "simulate_batch", "batch_key", "BatchMember", "solver_options", "output_grid", "ATOL",
+__all__ = ["SolverError", "AssembledRun", "assemble", "simulate", "simulate_batch", "batch_key", "BatchMember", "solver_options", "output_grid", "ATOL",
            "solve_interval"]
-
-
-class SolverError(RuntimeError):
-    """The ODE solver failed; the message carries the solver's own message and where it failed."""
 
 
 #: Solver fallbacks and retries are logged here (INFO).
@@ -204,7 +199,7 @@ def solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts
     The one solver step of every run (:func:`simulate`, batched stacks and
     :class:`snoworm.simulation.stepwise.Simulator`): ``solve_ivp`` with the scenario's method, tolerances and
     Jacobian, retried with the implicit methods before :class:`SolverError`; under the work limit
-    (:func:`work_rate`, counted from ``t``), numpy/scipy warnings captured.
+    (:func:`~snoworm.simulation.guard.work_rate`, counted from ``t``), numpy/scipy warnings captured.
 
     Parameters
     ----------
@@ -232,7 +227,7 @@ def solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts
         Output times and states ``(n_t, n_states)``, where the interval ended, the state there,
         and the index of the event that ended it (None at ``t1``).
     """
-    return _guarded(lambda m: _solve_interval(m, ctl, t, t1, y, events, sim, t_eval, stats, label, opts),
+    return guarded(lambda m: _solve_interval(m, ctl, t, t1, y, events, sim, t_eval, stats, label, opts),
                     model, sim, label, t)
 
 
@@ -280,102 +275,11 @@ def _integrate(model, modes, sim, name, progress=None):
     return pieces, phases, stats
 
 
-# ---------------------------------------------------------------- work limit and sanity (issue 15)
-# Kept apart from the interval driver: a counting proxy of the model handed to it, and checks of
-# its output.  Neither changes a number of a run that stays within the limits.
-
-#: Right-hand-side evaluations a run may use: this base (start-up transients) ...
-WORK_BASE_NFEV = 20_000
-#: ... plus this many per simulated second reached, at the default tolerances (rtol 1e-5,
-#: atol_scale 1); tighter tolerances get (1e-5 / min(rtol, 1e-5 atol_scale))^(1/4) times more.
-#: Shipped scenarios need under 600 per second; their rtol 1e-9 reference runs (allowed 10x)
-#: under 4 000 (traverse_patch 3 765, inchworm6 2 346).
-WORK_NFEV_PER_S = 5_000
-#: A run whose ground or wheel-rim speed exceeds this multiple of the fastest no-load wheel speed
-#: R_w * omega_nl (plus the fastest joint rate) has left the physics: a solver failure.
-SPEED_SANITY_FACTOR = 5.0
-
-
-def work_rate(sim) -> float:
-    """Right-hand-side evaluations allowed per simulated second for the run's tolerances."""
-    tol = min(sim.rtol, 1e-5 * sim.atol_scale)
-    return WORK_NFEV_PER_S * max(1.0, (1e-5 / tol) ** 0.25)
-
-
-class _Metered:
-    """The model as the solver sees it: ``rhs`` counts its calls against the work limit
-    (:data:`WORK_BASE_NFEV` + :data:`WORK_NFEV_PER_S` per simulated second reached) and checks
-    ``simulation.max_wall_s``; every other attribute is the model's own."""
-
-    def __init__(self, model, sim, name, t0=0.0):
-        self._model, self._sim, self._name, self._t0 = model, sim, name, float(t0)
-        self._n, self._t_max, self._wall0 = 0, float(t0), time.perf_counter()
-        self._rate = work_rate(sim)
-
-    def __getattr__(self, attr):
-        return getattr(self._model, attr)
-
-    def rhs(self, t, y, *args):
-        """The model's right-hand side, counted."""
-        self._n += 1
-        self._t_max = max(self._t_max, float(t))
-        if self._n > WORK_BASE_NFEV + self._rate * (self._t_max - self._t0):
-            raise SolverError(
-                f"work limit: {self._n} right-hand-side evaluations by t = {self._t_max:.6g} s of {self._name!r} "
-                f"(limit {WORK_BASE_NFEV} + {self._rate:.0f} per simulated second). The system is too stiff or "
-                "too fast to integrate: lower the large gains, stiffnesses, forces or speeds of the scenario, or "
-                "raise simulation.max_step_s / atol_scale if they are tiny.")
-        if self._sim.max_wall_s is not None and self._n % 256 == 0:
-            wall = time.perf_counter() - self._wall0
-            if wall > self._sim.max_wall_s:
-                raise SolverError(f"simulation.max_wall_s: {wall:.1f} s of wall time spent by t = {self._t_max:.6g} s "
-                                  f"of {self._name!r} (limit {self._sim.max_wall_s:g} s). Shorten the run, relax "
-                                  "simulation.rtol or raise max_wall_s.")
-        return self._model.rhs(t, y, *args)
-
-
-def _check_sane(model, pieces, name):
-    """Raise SolverError if a member's states are non-finite or its speeds far beyond the no-load speed."""
-    lay = model.layout
-    vnl = float(np.max(np.asarray(model.seg.wheel_radius_m) * np.asarray(model.seg.no_load_speed_radps)))
-    rate = float(np.max(model.links.rate_max_mps, initial=0.0))
-    limit = SPEED_SANITY_FACTOR * vnl + rate
-    R = np.max(np.asarray(model.seg.wheel_radius_m))
-    for piece in pieces:
-        for ts, ys, _ in piece:
-            Y = ys.reshape(ts.size, lay.n, lay.n_s)
-            if not np.all(np.isfinite(Y)):
-                raise SolverError(f"non-finite state in {name!r} near t = {ts[0]:.6g} s; the run is meaningless. "
-                                  "Check the scenario's extreme values.")
-            v = max(float(np.max(np.abs(Y[..., lay.v]), initial=0.0)),
-                    float(np.max(np.abs(Y[..., lay.omega]), initial=0.0)) * R)
-            if v > limit:
-                k = int(np.argmax(np.max(np.abs(Y[..., lay.v]), axis=1)))
-                raise SolverError(f"speed {v:.3g} m/s in {name!r} near t = {ts[k]:.6g} s, beyond {limit:.3g} m/s "
-                                  f"({SPEED_SANITY_FACTOR:g} x the no-load wheel speed R_w*omega_nl = {vnl:.3g} m/s): "
-                                  "the chain has run away. Check forces, gains and speeds for extreme values.")
-
-
-def _guarded(fn, model, sim, name, t0=0.0):
-    """``fn(metered model)`` under the work limit from ``t0``, with numpy/scipy warnings kept quiet
-    and the solver's own breakdowns (singular matrices, ...) as :class:`SolverError`."""
-    with np.errstate(all="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            return fn(_Metered(model, sim, name, t0))
-        except (RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
-            if type(exc) not in (RuntimeError, ArithmeticError, ZeroDivisionError, OverflowError,
-                                 np.linalg.LinAlgError):
-                raise           # SolverError, a mode's own error (e.g. ControllerError): as they are
-            raise SolverError(f"the solver broke down in {name!r} ({type(exc).__name__}: {str(exc)[:200]}). "
-                              "The scenario is too stiff or has extreme values; check its gains, stiffnesses "
-                              "and forces, or try a smaller simulation.rtol.") from None
-
-
 def _guarded_integrate(model, modes, sim, name, progress=None):
-    """:func:`_integrate` under :func:`_guarded`, its results checked by :func:`_check_sane`."""
-    pieces, phases, stats = _guarded(lambda m: _integrate(m, modes, sim, name, progress), model, sim, name)
-    _check_sane(model, pieces, name)
+    """:func:`_integrate` under :func:`~snoworm.simulation.guard.guarded`, its results checked by
+    :func:`~snoworm.simulation.guard.check_sane`."""
+    pieces, phases, stats = guarded(lambda m: _integrate(m, modes, sim, name, progress), model, sim, name)
+    check_sane(model, pieces, name)
     return pieces, phases, stats
 
 

@@ -1,0 +1,67 @@
+"""The guard around every solve (snoworm.simulation.guard, issue 15): work limit, wall-time limit,
+solver breakdowns and runaway states end a run with SolverError; shipped runs stay far inside."""
+import pytest
+
+from snoworm import SolverError, load_scenario, simulate
+from snoworm.simulation import guard
+from snoworm.simulation.driver import assemble, output_grid, solve_interval
+from snoworm.simulation.guard import WORK_BASE_NFEV, WORK_NFEV_PER_S, work_rate
+
+
+def test_work_limit_ends_a_too_stiff_run(monkeypatch, scenario_path):
+    """A max_step_s of 1e-7 s needs 1e7 steps per second: the work limit stops it early."""
+    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.max_step_s", 1e-7)])
+    monkeypatch.setattr(guard, "WORK_BASE_NFEV", 2_000)
+    calls = []
+    real = sc.chain_model.rhs
+    monkeypatch.setattr(sc.chain_model, "rhs", lambda *a: calls.append(1) or real(*a))
+    with pytest.raises(SolverError, match=r"work limit: \d+ right-hand-side evaluations by t = .* too stiff"):
+        simulate(sc)
+    assert len(calls) <= 2_000 + guard.work_rate(sc.simulation) * 1e-3     # stopped within the budget
+
+
+def test_work_limit_leaves_shipped_runs_alone(scenario_path):
+    """The budget is far above what a shipped scenario needs (nfev per simulated second)."""
+    sc = load_scenario(scenario_path("inchworm2"))
+    res = simulate(sc)
+    assert res.stats["nfev"] < 0.1 * (WORK_BASE_NFEV + work_rate(sc.simulation) * 20)
+
+
+def test_work_rate_grows_with_tighter_tolerances(scenario_path):
+    sc = load_scenario(scenario_path("tow6_uniform"))
+    assert work_rate(sc.simulation) == WORK_NFEV_PER_S                       # rtol 1e-5, atol_scale 1
+    tight = sc.with_({"simulation.rtol": 1e-9, "simulation.atol_scale": 1e-3})
+    assert work_rate(tight.simulation) == pytest.approx(10 * WORK_NFEV_PER_S)  # (1e-5 / 1e-9)^(1/4)
+
+
+def test_max_wall_s_ends_the_run(scenario_path):
+    sc = load_scenario(scenario_path("inchworm2"), [("simulation.max_wall_s", 1e-6)])
+    with pytest.raises(SolverError, match=r"simulation\.max_wall_s: .* \(limit 1e-06 s\)"):
+        simulate(sc)
+
+
+def test_runaway_chain_is_a_solver_failure(scenario_path):
+    """A 1 MN tow drags the chain backward at ~2 km/s: beyond 5 x the no-load speed, not a result."""
+    sc = load_scenario(scenario_path("tow6_uniform"), [("tow.force_N", 1e6), ("simulation.duration_s", 3)])
+    with pytest.raises(SolverError, match=r"speed .* m/s .* beyond 24\.8 m/s .* run away"):
+        simulate(sc)
+
+
+def test_singular_matrix_is_a_solver_failure(scenario_path):
+    """A wheel of (almost) no inertia makes the Newton matrix singular: SolverError, not a crash."""
+    sc = load_scenario(scenario_path("tow6_uniform"), [("vehicle.segment.wheel_inertia_kgm2", 1e-300),
+                                                       ("simulation.duration_s", 3)])
+    with pytest.raises(SolverError):
+        simulate(sc)
+
+
+def test_solve_interval_is_under_the_work_limit_too(scenario_path):
+    """The public interval solve (snoworm.Simulator steps) counts its own budget from its start."""
+    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.max_step_s", 1e-7)])
+    case = assemble(sc)
+    y0 = case.mode.initial_state()
+    ctl = case.mode.interval(0.0, y0).controls
+    stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0}
+    with pytest.raises(SolverError, match="work limit"):
+        solve_interval(case.model, ctl, 100.0, 101.0, y0, [], sc.simulation, output_grid(100.0, 101.0, 0.05, True),
+                       stats, "step", {})
