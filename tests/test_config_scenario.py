@@ -145,7 +145,8 @@ import json  # noqa: E402
 from click.testing import CliRunner  # noqa: E402
 
 from snoworm.config.params import PARAMETER_SETS  # noqa: E402
-from snoworm.config.scenario import parameter_entries, scenario_path, shipped_scenarios  # noqa: E402
+from snoworm.config.params import parameter_entries  # noqa: E402
+from snoworm.config.scenario import scenario_path, shipped_scenarios  # noqa: E402
 
 
 def test_shipped_scenarios_by_name_from_anywhere(tmp_path, monkeypatch):

@@ -18,7 +18,7 @@ import yaml
 
 from . import yamlio
 from ..dynamics import ChainModel
-from .params import PARAMETER_SETS
+from .params import parameter_entries, read_model_file, source_notes
 from .schema import Config, ScenarioError, build, dump, field, quote, short_key, suggest
 from .sections import (BUILT_IN_MODES, MAX_OUTPUT_SAMPLES, LinkConfig, ModeConfig, ModeRegistry, PatchConfig,
                        RandomTerrainConfig, SegmentConfig, SimulationConfig, TerrainConfig, TerrainModelConfig,
@@ -28,7 +28,7 @@ __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
     "TerrainModelConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig", "MODE_CONFIGS",
     "register_mode_config", "load_scenario", "scenario_from_dict", "dump_scenario", "apply_overrides",
-    "parse_set_option", "read_model_file", "read_yaml", "ScenarioError", "base_dir", "shipped_scenarios",
+    "parse_set_option", "read_yaml", "ScenarioError", "base_dir", "shipped_scenarios",
     "scenario_path", "read_scenario_yaml",
 ]
 
@@ -179,29 +179,6 @@ def _copy_tree(data):
     return copy.deepcopy(data)
 
 
-def read_model_file(mfile, base_dir):
-    """Terrain-model coefficients from a YAML file (e.g. written by ``snoworm calibrate``).
-
-    The file is a mapping of ``terrain.model`` keys, optionally under a ``terrain_model:`` key;
-    a relative path is taken relative to the scenario file.
-    """
-    if not isinstance(mfile, str):
-        raise ScenarioError(f"terrain.model_file: expected a file path, got {quote(mfile)}.")
-    path = Path(mfile)
-    if not path.is_absolute() and base_dir is not None:
-        path = Path(base_dir) / path
-    try:
-        data = read_yaml(path)
-    except ScenarioError as exc:
-        raise ScenarioError(f"terrain.model_file: {exc}") from None
-    if isinstance(data, dict) and "terrain_model" in data:
-        data = data["terrain_model"]
-    if not isinstance(data, dict):
-        raise ScenarioError(f"terrain.model_file: {path} must hold a mapping of terrain-model coefficients "
-                            "(b_tF, b_trF, A, peak_exponent_d, tau0, tau1, ...).")
-    return data
-
-
 def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Scenario:
     """Validate a scenario mapping (as parsed from YAML) into a :class:`Scenario`.
 
@@ -226,7 +203,7 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
         raise ScenarioError(f"vehicle: expected a mapping, got {quote(veh)}.")
     entries, veh["parameter_set"] = parameter_entries(veh.get("parameter_set"), base_dir)
     ps = {sec: {k: v for k, (v, _) in items.items()} for sec, items in entries.items()}
-    notes = _source_notes(raw.pop("sources", None) or {})
+    notes = source_notes(raw.pop("sources", None) or {})
     veh["segment"] = _merge(ps["segment"], veh.get("segment", {}))
     veh["links"] = _merge(ps["links"], veh.get("links", {}))
     if isinstance(raw["terrain"], dict):
@@ -265,96 +242,8 @@ def base_dir() -> Path:
     return Path.cwd() if d is None else d
 
 
-#: Source tags a value may carry (docs/model.md; params.py for the built-in sets).
-SOURCE_TAGS = ("[paper]", "[field data]", "[fitted]", "[assumed]", "[user]", "[Lines]", "[derived]")
 #: Sections of a parameter set and their dotted prefixes in a scenario.
 _SECTIONS = {"segment": "vehicle.segment", "links": "vehicle.links", "terrain_model": "terrain.model"}
-
-
-def _tag(value, where):
-    if not isinstance(value, str) or not value.startswith(SOURCE_TAGS):
-        raise ScenarioError(f"{where}: a source must start with one of {', '.join(SOURCE_TAGS)}, e.g. "
-                            f"'[field data] weighed 2026-01'; got {quote(value)}.")
-    return value
-
-
-def _source_notes(notes) -> dict:
-    """The scenario's ``sources:`` block ({dotted key: tag}), checked."""
-    if not isinstance(notes, dict):
-        raise ScenarioError(f"sources: expected a mapping of dotted keys to source tags, got {quote(notes)}.")
-    return {str(k): _tag(v, f"sources.{k}") for k, v in notes.items()}
-
-
-def _entries_copy(entries) -> dict:
-    """A copy of a parameter set's ``{section: {key: (value, source)}}`` (its entries are immutable
-    tuples of scalars, so copying the mappings suffices; a deep copy cost ~2 ms per scenario)."""
-    return {sec: dict(items) for sec, items in entries.items()}
-
-
-def parameter_entries(ps_name, base_dir=None):
-    """``({section: {key: (value, source)}}, name to record)`` of a named set or a parameter-set file.
-
-    ``ps_name`` is a name of :data:`~snoworm.config.params.PARAMETER_SETS` or a path to a YAML file of the
-    user's own vehicle (relative to the scenario file; see :func:`read_parameter_file`).
-    """
-    if ps_name is None:
-        raise ScenarioError("vehicle.parameter_set: is required but missing. Name the set of physical values "
-                            f"to start from, one of: {', '.join(PARAMETER_SETS)}, or a YAML parameter-set file.")
-    if isinstance(ps_name, str) and ps_name in PARAMETER_SETS:
-        return _entries_copy(PARAMETER_SETS[ps_name]), ps_name
-    if isinstance(ps_name, str) and (ps_name.endswith((".yaml", ".yml")) or "/" in ps_name):
-        path = Path(ps_name)
-        if not path.is_absolute() and base_dir is not None:
-            path = Path(base_dir) / path
-        return read_parameter_file(path), str(path.resolve())
-    raise ScenarioError(f"vehicle.parameter_set: unknown set {quote(ps_name)}.{suggest(str(ps_name), PARAMETER_SETS)} "
-                        f"Known sets: {', '.join(PARAMETER_SETS)}; or give a YAML parameter-set file (path ending .yaml).")
-
-
-def read_parameter_file(path) -> dict:
-    """A parameter-set file of the user's own vehicle -> ``{section: {key: (value, source)}}``.
-
-    The file holds ``segment``, ``links`` and ``terrain_model`` mappings with the keys of the
-    built-in sets; each value is a number (source ``[user] <file>``) or ``{value: ..., source:
-    "[field data] ..."}``.  ``base: frostyboy`` starts from a named set (its values keep their
-    sources); without it every key must be given (no silent defaults).
-    """
-    where = f"vehicle.parameter_set: {path}"
-    try:
-        data = read_yaml(path)
-    except ScenarioError as exc:
-        raise ScenarioError(f"vehicle.parameter_set: {exc}") from None
-    if not isinstance(data, dict):
-        raise ScenarioError(f"{where} must hold a mapping with segment, links and terrain_model sections.")
-    ref = PARAMETER_SETS["frostyboy"]
-    for key in data:
-        if key not in ("name", "description", "base", *ref):
-            raise ScenarioError(f"{where}: unknown key {quote(key)}.{suggest(str(key), [*ref, 'base', 'name'])} "
-                                f"Known keys: name, description, base, {', '.join(ref)}.")
-    base = data.get("base")
-    if base is not None and base not in PARAMETER_SETS:
-        raise ScenarioError(f"{where}: base: unknown set {quote(base)}. Known sets: {', '.join(PARAMETER_SETS)}.")
-    out = _entries_copy(PARAMETER_SETS[base]) if base else {sec: {} for sec in ref}
-    for sec in ref:
-        given = data.get(sec) or {}
-        if not isinstance(given, dict):
-            raise ScenarioError(f"{where}: {sec}: expected a mapping of values, got {quote(given)}.")
-        for k, v in given.items():
-            if k not in ref[sec]:
-                raise ScenarioError(f"{where}: {sec}.{k}: unknown key.{suggest(str(k), ref[sec])} "
-                                    f"Known keys: {', '.join(ref[sec])}.")
-            if isinstance(v, dict):
-                if set(v) - {"value", "source"} or "value" not in v:
-                    raise ScenarioError(f"{where}: {sec}.{k}: give a value, or a mapping {{value: ..., source: "
-                                        f"'[tag] note'}}; got {quote(v)}.")
-                out[sec][k] = (v["value"], _tag(v.get("source", f"[user] {Path(path).name}"), f"{where}: {sec}.{k}.source"))
-            else:
-                out[sec][k] = (v, f"[user] {Path(path).name}")
-        missing = [k for k in ref[sec] if k not in out[sec]]
-        if missing:
-            raise ScenarioError(f"{where}: {sec}: missing {', '.join(missing)}. Give every value of the vehicle, or "
-                                "start from a named set with 'base: frostyboy'.")
-    return out
 
 
 def _text(v, path):

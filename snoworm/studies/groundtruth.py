@@ -26,7 +26,8 @@ from scipy.optimize import brentq
 
 from .. import steady, terrain
 from ..config.params import PARAMETER_SETS, parameter_set
-from ..config.scenario import SegmentConfig, TerrainConfig, TerrainModelConfig, read_model_file
+from ..config.params import read_model_file
+from ..config.scenario import SegmentConfig, TerrainConfig, TerrainModelConfig
 from ..config.schema import ScenarioError, build, check_field, dump, suggest
 from ..infra.folders import output_folder, relocate
 from ..infra.csvwriter import csv_text, write_csv
