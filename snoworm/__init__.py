@@ -37,7 +37,7 @@ _EXPORTS = {
     "Result": "results.result", "load_result": "results.result",
     "Scenario": "config.scenario", "ScenarioError": "config.scenario", "load_scenario": "config.scenario",
     "scenario_from_dict": "config.scenario", "shipped_scenarios": "config.scenario",
-    "ModeConfig": "config.sections",
+    "ModeConfig": "config.mode_registry",
     "Observation": "simulation.stepwise", "Simulator": "simulation.stepwise",
     "SweepTable": "studies.sweep", "load_sweep": "studies.sweep", "run_sweep": "studies.sweep",
 }
@@ -54,7 +54,7 @@ if TYPE_CHECKING:  # for type checkers and editors; at run time the names come f
     from .modes import Mode, register_mode
     from .results.result import Result, load_result
     from .config.scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios
-    from .config.sections import ModeConfig
+    from .config.mode_registry import ModeConfig
     from .simulation.stepwise import Observation, Simulator
     from .studies.sweep import SweepTable, load_sweep, run_sweep
 

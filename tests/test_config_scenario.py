@@ -133,7 +133,7 @@ def test_cached_properties_are_built_once():
 
 
 def test_mode_configs_registry_holds_the_built_in_modes():
-    from snoworm.config.scenario import MODE_CONFIGS
+    from snoworm.config.mode_registry import MODE_CONFIGS
     assert {"uniform", "force_control", "inchworm", "supervisor"} <= set(MODE_CONFIGS)
     sc = load_scenario(SCENARIOS / "inchworm6.yaml")
     assert type(sc.mode) is MODE_CONFIGS["inchworm"]

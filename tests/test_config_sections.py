@@ -123,32 +123,3 @@ def test_output_samples_are_capped():
     raw["simulation"]["output_dt_s"] = 1e-9
     with pytest.raises(ScenarioError, match=r"^simulation\.output_dt_s: .* output samples .*, over the 150000 allowed"):
         scenario_from_dict(raw)
-
-
-# ------------------------------------------------------------------ the lazy mode registry
-def test_mode_registry_imports_a_built_in_modes_module_when_it_is_looked_up(tmp_path, monkeypatch):
-    import sys
-    import types
-
-    from snoworm.config.sections import ModeRegistry
-    reg = ModeRegistry({"first": "h6_fake_first", "second": "h6_fake_second"})
-    monkeypatch.setitem(sys.modules, "h6_registry_host", types.SimpleNamespace(reg=reg))
-    monkeypatch.syspath_prepend(str(tmp_path))
-    for key in ("first", "second"):
-        (tmp_path / f"h6_fake_{key}.py").write_text(f"import h6_registry_host\nh6_registry_host.reg[{key!r}] = {key!r}\n")
-        monkeypatch.delitem(sys.modules, f"h6_fake_{key}", raising=False)
-    reg["users"] = "mine"                              # registering imports nothing
-    assert "h6_fake_first" not in sys.modules and "h6_fake_second" not in sys.modules
-    assert reg["first"] == "first" and "users" in reg and "unknown" not in reg
-    assert "h6_fake_first" in sys.modules and "h6_fake_second" not in sys.modules    # only the one looked up
-    assert list(reg) == ["first", "second", "users"] and len(reg) == 3    # listing imports all, built-ins first
-    del reg["users"]
-    assert dict(reg) == {"first": "first", "second": "second"}
-
-
-def test_mode_registry_reports_a_failed_import_each_time():
-    from snoworm.config.sections import ModeRegistry
-    reg = ModeRegistry({"x": "h6_no_such_module"})
-    for _ in range(2):
-        with pytest.raises(ModuleNotFoundError):
-            reg["x"]

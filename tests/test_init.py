@@ -77,7 +77,8 @@ from dataclasses import dataclass
 from snoworm import Mode, ModeConfig, register_mode, scenario_from_dict, simulate
 from snoworm.model.inputs import Controls
 from snoworm.modes.base import Interval
-from snoworm.config.scenario import MODE_CONFIGS, apply_overrides, read_yaml
+from snoworm.config.mode_registry import MODE_CONFIGS
+from snoworm.config.scenario import apply_overrides, read_yaml
 from snoworm.config.schema import field
 
 @dataclass(frozen=True)

@@ -8,7 +8,8 @@ import snoworm
 from snoworm import Mode, ModeConfig, ScenarioError, register_mode, scenario_from_dict, simulate
 from snoworm.model.inputs import Controls
 from snoworm.modes.base import MODES, Interval
-from snoworm.config.scenario import MODE_CONFIGS, apply_overrides, read_yaml
+from snoworm.config.mode_registry import MODE_CONFIGS
+from snoworm.config.scenario import apply_overrides, read_yaml
 from snoworm.config.schema import field
 from tests.conftest import SCENARIOS
 

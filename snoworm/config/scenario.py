@@ -20,46 +20,17 @@ from . import yamlio
 from ..dynamics import ChainModel
 from .params import parameter_entries, read_model_file, source_notes
 from .schema import Config, ScenarioError, build, dump, field, quote, short_key, suggest
-from .sections import (BUILT_IN_MODES, MAX_OUTPUT_SAMPLES, LinkConfig, ModeConfig, ModeRegistry, PatchConfig,
+from .mode_registry import ModeConfig, build_mode_config
+from .sections import (MAX_OUTPUT_SAMPLES, LinkConfig, PatchConfig,
                        RandomTerrainConfig, SegmentConfig, SimulationConfig, TerrainConfig, TerrainModelConfig,
                        TowConfig, VehicleConfig)
 
 __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
-    "TerrainModelConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "ModeConfig", "MODE_CONFIGS",
-    "register_mode_config", "load_scenario", "scenario_from_dict", "dump_scenario", "apply_overrides",
+    "TerrainModelConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "load_scenario", "scenario_from_dict", "dump_scenario", "apply_overrides",
     "parse_set_option", "read_yaml", "ScenarioError", "base_dir", "shipped_scenarios",
     "scenario_path", "read_scenario_yaml",
 ]
-
-#: The scenario's ``mode.type`` -> its :class:`~snoworm.config.sections.ModeConfig` subclass.  Filled by
-#: :func:`snoworm.modes.register_mode`; a built-in mode's module is imported (by name: the modes sit
-#: above this layer) when the mode is first looked up.
-MODE_CONFIGS = ModeRegistry(BUILT_IN_MODES)
-
-
-def register_mode_config(name: str, cls) -> None:
-    """Make ``mode: {type: name, ...}`` validate against the config class ``cls``."""
-    if not (isinstance(cls, type) and issubclass(cls, ModeConfig)):
-        raise TypeError(f"a mode config must subclass snoworm.config.sections.ModeConfig, got {cls!r}")
-    MODE_CONFIGS[name] = cls
-
-
-def build_mode_config(raw, path="mode") -> ModeConfig:
-    """Validate a ``mode`` mapping against the config class registered for its ``type``."""
-    reg = MODE_CONFIGS
-    if not isinstance(raw, dict):
-        raise ScenarioError(f"{path}: expected a mapping with a 'type' key ({', '.join(reg)}), got {quote(raw)}.")
-    kind = raw.get("type")
-    if kind is None:
-        raise ScenarioError(f"{path}.type: is required but missing. Choose one of: {', '.join(reg)}.")
-    if not isinstance(kind, str):
-        raise ScenarioError(f"{path}.type: expected the name of a mode ({', '.join(reg)}), got "
-                            f"{type(kind).__name__} {quote(kind)}.")
-    if kind not in reg:
-        raise ScenarioError(f"{path}.type: unknown mode {quote(kind)}.{suggest(kind, reg)} Known modes: {', '.join(reg)}.")
-    return build(reg[kind], raw, path)
-
 
 @dataclass(frozen=True)
 class Scenario(Config):

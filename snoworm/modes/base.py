@@ -5,7 +5,7 @@ piecewise-constant :class:`~snoworm.model.inputs.Controls` and, optionally, stat
 the interval (a gait phase change).  The physics never changes between modes (paper section 5:
 the modes are controllers of the same chain).
 
-A new mode is one module defining a :class:`~snoworm.config.sections.ModeConfig` subclass (its
+A new mode is one module defining a :class:`~snoworm.config.mode_registry.ModeConfig` subclass (its
 ``mode:`` section, validated on construction) and a :class:`Mode` subclass naming it, registered
 with :func:`register_mode` -- also from a user's own module, before the scenario is loaded.
 """
@@ -17,8 +17,7 @@ import numpy as np
 
 from ..model.inputs import Controls
 from ..config.schema import ScenarioError
-from ..config.scenario import register_mode_config
-from ..config.sections import BUILT_IN_MODES, ModeConfig, ModeRegistry
+from ..config.mode_registry import BUILT_IN_MODES, ModeConfig, ModeRegistry, register_mode_config
 
 __all__ = ["Mode", "Interval", "MODES", "register_mode", "mode_class", "start_times", "rolling_interval"]
 
@@ -57,7 +56,7 @@ class Mode:
     name : str
         The ``mode.type`` this mode answers to.
     config_class : type
-        Its :class:`~snoworm.config.sections.ModeConfig` subclass.
+        Its :class:`~snoworm.config.mode_registry.ModeConfig` subclass.
     continue_solver : bool
         Whether the solver may carry its history across the boundary between two intervals
         that meet at an interval's end time (``simulation.method: VODE`` only; default False:

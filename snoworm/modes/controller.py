@@ -25,7 +25,7 @@ from typing import Any
 
 from ..config.schema import ScenarioError, field, quote
 from ..config.scenario import base_dir
-from ..config.sections import ModeConfig
+from ..config.mode_registry import ModeConfig
 from .base import Interval, Mode, register_mode
 from .command import CommandState, observe
 

@@ -84,7 +84,8 @@ from scipy.optimize import brentq
 from .. import steady, terrain
 from ..model.inputs import Controls
 from ..config.schema import Config, ScenarioError, field, suggest
-from ..config.sections import FINITE_WHY, ModeConfig
+from ..config.mode_registry import ModeConfig
+from ..config.sections import FINITE_WHY
 from .base import Mode, register_mode, rolling_interval, start_times
 
 __all__ = ["TargetsConfig", "ForceControlConfig", "ForceControlMode", "ForcePlan", "plan",

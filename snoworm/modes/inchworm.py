@@ -49,7 +49,8 @@ import numpy as np
 from .. import terrain
 from ..model.inputs import Controls
 from ..config.schema import ScenarioError, field, suggest
-from ..config.sections import FINITE_WHY, ModeConfig
+from ..config.mode_registry import ModeConfig
+from ..config.sections import FINITE_WHY
 from .base import Interval, Mode, register_mode
 
 __all__ = ["InchwormConfig", "InchwormMode", "GAITS", "gait_plan", "progress_conditions"]

@@ -51,7 +51,8 @@ import numpy as np
 from .. import steady, terrain
 from ..model.inputs import Controls
 from ..config.schema import ScenarioError, build, field
-from ..config.sections import FINITE_WHY, ModeConfig
+from ..config.mode_registry import ModeConfig
+from ..config.sections import FINITE_WHY
 from .base import Interval, Mode, register_mode
 from .inchworm import InchwormConfig, InchwormMode
 

@@ -12,7 +12,8 @@ import numpy as np
 
 from ..model.inputs import Controls
 from ..config.schema import ScenarioError, field
-from ..config.sections import FINITE_WHY, ModeConfig
+from ..config.mode_registry import ModeConfig
+from ..config.sections import FINITE_WHY
 from .base import Mode, register_mode, rolling_interval, start_times
 
 __all__ = ["UniformConfig", "UniformMode"]
