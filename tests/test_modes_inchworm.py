@@ -4,8 +4,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from snoworm import load_scenario, simulate
-from snoworm.modes.inchworm import gait_plan, progress_conditions
-from snoworm.config.scenario import ScenarioError, apply_overrides, read_yaml, scenario_from_dict
+from snoworm.modes.gait import progress_conditions
+from snoworm.config.scenario import apply_overrides, read_yaml, scenario_from_dict
 from snoworm import terrain
 from snoworm.config.params import terrain_params
 
@@ -140,22 +140,6 @@ def test_higher_xt_faster_less_sliding_lower_force(inch6):
     assert b["mean_speed_mps"] > a["mean_speed_mps"]
     assert b["peak_backward_speed_held_mps"] < a["peak_backward_speed_held_mps"]
     assert b["peak_joint_force_N"] < a["peak_joint_force_N"]
-
-
-def test_gait_validation():
-    with pytest.raises(ScenarioError, match="jam"):
-        gait_plan([[0], [0]], 2, ["prismatic"])
-    with pytest.raises(ScenarioError, match="only extends"):
-        gait_plan([[0]], 2, ["prismatic"])
-    with pytest.raises(ScenarioError, match="every segment"):
-        gait_plan([[0, 1]], 2, ["prismatic"])
-    with pytest.raises(ScenarioError, match="must be 'prismatic'"):
-        gait_plan([[1], [0]], 2, ["fixed"])
-    with pytest.raises(ScenarioError, match="out of range"):
-        gait_plan([[2], [0]], 2, ["prismatic"])
-    # a 4-segment gait moving one segment at a time, rear to front, is valid
-    plans = gait_plan([[3], [2], [1], [0]], 4, ["prismatic"] * 3)
-    assert [list(p.role) for p in plans] == [[0, 0, -1], [0, -1, 1], [-1, 1, 0], [1, 0, 0]]
 
 
 def test_user_gait_four_segments_one_at_a_time():
