@@ -122,6 +122,6 @@ def frostyboy():
 @pytest.fixture(scope="session")
 def data():
     """The shipped FrostyBoy field data (paper Table 2)."""
-    from snoworm.studies import groundtruth
-    return groundtruth.read_field_data()
+    from snoworm.studies import field_data
+    return field_data.read_field_data()
 

@@ -17,13 +17,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from snoworm.studies import calibrate as cal
+from snoworm.studies import field_data as fd
 from snoworm.studies import groundtruth as gt
 from snoworm.cli import main
 from snoworm.config.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("1", "2", "3", "4", "5")
-HEADER = ",".join(gt.FIELD_COLUMNS)   # the field-data CSV header
+HEADER = ",".join(fd.FIELD_COLUMNS)   # the field-data CSV header
 
 
 
@@ -51,7 +52,7 @@ def test_calibration_fits_xt(data, frostyboy):
 _SEG, _TP = gt.vehicle_model("frostyboy")
 
 
-_BASE = gt.read_field_data()
+_BASE = fd.read_field_data()
 
 
 @settings(max_examples=15, deadline=None)
@@ -78,7 +79,7 @@ def test_calibration_recovers_known_coefficients(tau0, tau1, b_trF, seed):
 
 def test_cli_calibrate_model_file_round_trip(tmp_path):
     out = tmp_path / "cal"
-    r = CliRunner().invoke(main, ["calibrate", str(gt.default_data_path()), "--fit", "tau0", "--fit", "tau1",
+    r = CliRunner().invoke(main, ["calibrate", str(fd.default_data_path()), "--fit", "tau0", "--fit", "tau1",
                                   "--out", str(out)])
     assert r.exit_code == 0, r.output
     assert "std err" in r.output and "before:" in r.output and "after:" in r.output
@@ -137,7 +138,7 @@ def test_cli_calibrate_refuses_a_foreign_folder_before_fitting(tmp_path, monkeyp
     out.mkdir()
     (out / "notes.txt").write_text("x")
     monkeypatch.setattr(cal, "calibrate", lambda *a, **k: pytest.fail("fitted before checking --out"))
-    r = CliRunner().invoke(main, ["calibrate", str(gt.default_data_path()), "--fit", "tau0", "--out", str(out)])
+    r = CliRunner().invoke(main, ["calibrate", str(fd.default_data_path()), "--fit", "tau0", "--out", str(out)])
     assert r.exit_code == 2 and str(out) in r.output and "--overwrite" in r.output
 def test_fitted_values_at_a_search_bound_are_noted(data, frostyboy):
     """X_t of a case fitted against its domain's upper end 1 is reported, not passed silently."""

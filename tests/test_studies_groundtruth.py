@@ -17,7 +17,6 @@ from snoworm.studies import groundtruth as gt
 from snoworm import steady
 from snoworm.cli import main
 from snoworm.config.scenario import load_scenario
-from snoworm.config.schema import ScenarioError
 from snoworm import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -25,7 +24,6 @@ CASES = ("1", "2", "3", "4", "5")
 # docs/model.md section 3: the default model at the Table 2 wheel speeds
 MODEL_TORQUE_NM = (10.0, 27.0, 30.0, 31.9, 45.0)
 MODEL_SLIP_PCT = (2.1, 6.3, 7.8, 9.3, 30.4)
-HEADER = ",".join(gt.FIELD_COLUMNS)   # the field-data CSV header
 
 
 
@@ -33,30 +31,6 @@ HEADER = ",".join(gt.FIELD_COLUMNS)   # the field-data CSV header
 @pytest.fixture(scope="module")
 def rows(data, frostyboy):
     return gt.compare_table2(data, *frostyboy)
-
-
-# ------------------------------------------------------------------------------- field data
-
-def test_shipped_data_is_table2(data):
-    assert data.case == CASES
-    np.testing.assert_allclose(data.speed_mps, [2.5, 1.23, 1.98, 1.84, 1.11], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(data.wheel_speed_mps, [2.66, 1.28, 2.05, 1.93, 1.58], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(data.slip, [0.06, 0.039, 0.034, 0.047, 0.30], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(data.torque_Nm, [10, 27, 30, 32.8, 45], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(data.drawbar_N, [0, 0, 0, 28.8, 0], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(data.xt, [1, 0.83, 0.8, 0.8, 0.65], rtol=0, atol=1e-12)
-    # the repository copy (data/) is the package data
-    assert (ROOT / "data" / "frostyboy_2020.csv").read_bytes() == gt.default_data_path().read_bytes()
-
-
-def test_reader_tolerates_comments_blank_lines_extra_columns(tmp_path):
-    f = tmp_path / "field.csv"
-    f.write_text("# my rover\n\n" + HEADER + ",note\n# a comment between rows\n"
-                 'a,"snow, wet",1.0,1.1,0.0909,20,0,0.9,x\n\n  # indented comment\nb,snow,1.0,1.1,0.09,21,5,0.9,y\n')
-    d = gt.read_field_data(f)
-    assert d.case == ("a", "b")
-    assert d.surface[0] == "snow, wet"
-    np.testing.assert_allclose(d.drawbar_N, [0.0, 5.0], atol=0)
 
 
 # ------------------------------------------------------------------------------- Table 2
@@ -142,8 +116,3 @@ def test_cli_terrain_curves(tmp_path):
     assert arr.shape == (2 * 1001, 5)
     np.testing.assert_allclose(arr[:, 4], arr[:, 2] - arr[:, 3], atol=1e-3)
     assert (out / "terrain_curves.png").stat().st_size > 1000
-
-
-def test_bad_input_api_raises_scenario_error(tmp_path):
-    with pytest.raises(ScenarioError, match="no such file"):
-        gt.read_field_data(tmp_path / "missing.csv")

@@ -2,6 +2,7 @@
 
 :mod:`~snoworm.studies.sweep` (parameter sweeps), :mod:`~snoworm.studies.paper` (the paper's
 figures and claims), :mod:`~snoworm.studies.mobility` (mobility maps),
-:mod:`~snoworm.studies.groundtruth` (field data, Table 2, terrain curves) and
+:mod:`~snoworm.studies.groundtruth` (Table 2, terrain curves), :mod:`~snoworm.studies.field_data`
+(reading field data) and
 :mod:`~snoworm.studies.calibrate` (fitting terrain coefficients to the field data).
 """

@@ -4,7 +4,7 @@ The paper set its coefficients "by trial and error until simulation and data con
 same match is a weighted least-squares problem solved by :func:`scipy.optimize.least_squares`.
 
 Model
-    For every case of a field-data file (:func:`snoworm.studies.groundtruth.read_field_data`), the
+    For every case of a field-data file (:func:`snoworm.studies.field_data.read_field_data`), the
     steady state of one segment (:func:`snoworm.steady.steady_state`) at the case's measured
     wheel speed ``R_w*omega`` and drawbar gives a model slip (Eq. 1) and motor torque per wheel.
 
@@ -41,7 +41,8 @@ from scipy.optimize import least_squares
 
 from .. import steady
 from ..infra.folders import atomic_write_text, check_output_folder, output_folder, relocate
-from .groundtruth import FieldData, compare_table2, format_table2, read_field_data, vehicle_model
+from .field_data import FieldData, read_field_data
+from .groundtruth import compare_table2, format_table2, vehicle_model
 from ..config.schema import ScenarioError, suggest
 from ..config.sections import TerrainConfig, TerrainModelConfig
 from ..terrain import TerrainParams

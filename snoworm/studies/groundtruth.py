@@ -2,8 +2,9 @@
 
 Three pieces, each a pure function of a parameter set plus a thin writer:
 
-* :func:`read_field_data` reads a field-data CSV (``#`` comment lines allowed) such as the
-  shipped ``frostyboy_2020.csv`` (paper Table 2) and validates it.
+* :func:`~snoworm.studies.field_data.read_field_data` (:mod:`snoworm.studies.field_data`) reads
+  a field-data CSV (``#`` comment lines allowed) such as the shipped ``frostyboy_2020.csv``
+  (paper Table 2) and validates it.
 * :func:`compare_table2` runs the steady-state model (:func:`snoworm.steady.steady_state`) on
   every case at its measured wheel speed ``R_w*omega``, drawbar and assigned ``X_t``, and lists
   measured against modelled ground speed, slip and torque (docs/model.md section 3).
@@ -14,12 +15,8 @@ The terrain laws themselves live only in :mod:`snoworm.terrain`; nothing here re
 """
 from __future__ import annotations
 
-import csv
-import io
 import math
 from dataclasses import dataclass
-from importlib import resources
-from pathlib import Path
 
 import numpy as np
 from scipy.optimize import brentq
@@ -32,142 +29,13 @@ from ..config.schema import ScenarioError, build, check_field, dump, suggest
 from ..infra.folders import output_folder, relocate
 from ..infra.csvwriter import csv_text, write_csv
 from ..terrain import TerrainParams
+from .field_data import FieldData, read_field_data
 
 __all__ = [
-    "FIELD_COLUMNS", "FieldData", "default_data_path", "read_field_data", "vehicle_model",
+    "vehicle_model",
     "compare_table2", "table2_csv", "format_table2", "TerrainCurves", "terrain_curves",
     "terrain_curves_csv", "format_zero_crossings", "run_groundtruth", "run_terrain_curves",
 ]
-
-#: Columns of a field-data file: name -> meaning.  Extra columns are allowed and ignored.
-FIELD_COLUMNS = {
-    "case": "case label (unique)",
-    "surface": "free-text description of the surface",
-    "speed_mps": "measured longitudinal ground speed V [m/s]",
-    "wheel_speed_mps": "measured wheel speed R_w*omega [m/s], > 0",
-    "slip": "measured steady slip as a fraction (0.06 for 6 %), in [-1, 1]",
-    "torque_Nm": "measured motor output torque per wheel [N m]",
-    "drawbar_N": "measured drawbar (tow) force [N]; 0 when nothing is towed",
-    "xt": "terrain coefficient X_t assigned to the case, in (0, 1]",
-}
-_NUMERIC = ("speed_mps", "wheel_speed_mps", "slip", "torque_Nm", "drawbar_N", "xt")
-
-_DATA_FILE = "frostyboy_2020.csv"
-
-
-def default_data_path() -> Path:
-    """Path of the shipped FrostyBoy 2020 field data (paper Table 2), package data of snoworm."""
-    return Path(str(resources.files("snoworm") / "data" / _DATA_FILE))
-
-
-@dataclass(frozen=True)
-class FieldData:
-    """Steady-state field cases (one row each), SI units.
-
-    Attributes
-    ----------
-    source : str
-        File the data came from.
-    case, surface : tuple of str
-        Case labels and surface descriptions.
-    speed_mps, wheel_speed_mps, slip, torque_Nm, drawbar_N, xt : ndarray
-        Columns of :data:`FIELD_COLUMNS` (slip as a fraction).
-    """
-
-    source: str
-    case: tuple
-    surface: tuple
-    speed_mps: np.ndarray
-    wheel_speed_mps: np.ndarray
-    slip: np.ndarray
-    torque_Nm: np.ndarray
-    drawbar_N: np.ndarray
-    xt: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.case)
-
-
-def _bad(path, msg):
-    raise ScenarioError(f"{path}: {msg}")
-
-
-def read_field_data(path=None) -> FieldData:
-    """Read and validate a field-data CSV (format of the shipped ``frostyboy_2020.csv``).
-
-    Lines whose first non-blank character is ``#`` and blank lines are skipped; the first
-    remaining line is the header.  Required columns are those of :data:`FIELD_COLUMNS`
-    (any order; extra columns are ignored).
-
-    Parameters
-    ----------
-    path : str or Path, optional
-        The file; ``None`` reads the shipped FrostyBoy 2020 data (paper Table 2).
-
-    Raises
-    ------
-    ScenarioError
-        Missing file or columns, non-numeric or non-finite values, slip outside [-1, 1],
-        wheel speed or X_t not positive, duplicate case labels, no data rows.
-    """
-    path = Path(path) if path is not None else default_data_path()
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        _bad(path, "no such file. Give the path of a field-data CSV (see data/frostyboy_2020.csv for the format).")
-    except (OSError, UnicodeDecodeError) as exc:
-        _bad(path, f"cannot be read as UTF-8 text ({exc}).")
-    lines = [(n, ln) for n, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
-        _bad(path, "no header and no data rows. Expected a header line "
-             f"'{','.join(FIELD_COLUMNS)}' followed by one row per case.")
-    rows = list(csv.reader(io.StringIO("\n".join(ln for _, ln in lines))))
-    header = [h.strip() for h in rows[0]]
-    missing = [c for c in FIELD_COLUMNS if c not in header]
-    if missing:
-        hints = "".join(f" For '{m}':{suggest(m, header)}" for m in missing if suggest(m, header))
-        _bad(path, f"missing column(s) {', '.join(repr(m) for m in missing)}. The header must name "
-             f"{', '.join(FIELD_COLUMNS)} (found {', '.join(repr(h) for h in header)}).{hints} "
-             "Slip is a fraction, torque per wheel in N m, drawbar in N (0 when nothing is towed).")
-    if len(rows) < 2:
-        _bad(path, "has a header but no data rows. Add one row per steady-state case.")
-    col = {c: header.index(c) for c in FIELD_COLUMNS}
-    values = {c: [] for c in FIELD_COLUMNS}
-    for (lineno, _), row in zip(lines[1:], rows[1:]):
-        if len(row) != len(header):
-            _bad(path, f"line {lineno} has {len(row)} fields but the header has {len(header)}. "
-                 "Quote text that contains commas, e.g. \"lake snow, sled\".")
-        for c in FIELD_COLUMNS:
-            raw = row[col[c]].strip()
-            if c in _NUMERIC:
-                try:
-                    v = float(raw)
-                except ValueError:
-                    extra = " Write 0 for no drawbar." if c == "drawbar_N" else ""
-                    _bad(path, f"line {lineno}, column '{c}': expected a number ({FIELD_COLUMNS[c]}), "
-                         f"got {raw!r}.{extra}")
-                if not math.isfinite(v):
-                    _bad(path, f"line {lineno}, column '{c}': must be a finite number, got {raw!r}.")
-                values[c].append(v)
-            else:
-                values[c].append(raw)
-        lab = values["case"][-1]
-        s, w, x = values["slip"][-1], values["wheel_speed_mps"][-1], values["xt"][-1]
-        if not -1.0 <= s <= 1.0:
-            hint = f" Did you give it in percent? As a fraction it would be {s / 100:g}." if abs(s) <= 100 else ""
-            _bad(path, f"line {lineno} (case {lab}): slip {s:g} is outside [-1, 1]; slip is a fraction.{hint}")
-        if not w > 0:
-            _bad(path, f"line {lineno} (case {lab}): wheel_speed_mps must be greater than 0 m/s "
-                 f"(steady forward driving), got {w:g}.")
-        if not 0 < x <= 1:
-            _bad(path, f"line {lineno} (case {lab}): xt must be in (0, 1], got {x:g}. "
-                 "X_t = 1 is neve, lower is looser snow.")
-    dup = sorted({c for c in values["case"] if values["case"].count(c) > 1})
-    if dup:
-        _bad(path, f"case label(s) {', '.join(repr(d) for d in dup)} appear more than once. Give each case a unique label.")
-    return FieldData(source=str(path), case=tuple(values["case"]), surface=tuple(values["surface"]),
-                     **{c: np.array(values[c], float) for c in _NUMERIC})
-
 
 def vehicle_model(parameter_set_name: str = "frostyboy", model_file=None):
     """Segment and terrain-model parameters of a named set, optionally with a terrain-model file.

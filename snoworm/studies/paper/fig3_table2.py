@@ -6,7 +6,8 @@ import math
 import numpy as np
 
 from ... import plotting
-from ..groundtruth import compare_table2, format_zero_crossings, read_field_data, terrain_curves
+from ..field_data import read_field_data
+from ..groundtruth import compare_table2, format_zero_crossings, terrain_curves
 from .claims import Context, Section, make_claim, steady_mean
 
 __all__ = ["TABLE2_CASES", "check_fig3", "item_fig3", "table2_model", "check_table2", "item_table2"]
