@@ -1,111 +1,24 @@
 """Command-line interface (click).  Thin: every command calls the Python API.
 
 Exit status: 0 success, 1 solver failure (with the solver's message), 2 bad input (a clear
-one-paragraph message naming the field and the fix, never a traceback).
+one-paragraph message naming the field and the fix, never a traceback).  What every command
+shares (error handling, exit statuses, common options, progress, logging) is in
+:mod:`snoworm.cli_common`.
 """
 from __future__ import annotations
 
-import functools
-import logging
 import os
-import shlex
-import signal
 import sys
 
 import click
 
 from ._version import __version__
-
-EXIT_SOLVER = 1
-EXIT_INPUT = 2
-
-
-def _fail(msg, code):
-    click.echo(f"Error: {msg}", err=True)
-    sys.exit(code)
+from .cli_common import (EXIT_SOLVER, CommandGroup, Terminated, configure_logging, fail, handle_errors,
+                         model_file_option, out_option, overwrite_option, param_set_option, plot_format_option,
+                         progress_bar, set_option)
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, handled like Ctrl-C (finished files kept, partial ones removed)."""
-
-
-def _on_sigterm(signum, frame):
-    raise Terminated()
-
-
-def _catch_sigterm():
-    """Install the SIGTERM handler (main thread only); returns the previous handler or None."""
-    try:
-        return signal.signal(signal.SIGTERM, _on_sigterm)
-    except (ValueError, AttributeError):   # not the main thread / no SIGTERM on this platform
-        return None
-
-
-def handle_errors(fn):
-    """Turn ScenarioError and OutputError into exit 2, SolverError and ControllerError into exit 1,
-    each with a clear message; SIGTERM is handled like Ctrl-C."""
-    @functools.wraps(fn)
-    def wrapper(*a, **kw):
-        from .config.schema import ScenarioError  # lazy: start-up
-        from .simulation.driver import SolverError  # lazy: start-up
-        from .modes.controller import ControllerError  # lazy: start-up
-        from .infra import folders  # lazy: start-up
-        from .infra.folders import OutputError  # lazy: start-up
-        old = _catch_sigterm()
-        argv = click.get_current_context().find_root().meta.get("snoworm.argv")
-        folders.COMMAND = shlex.join(["snoworm", *argv]) if argv is not None else None   # for the manifests
-        try:
-            return fn(*a, **kw)
-        except (ScenarioError, OutputError) as exc:
-            _fail(str(exc), EXIT_INPUT)
-        except SolverError as exc:
-            _fail(f"solver failure: {exc}", EXIT_SOLVER)
-        except ControllerError as exc:      # the user's controller raised or returned a bad command
-            _fail(str(exc), EXIT_SOLVER)
-        except RecursionError:  # a structure nested beyond Python's stack: bad input, not a bug
-            _fail("the input is nested too deeply to read (a scenario needs only a few levels); flatten it.",
-                  EXIT_INPUT)
-        except BrokenPipeError:  # output piped into e.g. `head`: not an error of ours
-            sys.stderr.close()
-            sys.exit(0)
-        except KeyboardInterrupt as exc:
-            _fail("interrupted; nothing half-written was left (finished files of a sweep were kept).",
-                  143 if isinstance(exc, Terminated) else 130)
-        except Exception as exc:  # a bug: one paragraph, the traceback on request
-            if os.environ.get("SNOWORM_DEBUG"):
-                raise
-            _fail(f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
-                  "rerun with SNOWORM_DEBUG=1 for the traceback and report it.", EXIT_SOLVER)
-        finally:
-            folders.COMMAND = None
-            if old is not None:
-                signal.signal(signal.SIGTERM, old)
-    return wrapper
-
-
-class _Group(click.Group):
-    """The command group; keeps its command line (for the output folders' manifests)."""
-
-    def parse_args(self, ctx, args):
-        ctx.meta["snoworm.argv"] = list(args)
-        return super().parse_args(ctx, args)
-
-
-def _check_out(ctx, param, value):
-    """``--out`` must name a directory: an empty path would write into the current folder."""
-    if value is not None and not str(value).strip():
-        raise click.BadParameter("must name a directory, got an empty path (it would write into the current "
-                                 "folder). Give e.g. --out results/.")
-    return value
-
-
-def out_option(help_text):
-    """The ``--out DIR`` option of a command that writes results (checked by :func:`_check_out`)."""
-    return click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
-                        help=help_text)
-
-
-@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=CommandGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="snoworm")
 @click.option("-v", "--verbose", is_flag=True, help="Also log solver fallbacks and retries to stderr.")
 def main(verbose=False):
@@ -114,38 +27,7 @@ def main(verbose=False):
     Scenarios are YAML files or the names of the shipped ones (`snoworm scenarios` lists them).
     Start with `snoworm run inchworm6 --out out/`.
     """
-    log = logging.getLogger("snoworm")
-    if not any(isinstance(h, _StderrHandler) for h in log.handlers):
-        h = _StderrHandler()
-        h.setFormatter(logging.Formatter("snoworm: %(message)s"))
-        log.addHandler(h)
-    log.setLevel(logging.INFO if verbose else logging.WARNING)
-
-
-class _StderrHandler(logging.StreamHandler):
-    """Log records to the current ``sys.stderr`` (looked up at each record, not at start-up)."""
-
-    def emit(self, record):
-        self.stream = sys.stderr
-        super().emit(record)
-
-
-overwrite_option = click.option("--overwrite", is_flag=True,
-                                help="Write into a non-empty --out folder that snoworm did not write (same-named "
-                                     "files are replaced, other files kept). An earlier snoworm output folder is "
-                                     "always replaced as a whole.")
-
-
-def _progress(total, desc, unit):
-    from .infra.progress import Progress  # lazy: start-up
-    return Progress(total, desc, unit)
-
-
-set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
-                          help="Override a scenario value by its dotted key, e.g. --set terrain.xt=0.5 "
-                               "(repeatable; VALUE is parsed as YAML).")
-plot_format_option = click.option("--plot-format", type=click.Choice(["png", "pdf", "svg"]), default="png",
-                                  show_default=True, help="File format of the plots (PNG at 200 dpi).")
+    configure_logging(verbose)
 
 
 @main.command()
@@ -169,7 +51,7 @@ def run(scenario, out_dir, sets, no_plot, plot_format, overwrite):
     from .config.scenario import load_scenario  # lazy: start-up
     sc = load_scenario(scenario, sets)
     check_output_folder(out_dir, overwrite)
-    with _progress(sc.simulation.duration_s, sc.name, "s simulated") as bar:
+    with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar:
         res = simulate(sc, progress=bar.set)
     paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite)
     s = res.summary()
@@ -196,14 +78,6 @@ def validate(scenario, sets):
 
 # ---------------------------------------------------------------- ground truth and calibration
 # (snoworm/studies/groundtruth.py, snoworm/studies/calibrate.py; paper Table 2 and Figure 3)
-
-param_set_option = click.option("--parameter-set", "parameter_set_name", default="frostyboy", show_default=True,
-                                help="Named set of physical values (segment and terrain model) to use.")
-model_file_option = click.option("--model-file", type=click.Path(dir_okay=False), default=None,
-                                 help="YAML of terrain-model coefficients (e.g. terrain_model.yaml written by "
-                                      "`snoworm calibrate`) replacing the parameter set's.")
-
-
 @main.command()
 @click.option("--data", "data_path", type=click.Path(dir_okay=False), default=None,
               help="Field-data CSV (default: the shipped FrostyBoy 2020 data, paper Table 2).")
@@ -280,7 +154,7 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
     """
     from .studies.calibrate import run_calibration  # lazy: start-up
-    with _progress(1, "calibrate", "model evaluations (budget)") as bar:
+    with progress_bar(1, "calibrate", "model evaluations (budget)") as bar:
         _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
                                          torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, overwrite=overwrite,
                                          progress=bar.set)
@@ -346,7 +220,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no
                           save_cases=save_cases, plot=not no_plot, batch=batch, series=series,
                           plot_format=plot_format, overwrite=overwrite)
     except SweepExecutionError as exc:
-        _fail(str(exc), EXIT_SOLVER)
+        fail(str(exc), EXIT_SOLVER)
     except KeyboardInterrupt as exc:
         how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
         click.echo(f"{how}: finished cases are in {out_dir}/summary.csv; run the same command "
@@ -397,7 +271,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
     --out/mobility_map.csv and --out/mobility_map.png.  Progress of the inching runs goes to stderr.
     """
     from .studies.mobility import run_mobility_map  # lazy: start-up
-    with _progress(1, "mobility map", "inching runs") as bar:
+    with progress_bar(1, "mobility map", "inching runs") as bar:
         _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets,
                                           rolling_speed_mps=rolling_speed_mps, inching=not no_inching,
                                           inch_duration_s=inch_duration_s, jobs=jobs, every_cell=every_cell,

@@ -122,7 +122,7 @@ def test_function_level_imports_are_justified():
     bad = []
     for p in _modules():
         lines = p.read_text().splitlines()
-        cli = p.name in ("cli.py", "__main__.py")
+        cli = p.name in ("cli.py", "cli_common.py", "__main__.py")
         for mod, line, in_func in _imports(p):
             if not in_func:
                 continue
@@ -177,7 +177,7 @@ def layer_mismatches(tree: set, tiers: list, documented: list) -> list:
 
 def test_tree_contract_and_doc_name_the_same_layers():
     tiers = contract_tiers()
-    assert len(tiers) <= 16, f"{len(tiers)} tiers: the contract should name folders, not every module"
+    assert len(tiers) <= 15, f"{len(tiers)} tiers: the contract should name folders, not every module"
     problems = layer_mismatches(tree_entries(), tiers, doc_tiers(DOC.read_text(encoding="utf-8")))
     assert not problems, "\n".join(problems)
 

@@ -1,0 +1,155 @@
+"""What every command of the command line (:mod:`snoworm.cli`) shares.
+
+Exit statuses and :func:`handle_errors` (bad input exit 2, solver or controller failure exit 1,
+Ctrl-C 130, SIGTERM 143, never a traceback unless ``SNOWORM_DEBUG``), the options several
+commands take (``--out``, ``--set``, ``--overwrite``, ``--plot-format``, ``--parameter-set``,
+``--model-file``), the progress bar and the log handler.  Like :mod:`snoworm.cli`, it imports the
+library only inside the functions that need it, so ``snoworm --help`` starts fast.
+"""
+from __future__ import annotations
+
+import functools
+import logging
+import os
+import shlex
+import signal
+import sys
+
+import click
+
+__all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "out_option",
+           "overwrite_option", "set_option", "plot_format_option", "param_set_option", "model_file_option",
+           "progress_bar", "StderrHandler", "configure_logging"]
+
+EXIT_SOLVER = 1
+EXIT_INPUT = 2
+
+
+def fail(msg, code):
+    """Print ``Error: msg`` to stderr and exit with status ``code``."""
+    click.echo(f"Error: {msg}", err=True)
+    sys.exit(code)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, handled like Ctrl-C (finished files kept, partial ones removed)."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
+def _catch_sigterm():
+    """Install the SIGTERM handler (main thread only); returns the previous handler or None."""
+    try:
+        return signal.signal(signal.SIGTERM, _on_sigterm)
+    except (ValueError, AttributeError):   # not the main thread / no SIGTERM on this platform
+        return None
+
+
+def handle_errors(fn):
+    """Turn ScenarioError and OutputError into exit 2, SolverError and ControllerError into exit 1,
+    each with a clear message; SIGTERM is handled like Ctrl-C."""
+    @functools.wraps(fn)
+    def wrapper(*a, **kw):
+        from .config.schema import ScenarioError  # lazy: start-up
+        from .simulation.guard import SolverError  # lazy: start-up
+        from .modes.controller import ControllerError  # lazy: start-up
+        from .infra import folders  # lazy: start-up
+        from .infra.folders import OutputError  # lazy: start-up
+        old = _catch_sigterm()
+        argv = click.get_current_context().find_root().meta.get("snoworm.argv")
+        folders.COMMAND = shlex.join(["snoworm", *argv]) if argv is not None else None   # for the manifests
+        try:
+            return fn(*a, **kw)
+        except (ScenarioError, OutputError) as exc:
+            fail(str(exc), EXIT_INPUT)
+        except SolverError as exc:
+            fail(f"solver failure: {exc}", EXIT_SOLVER)
+        except ControllerError as exc:      # the user's controller raised or returned a bad command
+            fail(str(exc), EXIT_SOLVER)
+        except RecursionError:  # a structure nested beyond Python's stack: bad input, not a bug
+            fail("the input is nested too deeply to read (a scenario needs only a few levels); flatten it.",
+                  EXIT_INPUT)
+        except BrokenPipeError:  # output piped into e.g. `head`: not an error of ours
+            sys.stderr.close()
+            sys.exit(0)
+        except KeyboardInterrupt as exc:
+            fail("interrupted; nothing half-written was left (finished files of a sweep were kept).",
+                  143 if isinstance(exc, Terminated) else 130)
+        except Exception as exc:  # a bug: one paragraph, the traceback on request
+            if os.environ.get("SNOWORM_DEBUG"):
+                raise
+            fail(f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
+                  "rerun with SNOWORM_DEBUG=1 for the traceback and report it.", EXIT_SOLVER)
+        finally:
+            folders.COMMAND = None
+            if old is not None:
+                signal.signal(signal.SIGTERM, old)
+    return wrapper
+
+
+class CommandGroup(click.Group):
+    """The command group; keeps its command line (for the output folders' manifests)."""
+
+    def parse_args(self, ctx, args):
+        ctx.meta["snoworm.argv"] = list(args)
+        return super().parse_args(ctx, args)
+
+
+def _check_out(ctx, param, value):
+    """``--out`` must name a directory: an empty path would write into the current folder."""
+    if value is not None and not str(value).strip():
+        raise click.BadParameter("must name a directory, got an empty path (it would write into the current "
+                                 "folder). Give e.g. --out results/.")
+    return value
+
+
+def out_option(help_text):
+    """The ``--out DIR`` option of a command that writes results (checked by :func:`_check_out`)."""
+    return click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
+                        help=help_text)
+
+
+class StderrHandler(logging.StreamHandler):
+    """Log records to the current ``sys.stderr`` (looked up at each record, not at start-up)."""
+
+    def emit(self, record):
+        self.stream = sys.stderr
+        super().emit(record)
+
+
+overwrite_option = click.option("--overwrite", is_flag=True,
+                                help="Write into a non-empty --out folder that snoworm did not write (same-named "
+                                     "files are replaced, other files kept). An earlier snoworm output folder is "
+                                     "always replaced as a whole.")
+
+
+def progress_bar(total, desc, unit):
+    """A :class:`~snoworm.infra.progress.Progress` bar on stderr (imported on first use)."""
+    from .infra.progress import Progress  # lazy: start-up
+    return Progress(total, desc, unit)
+
+
+set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
+                          help="Override a scenario value by its dotted key, e.g. --set terrain.xt=0.5 "
+                               "(repeatable; VALUE is parsed as YAML).")
+plot_format_option = click.option("--plot-format", type=click.Choice(["png", "pdf", "svg"]), default="png",
+                                  show_default=True, help="File format of the plots (PNG at 200 dpi).")
+
+
+def configure_logging(verbose: bool):
+    """Solver fallbacks and retries to stderr: INFO with ``--verbose``, else only warnings."""
+    log = logging.getLogger("snoworm")
+    if not any(isinstance(h, StderrHandler) for h in log.handlers):
+        h = StderrHandler()
+        h.setFormatter(logging.Formatter("snoworm: %(message)s"))
+        log.addHandler(h)
+    log.setLevel(logging.INFO if verbose else logging.WARNING)
+
+
+param_set_option = click.option("--parameter-set", "parameter_set_name", default="frostyboy", show_default=True,
+                                help="Named set of physical values (segment and terrain model) to use.")
+model_file_option = click.option("--model-file", type=click.Path(dir_okay=False), default=None,
+                                 help="YAML of terrain-model coefficients (e.g. terrain_model.yaml written by "
+                                      "`snoworm calibrate`) replacing the parameter set's.")

@@ -1,0 +1,103 @@
+"""What the commands share (snoworm.cli_common): exit statuses, error handling, shared options.
+
+Each command of tests/test_cli.py goes through these; here they are checked on a bare command
+so that each mapping (exception -> message and exit status) is seen on its own.
+"""
+import logging
+import os
+import signal
+import subprocess
+import sys
+
+import click
+import pytest
+from click.testing import CliRunner
+
+from snoworm.cli_common import (EXIT_INPUT, EXIT_SOLVER, CommandGroup, Terminated, configure_logging, handle_errors,
+                                out_option)
+from snoworm.config.schema import ScenarioError
+from snoworm.infra import folders
+from snoworm.infra.folders import OutputError
+from snoworm.modes.controller import ControllerError
+from snoworm.simulation.guard import SolverError
+
+
+def _cli(exc=None, seen=None):
+    @click.group(cls=CommandGroup)
+    def group():
+        pass
+
+    @group.command()
+    @out_option("where to write")
+    @handle_errors
+    def cmd(out_dir):
+        if seen is not None:
+            seen.append(folders.COMMAND)
+        if exc is not None:
+            raise exc
+        click.echo(f"ok {out_dir}")
+    return group
+
+
+@pytest.mark.parametrize("exc, code, text", [
+    (ScenarioError("tow.force_N: must be finite."), EXIT_INPUT, "Error: tow.force_N: must be finite.\n"),
+    (OutputError("out/ is not empty."), EXIT_INPUT, "Error: out/ is not empty.\n"),
+    (SolverError("every method failed"), EXIT_SOLVER, "Error: solver failure: every method failed\n"),
+    (ControllerError("the controller raised"), EXIT_SOLVER, "Error: the controller raised\n"),
+    (RecursionError(), EXIT_INPUT, "nested too deeply"),
+    (KeyboardInterrupt(), 130, "interrupted; nothing half-written"),
+    (Terminated(), 143, "interrupted; nothing half-written"),
+    (ZeroDivisionError("boom"), EXIT_SOLVER, "internal error (ZeroDivisionError: boom). This is a bug"),
+])
+def test_each_failure_is_one_message_and_its_exit_status(monkeypatch, exc, code, text):
+    monkeypatch.delenv("SNOWORM_DEBUG", raising=False)
+    r = CliRunner().invoke(_cli(exc), ["cmd", "--out", "o"])
+    assert r.exit_code == code
+    assert text in r.stderr and "Traceback" not in r.stderr
+
+
+def test_debug_shows_the_traceback_of_a_bug(monkeypatch):
+    monkeypatch.setenv("SNOWORM_DEBUG", "1")
+    r = CliRunner().invoke(_cli(ZeroDivisionError("boom")), ["cmd", "--out", "o"])
+    assert isinstance(r.exception, ZeroDivisionError)
+
+
+def test_the_command_line_is_kept_for_the_manifest_only_while_the_command_runs():
+    seen = []
+    r = CliRunner().invoke(_cli(seen=seen), ["cmd", "--out", "res dir"])
+    assert r.exit_code == 0 and r.stdout == "ok res dir\n"
+    assert seen == ["snoworm cmd --out 'res dir'"] and folders.COMMAND is None
+
+
+def test_sigterm_handler_is_restored_after_the_command():
+    before = signal.getsignal(signal.SIGTERM)
+    CliRunner().invoke(_cli(), ["cmd", "--out", "o"])
+    assert signal.getsignal(signal.SIGTERM) == before
+
+
+def test_out_refuses_an_empty_path():
+    r = CliRunner().invoke(_cli(), ["cmd", "--out", " "])
+    assert r.exit_code == 2 and "must name a directory, got an empty path" in r.stderr
+
+
+def test_logging_is_configured_once_at_the_chosen_level():
+    log = logging.getLogger("snoworm")
+    old_level, old_handlers = log.level, list(log.handlers)
+    try:
+        configure_logging(True)
+        configure_logging(False)
+        assert log.level == logging.WARNING
+        assert sum(type(h).__name__ == "StderrHandler" for h in log.handlers) == 1
+    finally:
+        log.setLevel(old_level)
+        log.handlers[:] = old_handlers
+
+
+def test_no_library_module_is_imported_at_import_time():
+    """Like the CLI, the shared helpers import snoworm's modules only when a command runs (the
+    package itself imports only its version string)."""
+    code = ("import sys, snoworm.cli_common; print(sorted(m for m in sys.modules if m.startswith('snoworm.') "
+            "and m not in ('snoworm.cli_common', 'snoworm._version')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={**os.environ, "PYTHONWARNINGS": "ignore"}).stdout
+    assert out.strip() == "[]"
