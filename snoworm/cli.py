@@ -7,15 +7,14 @@ shares (error handling, exit statuses, common options, progress, logging) is in
 """
 from __future__ import annotations
 
-import os
 import sys
 
 import click
 
 from ._version import __version__
-from .cli_common import (EXIT_SOLVER, CommandGroup, Terminated, configure_logging, fail, handle_errors,
-                         model_file_option, out_option, overwrite_option, param_set_option, plot_format_option,
-                         progress_bar, set_option)
+from .cli_common import (EXIT_SOLVER, CommandGroup, configure_logging, echo_claims, echo_run, echo_sweep, fail,
+                         handle_errors, model_file_option, out_option, overwrite_option, param_set_option,
+                         plot_format_option, progress_bar, set_option, sweep_interrupted)
 
 
 @click.group(cls=CommandGroup, context_settings={"help_option_names": ["-h", "--help"]})
@@ -54,14 +53,7 @@ def run(scenario, out_dir, sets, no_plot, plot_format, overwrite):
     with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar:
         res = simulate(sc, progress=bar.set)
     paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite)
-    s = res.summary()
-    click.echo(f"{sc.name}: {s['duration_s']:.1f} s simulated in {res.stats['wall_time_s']:.2f} s "
-               f"({s['duration_s'] / max(res.stats['wall_time_s'], 1e-9):.0f}x real time), "
-               f"distance {s['distance_m']:.2f} m, mean speed {s['mean_speed_mps']:.3f} m/s")
-    if s["final_link_forces_N"]:
-        click.echo("final link forces [N]: " + ", ".join(f"{f:.1f}" for f in s["final_link_forces_N"]))
-    click.echo("final net wheel forces [N]: " + ", ".join(f"{f:.1f}" for f in s["final_net_forces_N"]))
-    click.echo(f"wrote {len(paths)} files to {out_dir}")
+    echo_run(sc.name, res, paths, out_dir)
 
 
 @main.command()
@@ -190,7 +182,7 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
               help="Replace another sweep in --out (its files are removed), or write into a non-empty folder "
                    "snoworm did not write.")
 @handle_errors
-def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no_plot, plot_format, batch, overwrite):
+def sweep(scenario, sets, out_dir, no_plot, **options):
     """Run SCENARIO (a YAML file or a shipped scenario's name) over a grid of values and tabulate
     the results in --out.
 
@@ -215,25 +207,13 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no
     resume).
     """
     from .studies.sweep import SweepExecutionError, run_sweep  # lazy: start-up
-    try:
-        table = run_sweep(scenario, sets, out_dir=out_dir, jobs=jobs, scheduler=scheduler, zip_=zip_,
-                          save_cases=save_cases, plot=not no_plot, batch=batch, series=series,
-                          plot_format=plot_format, overwrite=overwrite)
+    try:    # options: jobs, scheduler, zip_, save_cases, series, plot_format, batch, overwrite (run_sweep's names)
+        table = run_sweep(scenario, sets, out_dir=out_dir, plot=not no_plot, **options)
     except SweepExecutionError as exc:
         fail(str(exc), EXIT_SOLVER)
     except KeyboardInterrupt as exc:
-        how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
-        click.echo(f"{how}: finished cases are in {out_dir}/summary.csv; run the same command "
-                   "again to resume.", err=True)
-        sys.exit(143 if isinstance(exc, Terminated) else 130)
-    bad = table.failures()
-    imm = sum(bool(r["immobilised"]) for r in table.rows if r["status"] == "ok")
-    click.echo(f"{len(table)} cases: {len(table) - len(bad)} ok, {len(bad)} failed, {imm} immobilised; "
-               f"summary in {out_dir}/summary.csv")
-    for r in bad[:5]:
-        click.echo(f"  case {r['case_id']} {r['status']}: {r['error']}")
-    if len(bad) > 5:
-        click.echo(f"  ... and {len(bad) - 5} more (see the error column)")
+        sweep_interrupted(exc, out_dir)
+    echo_sweep(table, out_dir)
 
 
 # ---------------------------------------------------------------- mobility map (snoworm/studies/mobility.py)
@@ -259,8 +239,7 @@ def sweep(scenario, sets, out_dir, jobs, scheduler, zip_, save_cases, series, no
 @plot_format_option
 @overwrite_option
 @handle_errors
-def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, no_inching, inch_duration_s, jobs,
-                 every_cell, no_plot, plot_format, overwrite):
+def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot, **options):
     """Which modes move SCENARIO's vehicle (a YAML file or a shipped name) over X_t and tow.
 
     Regions: rolling, inching only, immobile.
@@ -271,12 +250,10 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, rolling_speed_mps, 
     --out/mobility_map.csv and --out/mobility_map.png.  Progress of the inching runs goes to stderr.
     """
     from .studies.mobility import run_mobility_map  # lazy: start-up
+    # options: rolling_speed_mps, inch_duration_s, jobs, every_cell, plot_format, overwrite (run_mobility_map's names)
     with progress_bar(1, "mobility map", "inching runs") as bar:
-        _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets,
-                                          rolling_speed_mps=rolling_speed_mps, inching=not no_inching,
-                                          inch_duration_s=inch_duration_s, jobs=jobs, every_cell=every_cell,
-                                          plot=not no_plot,
-                                          plot_format=plot_format, overwrite=overwrite, progress=bar.set)
+        _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, inching=not no_inching,
+                                          plot=not no_plot, progress=bar.set, **options)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -310,13 +287,7 @@ def paper(out_dir, quick, strict, jobs, plot_format, overwrite):
     from .studies.paper import default_jobs, run_paper  # lazy: start-up
     rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True), overwrite=overwrite,
                     jobs=default_jobs() if jobs is None else jobs, plot_format=plot_format)
-    n_ok = sum(c.holds for c in rep.claims)
-    click.echo(f"{n_ok} of {len(rep.claims)} claims hold ({'quick' if quick else 'full'} mode, "
-               f"{rep.wall_time_s:.1f} s); report: {os.path.join(out_dir, 'report.html')}")
-    for c in rep.claims:
-        if not c.holds:
-            click.echo(f"FAILS: {c.id}: {c.statement}", err=True)
-    if strict and n_ok < len(rep.claims):
+    if echo_claims(rep, out_dir, quick) < len(rep.claims) and strict:
         sys.exit(1)
 
 

@@ -3,7 +3,8 @@
 Exit statuses and :func:`handle_errors` (bad input exit 2, solver or controller failure exit 1,
 Ctrl-C 130, SIGTERM 143, never a traceback unless ``SNOWORM_DEBUG``), the options several
 commands take (``--out``, ``--set``, ``--overwrite``, ``--plot-format``, ``--parameter-set``,
-``--model-file``), the progress bar and the log handler.  Like :mod:`snoworm.cli`, it imports the
+``--model-file``), the progress bar, the log handler, and the reports the longer commands print
+when they finish (:func:`echo_run`, :func:`echo_sweep`, :func:`echo_claims`).  Like :mod:`snoworm.cli`, it imports the
 library only inside the functions that need it, so ``snoworm --help`` starts fast.
 """
 from __future__ import annotations
@@ -19,7 +20,8 @@ import click
 
 __all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "out_option",
            "overwrite_option", "set_option", "plot_format_option", "param_set_option", "model_file_option",
-           "progress_bar", "StderrHandler", "configure_logging"]
+           "progress_bar", "StderrHandler", "configure_logging", "echo_run", "echo_sweep", "sweep_interrupted",
+           "echo_claims"]
 
 EXIT_SOLVER = 1
 EXIT_INPUT = 2
@@ -153,3 +155,48 @@ param_set_option = click.option("--parameter-set", "parameter_set_name", default
 model_file_option = click.option("--model-file", type=click.Path(dir_okay=False), default=None,
                                  help="YAML of terrain-model coefficients (e.g. terrain_model.yaml written by "
                                       "`snoworm calibrate`) replacing the parameter set's.")
+
+
+# ---------------------------------------------------------------- what the commands print at the end
+
+def echo_run(name, res, paths, out_dir):
+    """``snoworm run``'s report: simulated and wall time, distance, speed, final forces, files written."""
+    s = res.summary()
+    click.echo(f"{name}: {s['duration_s']:.1f} s simulated in {res.stats['wall_time_s']:.2f} s "
+               f"({s['duration_s'] / max(res.stats['wall_time_s'], 1e-9):.0f}x real time), "
+               f"distance {s['distance_m']:.2f} m, mean speed {s['mean_speed_mps']:.3f} m/s")
+    if s["final_link_forces_N"]:
+        click.echo("final link forces [N]: " + ", ".join(f"{f:.1f}" for f in s["final_link_forces_N"]))
+    click.echo("final net wheel forces [N]: " + ", ".join(f"{f:.1f}" for f in s["final_net_forces_N"]))
+    click.echo(f"wrote {len(paths)} files to {out_dir}")
+
+
+def sweep_interrupted(exc, out_dir):
+    """An interrupted sweep: say where the finished cases are and exit 130 (143 on SIGTERM)."""
+    how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+    click.echo(f"{how}: finished cases are in {out_dir}/summary.csv; run the same command "
+               "again to resume.", err=True)
+    sys.exit(143 if isinstance(exc, Terminated) else 130)
+
+
+def echo_sweep(table, out_dir):
+    """``snoworm sweep``'s report: cases ok, failed and immobilised, and the first five failures."""
+    bad = table.failures()
+    imm = sum(bool(r["immobilised"]) for r in table.rows if r["status"] == "ok")
+    click.echo(f"{len(table)} cases: {len(table) - len(bad)} ok, {len(bad)} failed, {imm} immobilised; "
+               f"summary in {out_dir}/summary.csv")
+    for r in bad[:5]:
+        click.echo(f"  case {r['case_id']} {r['status']}: {r['error']}")
+    if len(bad) > 5:
+        click.echo(f"  ... and {len(bad) - 5} more (see the error column)")
+
+
+def echo_claims(rep, out_dir, quick) -> int:
+    """``snoworm paper``'s report: how many claims hold (returned), and each failing one on stderr."""
+    n_ok = sum(c.holds for c in rep.claims)
+    click.echo(f"{n_ok} of {len(rep.claims)} claims hold ({'quick' if quick else 'full'} mode, "
+               f"{rep.wall_time_s:.1f} s); report: {os.path.join(out_dir, 'report.html')}")
+    for c in rep.claims:
+        if not c.holds:
+            click.echo(f"FAILS: {c.id}: {c.statement}", err=True)
+    return n_ok
