@@ -174,6 +174,59 @@ class CalibrationResult:
     immobilised_after: tuple
 
 
+def _start(names, data: FieldData, tp: TerrainParams):
+    """Starting point and bounds of the fit: the current values (every case's X_t for ``xt``),
+    moved just inside the bounds ``BOUNDS``."""
+    x0 = []
+    lo, hi = [], []
+    for f in names:
+        vals = list(data.xt) if f == "xt" else [getattr(tp, f)]
+        x0 += vals
+        lo += [BOUNDS[f][0]] * len(vals)
+        hi += [BOUNDS[f][1]] * len(vals)
+    x0 = np.clip(np.array(x0, float), np.nextafter(np.array(lo), np.inf), np.nextafter(np.array(hi), -np.inf))
+    return x0, lo, hi
+
+
+def _uncertainty(J, s2):
+    """Standard errors and correlations of the fitted values from the Jacobian ``J`` at the solution
+    and the residual variance ``s2`` (``s2 (J^T J)^-1``; NaN where ``J^T J`` is near singular)."""
+    n_par = J.shape[1]
+    with np.errstate(all="ignore"):
+        JTJ = J.T @ J
+        try:
+            ok = np.linalg.cond(JTJ) < 1e12
+            cov = np.linalg.inv(JTJ) * s2 if ok else np.full((n_par, n_par), np.nan)
+        except np.linalg.LinAlgError:
+            cov = np.full((n_par, n_par), np.nan)
+        se = np.sqrt(np.where(np.diag(cov) >= 0, np.diag(cov), np.nan))
+        corr = cov / np.outer(se, se)
+    return se, corr
+
+
+def _result(data: FieldData, names, seg, tp: TerrainParams, x0, r0, sol, *, torque_scale_Nm,
+            slip_scale) -> CalibrationResult:
+    """The calibration's result from the solver's solution ``sol`` (started at ``x0`` with residuals
+    ``r0``): fitted values with standard errors and correlations, Table 2 before and after, costs,
+    and the cases the fitted model leaves immobilised."""
+    n = len(data)
+    tp_fit, xt_fit = _unpack(sol.x, names, tp, data.xt, n)
+    n_res, n_par = r0.size, sol.x.size
+    dof = n_res - n_par
+    s2 = float(sol.fun @ sol.fun) / dof
+    se, corr = _uncertainty(sol.jac, s2)
+    _, _, imm = model_predictions(data, seg, tp_fit, xt_fit)
+    data_fit = replace(data, xt=np.asarray(xt_fit, float))
+    return CalibrationResult(
+        names=tuple(_param_labels(names, data)), start=np.array(x0), value=np.array(sol.x), stderr=se,
+        correlation=corr, terrain_params=tp_fit, xt=np.asarray(xt_fit, float),
+        rows_before=compare_table2(data, seg, tp), rows_after=compare_table2(data_fit, seg, tp_fit),
+        n_residuals=n_res, dof=dof, sigma=math.sqrt(s2), cost_before=0.5 * float(r0 @ r0),
+        cost_after=float(sol.cost), torque_scale_Nm=float(torque_scale_Nm), slip_scale=float(slip_scale),
+        success=bool(sol.success), message=str(sol.message), nfev=int(sol.nfev),
+        immobilised_after=tuple(c for c, m in zip(data.case, imm) if m))
+
+
 def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: float = 1.0,
               slip_scale: float = 0.01, progress=None) -> CalibrationResult:
     """Fit terrain-model coefficients (and optionally every case's X_t) to steady field data.
@@ -205,14 +258,7 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
                             f"and slip {slip_scale}.")
     n = len(data)
     names = _check_fit(fit, n)
-    x0 = []
-    lo, hi = [], []
-    for f in names:
-        vals = list(data.xt) if f == "xt" else [getattr(tp, f)]
-        x0 += vals
-        lo += [BOUNDS[f][0]] * len(vals)
-        hi += [BOUNDS[f][1]] * len(vals)
-    x0 = np.clip(np.array(x0, float), np.nextafter(np.array(lo), np.inf), np.nextafter(np.array(hi), -np.inf))
+    x0, lo, hi = _start(names, data, tp)
     meas = np.concatenate([data.torque_Nm / torque_scale_Nm, data.slip / slip_scale])
 
     budget = 200 * (len(x0) + 1)
@@ -229,30 +275,7 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
     r0 = resid(x0)
     sol = least_squares(resid, x0, bounds=(lo, hi), method="trf", jac="3-point", x_scale="jac",
                         xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=budget)
-    tp_fit, xt_fit = _unpack(sol.x, names, tp, data.xt, n)
-    n_res, n_par = r0.size, sol.x.size
-    dof = n_res - n_par
-    s2 = float(sol.fun @ sol.fun) / dof
-    J = sol.jac
-    with np.errstate(all="ignore"):
-        JTJ = J.T @ J
-        try:
-            ok = np.linalg.cond(JTJ) < 1e12
-            cov = np.linalg.inv(JTJ) * s2 if ok else np.full((n_par, n_par), np.nan)
-        except np.linalg.LinAlgError:
-            cov = np.full((n_par, n_par), np.nan)
-        se = np.sqrt(np.where(np.diag(cov) >= 0, np.diag(cov), np.nan))
-        corr = cov / np.outer(se, se)
-    _, _, imm = model_predictions(data, seg, tp_fit, xt_fit)
-    data_fit = replace(data, xt=np.asarray(xt_fit, float))
-    return CalibrationResult(
-        names=tuple(_param_labels(names, data)), start=np.array(x0), value=np.array(sol.x), stderr=se,
-        correlation=corr, terrain_params=tp_fit, xt=np.asarray(xt_fit, float),
-        rows_before=compare_table2(data, seg, tp), rows_after=compare_table2(data_fit, seg, tp_fit),
-        n_residuals=n_res, dof=dof, sigma=math.sqrt(s2), cost_before=0.5 * float(r0 @ r0),
-        cost_after=float(sol.cost), torque_scale_Nm=float(torque_scale_Nm), slip_scale=float(slip_scale),
-        success=bool(sol.success), message=str(sol.message), nfev=int(sol.nfev),
-        immobilised_after=tuple(c for c, m in zip(data.case, imm) if m))
+    return _result(data, names, seg, tp, x0, r0, sol, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale)
 
 
 def format_report(res: CalibrationResult) -> str:

@@ -228,20 +228,39 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
         for x in xts:
             rows.append({"xt": x, "tow_N": f, **rolling_cell(sc, x, f, wheel_speed_mps)})
     if inching:
-        todo = [r for r in rows if every_cell or not r["rolling"]]
-        tasks = [(inching_scenario(sc, r["xt"], r["tow_N"], inch_duration_s), inch_min_speed_mps) for r in todo]
-        for r, o in zip(todo, _inch_all(tasks, jobs, progress, cost=[r["xt"] for r in todo])):
-            r.update(o)
-        for r in rows:
-            if "inching" not in r:
-                r.update(inching=None, inching_speed_mps=None, inching_energy_per_metre_J_per_m=None,
-                         inching_note="")
+        _add_inching(sc, rows, inch_duration_s, inch_min_speed_mps, jobs, every_cell, progress)
+    _classify(rows, inching)
+    limits = _rolling_limits(sc, tows, wheel_speed_mps)
+    return {"rows": rows, "xts": xts, "tows": tows, "regions": REGIONS, "rolling_limit_xt": limits, "inching": inching,
+            "every_cell": bool(every_cell), "inch_duration_s": inch_duration_s, "wheel_speed_mps": wheel_speed_mps,
+            "wall_time_s": time.perf_counter() - wall0, "scenario": sc.name}
+
+
+def _add_inching(sc, rows, inch_duration_s, inch_min_speed_mps, jobs, every_cell, progress):
+    """Simulate inching in the cells that do not roll (every cell if ``every_cell``), in ``jobs``
+    processes, and add its results to the rows (None where it was not simulated)."""
+    todo = [r for r in rows if every_cell or not r["rolling"]]
+    tasks = [(inching_scenario(sc, r["xt"], r["tow_N"], inch_duration_s), inch_min_speed_mps) for r in todo]
+    for r, o in zip(todo, _inch_all(tasks, jobs, progress, cost=[r["xt"] for r in todo])):
+        r.update(o)
+    for r in rows:
+        if "inching" not in r:
+            r.update(inching=None, inching_speed_mps=None, inching_energy_per_metre_J_per_m=None,
+                     inching_note="")
+
+
+def _classify(rows, inching):
+    """Each cell's region (rolling, inching only, immobile) and whether inching costs less energy per metre."""
     for r in rows:
         inch_ok = bool(r.get("inching", False))
         r["region"] = "rolling" if r["rolling"] else ("inching only" if inch_ok else "immobile")
         er, ei = r["rolling_energy_per_metre_J_per_m"], r.get("inching_energy_per_metre_J_per_m")
         r["inching_cheaper"] = (None if inching and r.get("inching") is None
                                 else bool(er is not None and ei is not None and ei < er))
+
+
+def _rolling_limits(sc, tows, wheel_speed_mps) -> dict:
+    """Per tow force, the X_t below which the chain cannot roll steadily (None if above 1)."""
     seg = sc.vehicle.segment_params()[0]
     tp = sc.terrain.model.params()
     limits = {}
@@ -251,9 +270,7 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True,
                                                        wheel_speed_mps=wheel_speed_mps)
         except ValueError:
             limits[f] = None
-    return {"rows": rows, "xts": xts, "tows": tows, "regions": REGIONS, "rolling_limit_xt": limits, "inching": inching,
-            "every_cell": bool(every_cell), "inch_duration_s": inch_duration_s, "wheel_speed_mps": wheel_speed_mps,
-            "wall_time_s": time.perf_counter() - wall0, "scenario": sc.name}
+    return limits
 
 
 #: Columns of ``mobility_map.csv``.

@@ -19,14 +19,9 @@ def _paper_claims_fig3_table2(ctx):
     return check_fig3(terrain_curves([1.0, 0.5], seg, tp)) + check_table2(*table2_model(ctx))
 
 
-def item_readings(ctx: Context) -> Section:
-    """The model's readings of the paper and the effect of the alternatives on the claims."""
-    s = Section("readings", "Readings of the paper chosen by the model, and their alternatives", (
-        "Eq. 2's exponent d on X_t in the peak factor is illegible in the paper (OCR); the terrain resistance "
-        "torque is named but never written out; the wheel torque balance is described only in words "
-        "(docs/model.md section 2)."), scenarios=["Fig 3 and Table 2 checks re-run with terrain.model overrides",
-                                             "tow6_uniform with terrain.model.torque_balance=traction"])
-    # d = 1, the literal reading
+def _reading_d1(ctx: Context, s: Section):
+    """d = 1, the literal reading of Eq. 2: the Fig 3 / Table 2 claims under it, and the claim that it
+    fails as docs/model.md says (the reason d = 2 is the default)."""
     d1 = ctx.child({"peak_exponent_d": 1}, plot=True)
     seg, tp1 = d1.vehicle()
     c1 = terrain_curves([1.0, 0.5], seg, tp1)
@@ -45,10 +40,11 @@ def item_readings(ctx: Context) -> Section:
         abs(first_up - 74.0) <= 2.0 and abs(100 * case5 - 16.7) <= 0.5, source="model"))
     if ctx.out_dir is not None:
         s.figures.append(plotting.save(plotting.plot_terrain_curves(c1), ctx.figure("fig3_d1_terrain_curves.png")))
-    # resistance torque without X dependence
-    s.variants.append(Variant("resistance torque independent of X_t (tau1 = 0)", {"terrain.model.tau1": 0},
-                              _paper_claims_fig3_table2(ctx.child({"tau1": 0.0}))))
-    # the traction torque-balance convention
+
+
+def _reading_traction(ctx: Context, s: Section):
+    """The traction torque-balance convention: the Fig 3 / Table 2 claims under it, and the claim that
+    it leaves the steady slips unchanged."""
     tr = ctx.child({"torque_balance": "traction"})
     s.variants.append(Variant("torque_balance: traction", {"terrain.model.torque_balance": "traction"},
                               _paper_claims_fig3_table2(tr)))
@@ -65,6 +61,20 @@ def item_readings(ctx: Context) -> Section:
          "table2_torques_traction_Nm": [b["torque_Nm"] for b in sim_t]},
         "steady slips of the five Table 2 runs and of Fig 6 differ by <= 0.01 percentage points",
         max(ds) <= 0.01 and 100 * float(np.max(np.abs(s6c - s6t))) <= 0.01, source="model"))
+
+
+def item_readings(ctx: Context) -> Section:
+    """The model's readings of the paper and the effect of the alternatives on the claims."""
+    s = Section("readings", "Readings of the paper chosen by the model, and their alternatives", (
+        "Eq. 2's exponent d on X_t in the peak factor is illegible in the paper (OCR); the terrain resistance "
+        "torque is named but never written out; the wheel torque balance is described only in words "
+        "(docs/model.md section 2)."), scenarios=["Fig 3 and Table 2 checks re-run with terrain.model overrides",
+                                             "tow6_uniform with terrain.model.torque_balance=traction"])
+    _reading_d1(ctx, s)
+    # resistance torque without X dependence
+    s.variants.append(Variant("resistance torque independent of X_t (tau1 = 0)", {"terrain.model.tau1": 0},
+                              _paper_claims_fig3_table2(ctx.child({"tau1": 0.0}))))
+    _reading_traction(ctx, s)
     s.notes.append("The traction convention moves the steady torques by up to 0.35 N m (e.g. case 1: R_w b_trF F_n = "
                    "9.65 N m instead of F_n R_w tau0 = 10.0 N m, since its T_rrB vanishes at X_t = 1), within the "
                    "Table 2 tolerance; the slips and the chassis motion are unchanged.")

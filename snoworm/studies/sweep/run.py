@@ -136,20 +136,10 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         A malformed SPEC, unequal zip lengths, every case invalid, or an output directory
         holding another sweep.
     """
-    if series not in SERIES_FORMATS:
-        raise ScenarioError(f"series: expected one of {', '.join(SERIES_FORMATS)}, got {series!r}.")
-    if series == "netcdf":
-        save_cases = True
-        try:
-            require_xarray()       # before any case runs
-        except ImportError:
-            raise ScenarioError("--series netcdf needs xarray: pip install 'snoworm[data]' "
-                                "(or keep the default --series folders).") from None
+    save_cases = _check_series(series) or save_cases
     local = executor is None and scheduler is None     # this process or its own pool: pass scenarios on
     plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=local)
-    out = Path(out_dir) if out_dir is not None else None
-    if out is not None and not (out / "sweep.json").exists():
-        check_output_folder(out, overwrite)
+    out = _new_output_folder(out_dir, overwrite)
     own = executor is None
     if own:                         # before anything is written: an unreachable scheduler writes nothing
         executor = _make_executor(scheduler, batch, jobs)
@@ -158,6 +148,30 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
                           plot_format)
     except OSError as exc:            # writing sweep.json, the manifest or the plot
         raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
+
+
+def _new_output_folder(out_dir, overwrite):
+    """``out_dir`` as a Path (None: nothing is written), checked before any case runs unless it holds
+    a sweep already (resumed or refused later, by :func:`~snoworm.studies.sweep.summary.prepare_dir`)."""
+    out = Path(out_dir) if out_dir is not None else None
+    if out is not None and not (out / "sweep.json").exists():
+        check_output_folder(out, overwrite)
+    return out
+
+
+def _check_series(series: str) -> bool:
+    """Check ``series`` (and that xarray is there for ``netcdf``, before any case runs); True if it
+    implies saving the cases' series."""
+    if series not in SERIES_FORMATS:
+        raise ScenarioError(f"series: expected one of {', '.join(SERIES_FORMATS)}, got {series!r}.")
+    if series == "netcdf":
+        try:
+            require_xarray()       # before any case runs
+        except ImportError:
+            raise ScenarioError("--series netcdf needs xarray: pip install 'snoworm[data]' "
+                                "(or keep the default --series folders).") from None
+        return True
+    return False
 
 
 def _in_folder(plan, out, executor, own, progress, plot, zip_, keep_series, overwrite, plot_format) -> SweepTable:
