@@ -7,6 +7,7 @@ import failing) is printed and makes the build fail (exit status 1).  ``make doc
 """
 from __future__ import annotations
 
+import importlib
 import pkgutil
 import sys
 import warnings
@@ -22,9 +23,24 @@ SKIP = {"snoworm.__main__"}
 
 
 def modules() -> list:
-    """``snoworm`` and every submodule, in import order."""
+    """``snoworm`` and every submodule, in import order, each named once.
+
+    pdoc documents the submodules of a package without ``__all__`` (a layer package such as
+    ``snoworm.config``) on its own, so those are not named again (pdoc warns about a module named
+    twice); a package with ``__all__`` (its public face, e.g. ``snoworm.modes``) has its submodules
+    named here.
+    """
     names = ["snoworm"] + [m.name for m in pkgutil.walk_packages(snoworm.__path__, "snoworm.")]
-    return [n for n in names if n not in SKIP]
+    walked, out = set(), []     # walked: packages whose submodules pdoc reaches by itself
+    for name in names:
+        if name in SKIP:
+            continue
+        if name.rpartition(".")[0] not in walked:
+            out.append(name)
+        mod = importlib.import_module(name)
+        if hasattr(mod, "__path__") and not hasattr(mod, "__all__"):
+            walked.add(name)
+    return out
 
 
 def build(out_dir) -> list:
@@ -41,6 +57,7 @@ if __name__ == "__main__":
     problems = build(out)
     for p in problems:
         print(p, file=sys.stderr)
-    print(f"API reference of {len(modules())} modules in {out}/index.html"
+    pages = sum(1 for p in out.rglob("*.html") if p.name not in ("index.html", "search.html"))
+    print(f"API reference of {pages} modules in {out}/index.html"
           + (f"; {len(problems)} warning(s): failed" if problems else ""))
     sys.exit(1 if problems else 0)

@@ -16,10 +16,13 @@ def test_api_reference_builds_without_warnings(tmp_path):
                        timeout=600, cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
     assert r.stderr == ""                     # no warnings
-    page = (out / "snoworm" / "results.html").read_text(encoding="utf-8")
+    page = (out / "snoworm" / "results" / "result.html").read_text(encoding="utf-8")
     for name in ("to_pandas", "to_xarray", "load_result", "SEGMENT_COLUMNS"):
         assert name in page, name
     assert (out / "snoworm" / "plotting" / "style.html").exists() and (out / "index.html").exists()
+    # every module has its page: the layer packages' modules (walked by pdoc) and the faces' ones
+    for mod in ("config/scenario", "studies/sweep/run", "studies/paper/claims", "infra/folders", "modes/gait"):
+        assert (out / "snoworm" / f"{mod}.html").exists(), mod
     assert "__main__" not in " ".join(p.name for p in out.rglob("*.html"))
 
 
