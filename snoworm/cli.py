@@ -223,7 +223,13 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
 @click.option("--xt", "xt_spec", default="0.2:1.0:9", show_default=True,
               help="Terrain coefficients X_t in (0, 1]: START:STOP:COUNT or a comma-separated list.")
 @click.option("--tow", "tow_spec", default="0", show_default=True, help="Tow forces [N], comma-separated (|force| at most 1e6 N).")
-@out_option("Directory for mobility_map.csv and mobility_map.png.")
+@click.option("--grade", "grade_spec", default="0", show_default=True,
+              help="Constant grades [deg], positive uphill, |grade| <= 40: START:STOP:COUNT or a comma-separated "
+                   "list. Several grades add gradeability.png (steepest grade climbed against X_t, per gait).")
+@click.option("--gait", "gaits", multiple=True,
+              help="Inchworm gait to map, repeatable: a name (six_segment, two_segment) or phases as a list, e.g. "
+                   "'[[0],[1],[2],[3],[4],[5]]' (default: the scenario's). Several: one gradeability curve each.")
+@out_option("Directory for mobility_map.csv and mobility_map.png (and gradeability.png).")
 @set_option
 @click.option("--rolling-speed", "rolling_speed_mps", type=float, default=None,
               help="Rolling wheel-speed set-point [m/s] (default: the scenario's supervisor or uniform mode).")
@@ -240,17 +246,19 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
 @overwrite_option
 @handle_errors
 def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot, **options):
-    """Which modes move SCENARIO's vehicle (a YAML file or a shipped name) over X_t and tow.
+    """Which modes move SCENARIO's vehicle (a YAML file or a shipped name) over X_t, grade and tow.
 
     Regions: rolling, inching only, immobile.
 
     Rolling by the steady-state solver (each segment's share of the tow below its maximum
     drawbar); inching by short simulations of the inchworm gait of the scenario's supervisor or
-    inchworm mode, in the cells that do not roll (every cell with --every-cell).  Writes
-    --out/mobility_map.csv and --out/mobility_map.png.  Progress of the inching runs goes to stderr.
+    inchworm mode, in the cells that do not roll (every cell with --every-cell), bisected over the
+    grades.  Writes --out/mobility_map.csv and --out/mobility_map.png (with several --grade values
+    also --out/gradeability.png).  Progress of the inching runs goes to stderr.
     """
     from .studies.mobility import run_mobility_map  # lazy: start-up
-    # options: rolling_speed_mps, inch_duration_s, jobs, every_cell, plot_format, overwrite (run_mobility_map's names)
+    # options: grade_spec, gaits, rolling_speed_mps, inch_duration_s, jobs, every_cell, plot_format, overwrite
+    # (run_mobility_map's names)
     with progress_bar(1, "mobility map", "inching runs") as bar:
         _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, inching=not no_inching,
                                           plot=not no_plot, progress=bar.set, **options)

@@ -9,12 +9,14 @@ r"""Longitudinal dynamics of a chain of wheeled segments (docs/model.md section 
       <-- F_tow                                   segment 0 is the leader (front)
       each segment: 2 axles at x_k +- wheelbase/2, each axle with 2 wheels
 
-    m_k dv_k/dt = n_w * sum_axles (F_t - F_tr) + T_{k-1} - T_k - F_tow [k = N-1]
+    m_k dv_k/dt = n_w * sum_axles (F_t - F_tr) + T_{k-1} - T_k - F_tow [k = N-1] - m_k g sin(theta_k)
     J   dw/dt   = T_m - R_w (F_t - F_tr) - T_rr                 (per wheel, per axle)
     T_k = k_c (x_k - x_{k+1} - L_0 - s_k) + c_c (v_k - v_{k+1} - ds_k/dt)
           (spring-damper in series with the prismatic actuator of extension s_k; s_k = 0 fixed)
 
-The model composes the law kernels -- terrain (:mod:`snoworm.terrain`, Eqs. 1-3), motor
+F_n is the normal load of :func:`snoworm.terrain.normal_load_N` on the grade theta_k under the segment
+(:mod:`snoworm.slope`, docs/model.md section 7); on level ground (``elevation=None`` or level) every
+grade term is skipped.  The model composes the law kernels -- terrain (:mod:`snoworm.terrain`, Eqs. 1-3), motor
 (:mod:`snoworm.drivetrain`), links (:mod:`snoworm.links`) and control laws
 (:mod:`snoworm.feedback`) -- into one kernel, :meth:`ChainModel.evaluate`, which computes every
 force from the state for any leading batch shape: the right-hand side calls it on one state
@@ -41,6 +43,7 @@ from . import drivetrain, feedback, links as link_law, terrain
 from .model import jacobian
 from .model.arrays import LinkArrays, SegmentArrays, StateLayout
 from .model.inputs import Controls
+from .slope import ElevationProfile
 from .terrain import TerrainParams, TerrainProfile
 
 __all__ = ["ChainModel", "StackedConstantProfile"]
@@ -79,14 +82,18 @@ class ChainModel:
         Constant towed load on the rear segment (pulls backward when positive).
     force_loop : bool
         Whether the state includes the outer force-loop integrators (force-control mode).
+    elevation : ElevationProfile, optional
+        Elevation along the track (docs/model.md section 7); None or level: level ground.
     """
 
     def __init__(self, seg: SegmentArrays, links: LinkArrays, terrain_params: TerrainParams,
-                 profile: TerrainProfile, tow_force_N: float, force_loop: bool = False):
+                 profile: TerrainProfile, tow_force_N: float, force_loop: bool = False,
+                 elevation: ElevationProfile | None = None):
         self.seg = seg
         self.links = links
         self.tp = terrain_params
         self.profile = profile
+        self.elevation = elevation if elevation is not None and not elevation.is_level else None
         #: leading batch shape of the parameter arrays: () for one chain, (B,) for B stacked
         #: chains (see :meth:`stack`); every per-segment array then has shape (B, N)
         self.batch_shape = tuple(np.shape(seg.mass_kg)[:-1])
@@ -100,6 +107,10 @@ class ChainModel:
         col = lambda a: np.asarray(a, float)[..., None]
         #: per-wheel static normal load, shape (..., N, 1) (broadcasts against axle arrays)
         self.normal_force_N = col(seg.normal_force_N)
+        # grade terms (docs/model.md section 7): pitch transfer 2h/b and the chord's half-length
+        b = np.asarray(seg.wheelbase_m, float)
+        self._transfer = np.divide(2.0 * seg.com_height_m, b, out=np.zeros(b.shape), where=b > 0)
+        self._half_base = b / 2.0
         #: axle positions relative to the segment's reference point, shape (..., N, 2): front, rear
         self.axle_offset_m = np.stack([seg.wheelbase_m / 2.0, -seg.wheelbase_m / 2.0], axis=-1)
         #: wheels on each axle, shape (..., N)
@@ -126,8 +137,11 @@ class ChainModel:
         z = lambda v: np.array(v, float)
         self._tpk = replace(tp, **{k: z(getattr(tp, k)) for k in tp.__dataclass_fields__ if k != "torque_balance"})
         self._zero = z(0.0)
-        Fn = self.normal_force_N
-        if getattr(self.profile, "is_constant", False):
+        self._Fn_k, self._G_const = self.normal_force_N, None
+        if self.elevation is not None and self.elevation.is_constant:   # constant grade: constant loads
+            _, _, self._Fn_k, self._G_const = self.grade_terms(np.zeros(self.batch_shape + (self.n,)))
+        Fn = self._Fn_k
+        if getattr(self.profile, "is_constant", False) and (self.elevation is None or self._G_const is not None):
             X = self.profile(self.axle_offset_m)
             self._Xc = X
             self._coef = (terrain.traction_coefficients(Fn, X, self._tpk),
@@ -193,6 +207,8 @@ class ChainModel:
                 raise ValueError("stacked chains need the same terrain coefficients")
             if m.profile != m0.profile and not (m.profile.is_constant and m0.profile.is_constant):
                 raise ValueError("stacked chains need the same X_t profile, or constant profiles")
+            if m.elevation != m0.elevation:
+                raise ValueError("stacked chains need the same elevation profile")
         st = lambda objs, name: np.stack([np.asarray(getattr(o, name), float) for o in objs])
         seg = SegmentArrays(**{k: st([m.seg for m in models], k) for k in SegmentArrays.__dataclass_fields__})
         links = LinkArrays(**{k: st([m.links for m in models], k) for k in LinkArrays.__dataclass_fields__})
@@ -200,7 +216,8 @@ class ChainModel:
             profile = m0.profile
         else:
             profile = StackedConstantProfile(tuple(float(m.profile.values[0]) for m in models))
-        return cls(seg, links, m0.tp, profile, np.array([m.tow_force_N for m in models]), force_loop=m0.force_loop)
+        return cls(seg, links, m0.tp, profile, np.array([m.tow_force_N for m in models]), force_loop=m0.force_loop,
+                   elevation=m0.elevation)
 
     # ------------------------------------------------------------------ layout and terrain
     def unpack(self, y):
@@ -214,6 +231,20 @@ class ChainModel:
     def xt_at_axles(self, x_m):
         """Terrain coefficient under each axle for segment positions ``x_m`` (..., N) -> (..., N, 2)."""
         return self.profile(np.asarray(x_m, float)[..., None] + self.axle_offset_m)
+
+    def grade_terms(self, x_m):
+        """``(sin theta, cos theta, F_n, F_g)`` under segments at positions ``x_m`` (..., N), docs/model.md
+        section 7: the chord grade (:meth:`ElevationProfile.sin_grade`), the normal load per wheel, shape
+        (..., N, 2) front and rear (:func:`terrain.normal_load_N`), and gravity along the track, shape
+        (..., N) (:func:`terrain.gravity_force_N`).  Level ground: ``(0, 1, static load, 0)``."""
+        x = np.asarray(x_m, float)
+        if self.elevation is None:
+            z = np.zeros(np.shape(x + self._half_base))
+            return z, z + 1.0, np.stack([z + self.normal_force_N[..., 0]] * 2, axis=-1), z
+        s = self.elevation.sin_grade(x, self._half_base)
+        c = np.sqrt(1.0 - s * s)
+        Fn = terrain.normal_load_N(self.normal_force_N[..., 0], s, c, self._transfer)
+        return s, c, Fn, terrain.gravity_force_N(self._m, self.seg.gravity_mps2, s)
 
     def initial_state(self, joint_extension_m=None) -> np.ndarray:
         """Chain at rest: leader at x = 0, links at their rest spacing (zero force)."""
@@ -266,7 +297,9 @@ class ChainModel:
         R = self._R
         cd = self._controls(ctl)
         V = v[..., None]
-        X, i, Ft, Ftr, Trr = self._terrain(x, V, w * R)
+        # normal load per wheel and gravity along the track: constant on level ground (G None) or a constant grade
+        Fn, G = (self._Fn_k, self._G_const) if self.elevation is None or self._G_const is not None else self.grade_terms(x)[2:]
+        X, i, Ft, Ftr, Trr = self._terrain(x, V, w * R, Fn)
         dY = np.empty_like(Y)
         T, T_spring, damper_v = self._links(Y, x, v, ctl, cd, dY)
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
@@ -297,7 +330,7 @@ class ChainModel:
         Tpad[..., -1] = self.tow_force_N
         Fl = Tpad[..., :-1] - Tpad[..., 1:]
         dY[..., L.x] = v
-        dY[..., L.v] = (wheel_net + Fl) / self._m
+        dY[..., L.v] = (wheel_net + Fl if G is None else wheel_net + Fl + G) / self._m
         if not outputs:
             return dY, None
         nw = self.wheels_per_axle[..., None]
@@ -311,10 +344,12 @@ class ChainModel:
             # power dissipated at the wheel-terrain contact: what the wheels take from the
             # motors minus what reaches the chassis, per segment [W]
             "terrain_dissipation_W": self.wheels_per_axle * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),
+            "gravity_N": np.zeros(x.shape) if G is None else np.broadcast_to(G, x.shape),
+            "normal_load_N": np.broadcast_to(Fn, Ft.shape),
         }
         return dY, out
 
-    def _terrain(self, x, V, wm):
+    def _terrain(self, x, V, wm, Fn):
         """Per-axle terrain quantities (Eqs. 1-3, resistance torque), X_t evaluated at each axle.
 
         Returns ``(X, slip, F_t, F_tr, T_rr)`` per wheel, shape ``(..., N, 2)``.
@@ -325,7 +360,6 @@ class ChainModel:
             c_t, c_r, c_q = self._coef
             X = self._Xc
         else:
-            Fn = self.normal_force_N
             X = self.profile(x[..., None] + self.axle_offset_m)
             c_t = terrain.traction_coefficients(Fn, X, tp)
             c_r = terrain.resistance_coefficients(Fn, X, tp)

@@ -39,7 +39,7 @@ from .simulation.stepwise import Simulator
 __all__ = ["SnowormEnv", "OBSERVATION_FIELDS", "default_reward"]
 
 #: Observation arrays in the order they fill the observation vector.
-OBSERVATION_FIELDS = ("x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt",
+OBSERVATION_FIELDS = ("x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt", "grade_deg",
                       "link_force_N", "link_length_m", "joint_extension_m")
 
 

@@ -2,11 +2,13 @@
 
 At steady driving on uniform terrain a segment's wheels all run at the same slip ``i`` and
 
-    n_wheels (F_t(i) - F_tr(V)) = D                 (chassis force balance, docs/model.md section 4)
+    n_wheels (F_t(i) - F_tr(V)) - m g sin(theta) = D     (chassis force balance, docs/model.md sections 4, 7)
     T_m = R_w (F_t - F_tr) + T_rr                   (wheel torque balance, per wheel)
 
-with ``V = R_w w (1 - i)`` and drawbar ``D`` (tow force).  These are the same terrain kernels
-as the dynamic simulation (:mod:`snoworm.terrain`), so the two agree to solver tolerance.
+with ``V = R_w w (1 - i)``, drawbar ``D`` (tow force) and grade ``theta`` (``grade_deg``, 0: level;
+the normal loads are those of :func:`snoworm.terrain.normal_load_N`).  These are the same terrain
+kernels as the dynamic simulation (:mod:`snoworm.terrain`), so the two agree to solver tolerance.
+Forces and torques per wheel are the means over the two axles (they differ with pitch load transfer).
 """
 from __future__ import annotations
 
@@ -16,10 +18,12 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from . import terrain
+from .slope import MAX_GRADE_DEG
 from .terrain import TerrainParams
 
 __all__ = ["SteadyState", "Immobilised", "steady_state", "max_drawbar_N", "net_force_per_segment_N",
-           "immobilisation_limit_xt", "segment_geometry", "state_at_slip", "peak_slip"]
+           "immobilisation_limit_xt", "segment_geometry", "state_at_slip", "peak_slip", "max_grade_deg",
+           "axle_loads_N"]
 
 
 class Immobilised(ValueError):
@@ -62,28 +66,48 @@ def segment_geometry(seg):
     return n_wheels, F_n, seg.wheel_radius_m
 
 
-def net_force_per_segment_N(i, X, wheel_speed_mps, seg, tp: TerrainParams, moving: bool = False):
-    """Drawbar a segment develops at slip ``i`` (vectorised over ``i`` and ``X``).
+def axle_loads_N(seg, grade_deg: float = 0.0):
+    """``(F_n front, F_n rear, gravity force)`` of a segment on a constant grade (:func:`terrain.normal_load_N`)."""
+    n_w, F_n, _ = segment_geometry(seg)
+    th = np.radians(grade_deg)
+    transfer = 2.0 * seg.com_height_m / seg.wheelbase_m if seg.wheelbase_m > 0 else 0.0
+    Fn = terrain.normal_load_N(F_n, np.sin(th), np.cos(th), transfer)
+    return Fn[..., 0], Fn[..., 1], terrain.gravity_force_N(seg.mass_kg, seg.gravity_mps2, np.sin(th))
+
+
+def net_force_per_segment_N(i, X, wheel_speed_mps, seg, tp: TerrainParams, moving: bool = False,
+                            grade_deg: float = 0.0):
+    """Drawbar a segment develops at slip ``i`` on grade ``grade_deg`` (vectorised over ``i`` and ``X``).
 
     With ``moving=True`` the resistance takes its full forward-motion value ``sgn(V) = 1``
     (the smooth sign would let it vanish as ``i -> 1``, ``V -> 0``): the drawbar available
     while the segment actually moves forward.
     """
-    n_w, F_n, _ = segment_geometry(seg)
+    n_w, _, _ = segment_geometry(seg)
     V = wheel_speed_mps * (1.0 - np.asarray(i, float))
     if moving:
         V = np.full_like(V, np.inf)
-    return n_w * (terrain.traction_force(i, F_n, X, tp) - terrain.resistance_force(V, F_n, X, tp))
+    if grade_deg == 0.0:
+        F_n = segment_geometry(seg)[1]
+        return n_w * (terrain.traction_force(i, F_n, X, tp) - terrain.resistance_force(V, F_n, X, tp))
+    Ff, Fr, G = axle_loads_N(seg, grade_deg)
+    per_axle = [terrain.traction_force(i, F, X, tp) - terrain.resistance_force(V, F, X, tp) for F in (Ff, Fr)]
+    return n_w / 2 * (per_axle[0] + per_axle[1]) + G
 
 
-def _state(i, X, wheel_speed_mps, seg, tp):
+def _state(i, X, wheel_speed_mps, seg, tp, grade_deg=0.0):
     n_w, F_n, R = segment_geometry(seg)
     V = wheel_speed_mps * (1.0 - i)
-    Ft = float(terrain.traction_force(i, F_n, X, tp))
-    Ftr = float(terrain.resistance_force(V, F_n, X, tp))
-    Trr = float(terrain.resistance_torque(wheel_speed_mps, F_n, X, R, tp))
-    T = float(terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp))
-    return SteadyState(float(i), float(V), float(wheel_speed_mps), T, Ft, Ftr, n_w * (Ft - Ftr))
+    G = 0.0
+    if grade_deg != 0.0:           # per axle loads on the grade: forces and torque are the axles' means
+        Ff, Fr, G = axle_loads_N(seg, grade_deg)
+        F_n = np.array([Ff, Fr], float)
+    Ft = terrain.traction_force(i, F_n, X, tp)
+    Ftr = terrain.resistance_force(V, F_n, X, tp)
+    Trr = terrain.resistance_torque(wheel_speed_mps, F_n, X, R, tp)
+    T = float(np.mean(terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)))
+    Ft, Ftr = float(np.mean(Ft)), float(np.mean(Ftr))
+    return SteadyState(float(i), float(V), float(wheel_speed_mps), T, Ft, Ftr, n_w * (Ft - Ftr) + float(G))
 
 
 def state_at_slip(i, X, wheel_speed_mps, seg, tp: TerrainParams) -> SteadyState:
@@ -95,26 +119,45 @@ def state_at_slip(i, X, wheel_speed_mps, seg, tp: TerrainParams) -> SteadyState:
     return _state(float(i), X, float(wheel_speed_mps), seg, tp)
 
 
-def peak_slip(X, wheel_speed_mps, seg, tp):
+def peak_slip(X, wheel_speed_mps, seg, tp, grade_deg: float = 0.0):
     """Slip at which a segment's drawbar in forward motion peaks (the stable branch lies below it)."""
-    res = minimize_scalar(lambda i: -net_force_per_segment_N(i, X, wheel_speed_mps, seg, tp, moving=True),
+    res = minimize_scalar(lambda i: -net_force_per_segment_N(i, X, wheel_speed_mps, seg, tp, moving=True,
+                                                             grade_deg=grade_deg),
                           bounds=(0.0, 1.0), method="bounded", options={"xatol": 1e-10})
     return float(res.x)
 
 
-def max_drawbar_N(X, seg, tp: TerrainParams, wheel_speed_mps: float) -> float:
-    """Largest steady drawbar of one segment on terrain ``X`` [N] (negative: immobilised).
+def max_drawbar_N(X, seg, tp: TerrainParams, wheel_speed_mps: float, grade_deg: float = 0.0) -> float:
+    """Largest steady drawbar of one segment on terrain ``X`` and grade ``grade_deg`` [N] (negative: immobilised).
 
     ``wheel_speed_mps`` is the wheel speed ``R_w w`` at which the slip and the resistance torque
-    are evaluated [m/s].
+    are evaluated [m/s].  On a grade it is ``cos(theta)`` times the level value minus ``m g sin(theta)``
+    (the laws are linear in the normal load).
     """
-    i_pk = peak_slip(X, wheel_speed_mps, seg, tp)
-    return float(net_force_per_segment_N(i_pk, X, wheel_speed_mps, seg, tp, moving=True))
+    i_pk = peak_slip(X, wheel_speed_mps, seg, tp, grade_deg)
+    return float(net_force_per_segment_N(i_pk, X, wheel_speed_mps, seg, tp, moving=True, grade_deg=grade_deg))
+
+
+def max_grade_deg(X, seg, tp: TerrainParams, wheel_speed_mps: float, drawbar_N: float = 0.0) -> float | None:
+    """Steepest grade [deg] on which a rolling segment still pulls ``drawbar_N`` (its share of the tow)
+    at wheel speed ``wheel_speed_mps`` on terrain ``X`` (docs/model.md section 7).
+
+    The root of ``max_drawbar_N(X, grade) = drawbar_N`` in [-MAX_GRADE_DEG, MAX_GRADE_DEG] (it falls
+    monotonically with the grade); ``MAX_GRADE_DEG`` when the segment pulls it even there, None when it
+    cannot even downhill at ``-MAX_GRADE_DEG``.  The motor torque limit is not applied: check
+    ``steady_state(..., grade_deg=...).torque_Nm`` against it.
+    """
+    f = lambda g: max_drawbar_N(X, seg, tp, wheel_speed_mps, grade_deg=g) - drawbar_N
+    if f(MAX_GRADE_DEG) >= 0:
+        return MAX_GRADE_DEG
+    if f(-MAX_GRADE_DEG) < 0:
+        return None
+    return float(brentq(f, -MAX_GRADE_DEG, MAX_GRADE_DEG, xtol=1e-9))
 
 
 def steady_state(X, seg, tp: TerrainParams, *, drawbar_N: float = 0.0, wheel_speed_mps: float | None = None,
-                 ground_speed_mps: float | None = None) -> SteadyState:
-    """Steady slip, speed and torque of one segment at terrain ``X`` and drawbar ``drawbar_N``.
+                 ground_speed_mps: float | None = None, grade_deg: float = 0.0) -> SteadyState:
+    """Steady slip, speed and torque of one segment at terrain ``X``, drawbar ``drawbar_N`` and grade ``grade_deg``.
 
     Give either the wheel speed ``R_w w`` (the controller's set-point) or the ground speed.
     The solution is the lower-slip root (the stable branch, below the peak of the net force).
@@ -131,22 +174,22 @@ def steady_state(X, seg, tp: TerrainParams, *, drawbar_N: float = 0.0, wheel_spe
         V = float(ground_speed_mps)
 
         def g(i):
-            return net_force_per_segment_N(i, X, V / (1.0 - i), seg, tp) - drawbar_N
-        i_hi = min(peak_slip(X, V, seg, tp), 1.0 - 1e-9)
-        if net_force_per_segment_N(i_hi, X, V, seg, tp, moving=True) < drawbar_N:
+            return net_force_per_segment_N(i, X, V / (1.0 - i), seg, tp, grade_deg=grade_deg) - drawbar_N
+        i_hi = min(peak_slip(X, V, seg, tp, grade_deg), 1.0 - 1e-9)
+        if net_force_per_segment_N(i_hi, X, V, seg, tp, moving=True, grade_deg=grade_deg) < drawbar_N:
             raise Immobilised(f"drawbar {drawbar_N:.1f} N exceeds the maximum on X_t = {X:g}")
         i = brentq(g, 0.0, i_hi, xtol=1e-13) if g(0.0) < 0 else 0.0
-        return _state(i, X, V / (1.0 - i), seg, tp)
+        return _state(i, X, V / (1.0 - i), seg, tp, grade_deg)
     w = float(wheel_speed_mps)
-    i_hi = peak_slip(X, w, seg, tp)
+    i_hi = peak_slip(X, w, seg, tp, grade_deg)
 
     def f(i):
-        return net_force_per_segment_N(i, X, w, seg, tp) - drawbar_N
-    d_max = float(net_force_per_segment_N(i_hi, X, w, seg, tp, moving=True))
+        return net_force_per_segment_N(i, X, w, seg, tp, grade_deg=grade_deg) - drawbar_N
+    d_max = float(net_force_per_segment_N(i_hi, X, w, seg, tp, moving=True, grade_deg=grade_deg))
     if d_max < drawbar_N:
         raise Immobilised(f"drawbar {drawbar_N:.1f} N exceeds the maximum {d_max:.1f} N on X_t = {X:g}")
     i = brentq(f, 0.0, i_hi, xtol=1e-13) if f(0.0) < 0 else 0.0
-    return _state(i, X, w, seg, tp)
+    return _state(i, X, w, seg, tp, grade_deg)
 
 
 def immobilisation_limit_xt(seg, tp: TerrainParams, *, wheel_speed_mps: float, drawbar_N: float = 0.0) -> float:

@@ -23,6 +23,8 @@ __all__ = [
     "resistance_force",
     "resistance_torque",
     "wheel_reaction_torque",
+    "normal_load_N",
+    "gravity_force_N",
     "traction_coefficients",
     "traction_from_coefficients",
     "resistance_coefficients",
@@ -216,6 +218,37 @@ def wheel_reaction_torque(F_t, F_tr, T_rr, R_w, p: TerrainParams):
     if p.torque_balance == "traction":
         return R_w * F_t + T_rr
     return R_w * (F_t - F_tr) + T_rr
+
+
+def normal_load_N(weight_per_wheel_N, sin_theta, cos_theta, transfer):
+    """Normal load per wheel on the front and rear axle of a segment on a grade (docs/model.md section 7).
+
+    ``F_n = W (cos(theta) -+ t sin(theta))``, front ``-``, rear ``+``, with ``W = m g / n_wheels`` the
+    level-ground load per wheel and ``t = 2 h / b`` the static pitch load transfer of a centre of
+    mass at height ``h`` over a wheelbase ``b`` (0: none).  Every terrain law that uses the normal
+    load (Eqs. 2 and 3, the resistance torque) takes this one.  At ``theta = 0`` it is ``W``.
+
+    Parameters
+    ----------
+    weight_per_wheel_N : array_like, shape (..., N)
+        ``m g / n_wheels`` of each segment [N].
+    sin_theta, cos_theta : array_like, shape (..., N)
+        Sine and cosine of the grade under each segment (positive uphill).
+    transfer : array_like, shape (..., N)
+        ``2 h / b`` of each segment.
+
+    Returns
+    -------
+    ndarray, shape (..., N, 2)
+        Normal load per wheel, front and rear axle [N].
+    """
+    shift = transfer * sin_theta
+    return np.stack([weight_per_wheel_N * (cos_theta - shift), weight_per_wheel_N * (cos_theta + shift)], axis=-1)
+
+
+def gravity_force_N(mass_kg, gravity_mps2, sin_theta):
+    """Gravity along the track on a segment, ``-m g sin(theta)`` [N] (forward positive; docs/model.md section 7)."""
+    return -mass_kg * gravity_mps2 * sin_theta
 
 
 @dataclass(frozen=True)

@@ -34,8 +34,8 @@ def test_spaces_follow_the_contract(short6):
     np.testing.assert_allclose(env.action_space.high[:6], m.seg.no_load_speed_radps * m.seg.wheel_radius_m)
     np.testing.assert_allclose(env.action_space.high[6:], m.seg.torque_limit_Nm)
     obs, info = env.reset(seed=3)
-    assert obs.shape == (6 * 6 + 3 * 5,) and obs.dtype == np.float64 and info["t_s"] == 0.0
-    assert len(OBSERVATION_FIELDS) == 9
+    assert obs.shape == (7 * 6 + 3 * 5,) and obs.dtype == np.float64 and info["t_s"] == 0.0
+    assert len(OBSERVATION_FIELDS) == 10
     with pytest.raises(ValueError, match="joint_force_N"):
         SnowormEnv(short6, action_keys=("joint_force_N",))
 
@@ -65,3 +65,12 @@ def test_terminated_when_immobilised(short6):
         if terminated:
             break
     assert terminated and info["t_s"] == pytest.approx(1.0)
+
+
+def test_observation_carries_the_grade_under_each_segment(short6):
+    """On a grade the env's observation holds grade_deg per segment (docs/model.md section 7)."""
+    from snoworm.env import OBSERVATION_FIELDS, SnowormEnv
+    env = SnowormEnv(short6.with_({"terrain.grade_deg": 6.0}))
+    obs, _ = env.reset(seed=0)
+    j = OBSERVATION_FIELDS.index("grade_deg") * 6
+    np.testing.assert_allclose(obs[j:j + 6], 6.0, rtol=1e-12)

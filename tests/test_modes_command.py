@@ -105,7 +105,7 @@ def test_observation_is_read_only_and_matches_the_outputs(prismatic2):
     with pytest.raises(AttributeError):
         obs.t_s = 2.0
     d = obs.as_dict()
-    assert set(d) == {"t_s", "x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt", "link_force_N",
+    assert set(d) == {"t_s", "x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt", "grade_deg", "link_force_N",
                       "link_length_m", "joint_extension_m"}
     d["slip"][0] = 9.0                                    # a copy
     assert obs.slip[0] != 9.0

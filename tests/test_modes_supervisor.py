@@ -64,3 +64,23 @@ def test_supervisor_plot_and_energy(traverse, tmp_path):
     assert e["cost_of_transport"] == pytest.approx(e["total_electrical_J"] / (mass * 9.81 * e["distance_m"]), rel=1e-12)
     assert traverse.summary()["energy_metrics"]["energy_per_metre_J_per_m"] == pytest.approx(
         e["total_electrical_J"] / e["distance_m"], rel=1e-12)
+
+
+def test_rolling_surplus_includes_the_grade():
+    """The supervisor's resume test on a constant grade: the chain's rolling surplus is
+    sum_k (cos(theta) D_k(0) - m g sin(theta)) - tow (docs/model.md section 7)."""
+    import math
+
+    import numpy as np
+
+    from snoworm import load_scenario
+    from snoworm.modes.supervisor import chain_drawbar_surplus_N
+    level = load_scenario("traverse_patch")
+    slope = level.with_({"terrain.grade_deg": 6.0})
+    segs = level.vehicle.segment_params()
+    x = np.array([30.0 - 1.5 * k for k in range(6)])        # past the patch: X_t = 0.9 under every axle
+    s0 = chain_drawbar_surplus_N(level.chain_model, segs, x, 1.8)
+    s6 = chain_drawbar_surplus_N(slope.chain_model, segs, x, 1.8)
+    th = math.radians(6.0)
+    m_g = segs[0].mass_kg * segs[0].gravity_mps2
+    assert s6 == pytest.approx(math.cos(th) * s0 - 6 * m_g * math.sin(th), rel=1e-9)

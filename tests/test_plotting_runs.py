@@ -91,3 +91,19 @@ def test_plot_result_in_other_formats(uniform, tmp_path, fmt, magic):
     paths = runs.plot_result(uniform, tmp_path, fmt)
     assert [p.name for p in paths] == [f"forces.{fmt}", f"speeds.{fmt}", f"positions.{fmt}"]
     assert all(p.read_bytes()[:5] == magic for p in paths)
+
+
+def test_route_figure_shows_speeds_over_elevation_and_xt(tmp_path):
+    """A run on a grade gets the route figure: speeds against distance over z(s) and X_t(s)."""
+    res = simulate(load_scenario("ramp_drift", ["simulation.duration_s=4"]))
+    fig = runs.plot_route(res)
+    speed_ax, elev_ax, xt_ax = fig.axes[:3]
+    assert len(_labels(speed_ax)) == res.n_segments
+    xs = elev_ax.get_lines()[0].get_xdata()
+    z = elev_ax.get_lines()[0].get_ydata()
+    np.testing.assert_allclose(z, res.scenario.terrain.elevation_profile().elevation(xs))
+    np.testing.assert_allclose(xt_ax.get_lines()[0].get_ydata(), res.scenario.terrain.compile()(xs))
+    names = sorted(p.name for p in runs.plot_result(res, tmp_path))
+    assert "route.png" in names
+    level = simulate(load_scenario("tow6_uniform", ["simulation.duration_s=1"]))
+    assert "route.png" not in [p.name for p in runs.plot_result(level, tmp_path / "level")]

@@ -122,3 +122,19 @@ def test_solver_failure_leaves_the_simulator_at_the_step_start(tow6, monkeypatch
     np.testing.assert_array_equal(sim.observation().x_m, before.x_m)
     np.testing.assert_array_equal(sim.commands.controls.speed_sp_mps, 1.0)   # the failed step's command undone
     assert sim.result().t[-1] == pytest.approx(0.2)
+
+
+def test_simulator_observes_the_grade_under_each_segment():
+    """A controller sees the chord grade under each segment (docs/model.md section 7): on a route that
+    rises 1 m in 10 m from x = 0, the leader sits on it while the segments behind are level."""
+    import snoworm
+    sc = snoworm.load_scenario("tow6_uniform", ["terrain.elevation=[[0,0],[10,1],[20,1]]"])
+    obs = snoworm.Simulator(sc).observation()
+    grade = obs.grade_deg
+    assert grade.shape == (6,)
+    assert 0.0 < grade[0] < np.degrees(np.arcsin(0.1)) + 1e-9     # straddles the foot of the rise
+    np.testing.assert_allclose(grade[1:], 0.0, atol=1e-12)
+    blank = snoworm.modes.command.Observation(t_s=0.0, **{k: np.zeros(6) for k in
+                                                        ("x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt")},
+                                             **{k: np.zeros(5) for k in ("link_force_N", "link_length_m", "joint_extension_m")})
+    np.testing.assert_array_equal(blank.grade_deg, np.zeros(6))   # built by hand without a grade: level

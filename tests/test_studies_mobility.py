@@ -1,4 +1,6 @@
 """Mobility map (snoworm.studies.mobility): which modes move the vehicle over X_t and tow (beyond the paper)."""
+import math
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -128,3 +130,62 @@ def test_cli_every_cell_simulates_the_rolling_cells_too(scenario_path, tmp_path)
     rows = (tmp_path / "b" / "mobility_map.csv").read_text().splitlines()
     rolling = dict(zip(hdr, rows[2].split(",")))
     assert rolling["region"] == "rolling" and rolling["inching"] in ("0", "1") and rolling["inching_cheaper"] in ("0", "1")
+
+
+def test_grade_axis_bisection_equals_every_cell(scenario_path):
+    """With a grade axis the inching runs are bisected over the grades (monotone in the grade): the
+    regions equal those of simulating every cell, on a grid that has all three regions."""
+    sc = load_scenario(scenario_path("traverse_patch"))
+    kw = dict(wheel_speed_mps=1.8, grades=[0.0, 8.0, 16.0, 24.0], inch_duration_s=4.0, jobs=2)
+    fast = mobility_map(sc, [0.4, 0.7], [0.0], **kw)
+    full = mobility_map(sc, [0.4, 0.7], [0.0], every_cell=True, **kw)
+    region = lambda m: {(r["xt"], r["grade_deg"]): r["region"] for r in m["rows"]}
+    assert region(fast) == region(full)
+    assert set(region(full).values()) == {"rolling", "inching only", "immobile"}
+    simulated = [r for r in fast["rows"] if r["inching_speed_mps"] is not None]
+    assert len(simulated) < sum(not r["rolling"] for r in fast["rows"])          # the bisection saved runs
+    assert all(r["inching_note"].startswith("not simulated") for r in fast["rows"]
+               if r["inching"] is not None and r["inching_speed_mps"] is None)
+
+
+def test_rolling_cells_on_a_grade_use_the_graded_steady_state(scenario_path):
+    sc = load_scenario(scenario_path("traverse_patch"))
+    m = mobility_map(sc, [0.8], [0.0], wheel_speed_mps=1.8, grades=[10.0, 20.0], inching=False)
+    limit = m["rolling_max_grade_deg"][0.0][0.8]
+    assert [r["rolling"] for r in m["rows"]] == [10.0 < limit, 20.0 < limit] == [True, False]
+    g = m["gradeability"][0.0]
+    assert g["rolling_grid_deg"] == [10.0]
+    assert g["rolling_J_per_m_climbed"][0] == pytest.approx(
+        m["rows"][0]["rolling_energy_per_metre_J_per_m"] / math.sin(math.radians(10.0)))
+
+
+def test_cli_mobility_map_grade_axis(scenario_path, tmp_path):
+    r = CliRunner().invoke(main, ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.7,0.9",
+                                  "--grade", "0:20:3", "--no-inching", "--out", str(tmp_path / "m")])
+    assert r.exit_code == 0, r.output
+    header = (tmp_path / "m" / "mobility_map.csv").read_text().splitlines()[0].split(",")
+    assert header[:4] == ["xt", "tow_N", "grade_deg", "region"]
+    assert (tmp_path / "m" / "gradeability.png").stat().st_size > 10000
+    bad = CliRunner().invoke(main, ["mobility-map", str(scenario_path("traverse_patch")), "--grade", "0:60:3",
+                                    "--no-inching", "--out", str(tmp_path / "b")])
+    assert bad.exit_code == 2 and "--grade" in bad.output and "40" in bad.output
+
+
+def test_several_gaits_one_curve_each(scenario_path):
+    """Two gaits on a 2 x 2 grid: each gait's cells are its own runs; a cell inches when any gait
+    moves the chain, reporting that gait; a bad gait is a one-line error before any run."""
+    from snoworm.studies.mobility import parse_gait
+    from snoworm.config.schema import ScenarioError
+    sc = load_scenario(scenario_path("traverse_patch"))
+    gaits = ["six_segment", parse_gait("[[0],[1],[2],[3],[4],[5]]")]
+    m = mobility_map(sc, [0.4], [0.0], wheel_speed_mps=1.8, grades=[0.0, 8.0], inch_duration_s=4.0, gaits=gaits)
+    assert m["gait_labels"] == ["six_segment", "[[0],[1],[2],[3],[4],[5]]"]
+    for r in m["rows"]:
+        moved = [lab for lab, c in r["inching_by_gait"].items() if c["inching"]]
+        assert r["inching"] == bool(moved) and (r["inching_gait"] in moved if moved else r["inching_gait"] == "")
+    curves = m["gradeability"][0.0]["inching"]
+    assert set(curves) == set(m["gait_labels"])
+    with pytest.raises(ScenarioError, match="--gait"):
+        parse_gait("[[0], 1]")
+    with pytest.raises(ScenarioError, match="gait"):
+        mobility_map(sc, [0.4], [0.0], wheel_speed_mps=1.8, inch_duration_s=1.0, gaits=["no_such_gait"])

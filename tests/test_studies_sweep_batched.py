@@ -2,6 +2,7 @@
 
 The solver work budgets and the batched-vs-one-by-one driver test are in test_simulation_driver.py.
 """
+import numpy as np
 import pytest
 
 from snoworm.studies.sweep import BatchExecutor, run_chunk
@@ -79,3 +80,18 @@ def test_local_pool_tasks_carry_the_validated_scenarios(scenario_path):
     plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=False)
     assert all("scenario" not in t and t["raw"]["tow"]["force_N"] in (0, 100)
                for t in _tasks(plan, plan.cases, None, False))
+
+
+def test_grade_sweep_batches_only_equal_elevations():
+    """Members on different grades get different batch keys (stacked chains share one elevation
+    profile); members on the same grade share one, and the stacked run equals the runs alone."""
+    from snoworm import load_scenario, simulate
+    from snoworm.simulation.driver import batch_key, simulate_batch
+    base = load_scenario("tow6_uniform", ["simulation.duration_s=3"])
+    a, b = base.with_({"terrain.grade_deg": 4.0}), base.with_({"terrain.grade_deg": 8.0})
+    assert batch_key(a) != batch_key(b)
+    c = base.with_({"terrain.grade_deg": 4.0, "tow.force_N": 100.0})
+    assert batch_key(a) == batch_key(c)
+    for m, sc in zip(simulate_batch([a, c]), [a, c]):
+        alone = simulate(sc)
+        np.testing.assert_allclose(m.result.segments["v_mps"][-1], alone.segments["v_mps"][-1], rtol=1e-4)

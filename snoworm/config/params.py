@@ -49,6 +49,8 @@ PARAMETER_SETS = {
             "drivetrain_efficiency": (0.8, "[paper] 20 % loss (for electrical energy)"),
             "speed_kp_Nms_per_rad": (30.0, "[assumed] wheel-speed PI"),
             "speed_ki_Nm_per_rad": (150.0, "[assumed] wheel-speed PI"),
+            "com_height_m": (0.40, "[assumed] no FrostyBoy value published; about the axle height plus half the "
+                                   "chassis depth (only the pitch load transfer on a grade uses it)"),
         },
         "terrain_model": {
             "b_tF": (0.7, "[paper] Table 3"),

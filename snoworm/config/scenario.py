@@ -7,7 +7,6 @@ key (unknown keys are rejected with suggestions) and returns a frozen :class:`Sc
 """
 from __future__ import annotations
 
-import contextvars
 import copy
 import functools
 from importlib import resources
@@ -19,6 +18,7 @@ import yaml
 from . import yamlio
 from ..dynamics import ChainModel
 from .params import parameter_entries, read_model_file, source_notes
+from .routes import BASE_DIR as _BASE_DIR, base_dir, check_vehicle_on_grade
 from .schema import Config, ScenarioError, build, dump, field, quote, short_key, suggest
 from .mode_registry import ModeConfig, build_mode_config
 from .sections import (MAX_OUTPUT_SAMPLES, LinkConfig, PatchConfig,
@@ -62,6 +62,7 @@ class Scenario(Config):
                                 f"for {self.vehicle.segments} segments gives {n_out:.0f} output samples (times x segments), over "
                                 f"the {MAX_OUTPUT_SAMPLES} allowed (memory). Raise output_dt_s or shorten duration_s.")
         mode.check_vehicle(self.vehicle, "mode")
+        check_vehicle_on_grade(self.vehicle, self.terrain.elevation_profile())
         mode.check_scenario(self, "mode")      # checks needing terrain and tow (e.g. force control)
 
     @functools.cached_property
@@ -69,7 +70,8 @@ class Scenario(Config):
         """The assembled :class:`~snoworm.dynamics.ChainModel` (built once per scenario)."""
         veh = self.vehicle
         return ChainModel(veh.segment_arrays(), veh.link_arrays(), self.terrain.model.params(),
-                          self.terrain.compile(), self.tow.force_N, force_loop=self.mode.force_loop)
+                          self.terrain.compile(), self.tow.force_N, force_loop=self.mode.force_loop,
+                          elevation=self.terrain.elevation_profile())
 
     @functools.cached_property
     def mode_plan(self):
@@ -104,7 +106,7 @@ class Scenario(Config):
                 "terrain": dump(self.terrain), "tow": dump(self.tow), "mode": dump(self.mode),
                 "simulation": dump(self.simulation)}
         t = data["terrain"]
-        for key in ("xt", "profile", "patches", "random"):
+        for key in ("xt", "profile", "patches", "random", "grade_deg", "grade_patches", "elevation", "route"):
             if t[key] is None:
                 t.pop(key)
         for key in ("max_step_s", "max_wall_s"):
@@ -197,20 +199,6 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
     object.__setattr__(sc, "_notes", notes)
     object.__setattr__(sc, "_entries", entries)
     return sc
-
-
-#: folder of the scenario file being validated (None: the working directory); see :func:`base_dir`
-_BASE_DIR = contextvars.ContextVar("snoworm_scenario_dir", default=None)
-
-
-def base_dir() -> Path:
-    """The folder that relative file paths in the scenario being validated are taken from.
-
-    The scenario file's folder while :func:`load_scenario` validates it, else the working
-    directory.  A config section resolving a file path (e.g. ``mode.controller``) calls it.
-    """
-    d = _BASE_DIR.get()
-    return Path.cwd() if d is None else d
 
 
 #: Sections of a parameter set and their dotted prefixes in a scenario.

@@ -10,13 +10,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Optional
 
 import numpy as np
 
 from ..model.arrays import LinkArrays, SegmentArrays
 from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
+from ..slope import ElevationProfile, grade_patch_profile
 from ..terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
+from .routes import GRADE_DOMAIN, GradePatchConfig, base_dir, check_elevation_table, read_route
 
 __all__ = ["XT_DOMAIN", "FINITE_WHY", "BIG_FORCE_N", "BIG_SPEED_MPS", "MAX_SEGMENTS", "MAX_OUTPUT_SAMPLES",
            "SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig", "TerrainConfig",
@@ -60,6 +63,8 @@ class SegmentConfig(Config):
                                         doc="wheel-speed PI proportional gain")
     speed_ki_Nm_per_rad: float = field(ge=0, le=1e6, why=FINITE_WHY, unit="N m/rad",
                                        doc="wheel-speed PI integral gain")
+    com_height_m: float = field(ge=0, le=100, why=FINITE_WHY, unit="m",
+                                doc="height of the centre of mass above the ground (pitch load transfer on a grade)")
 
 
 @dataclass(frozen=True)
@@ -162,11 +167,15 @@ class RandomTerrainConfig(Config):
 
 @dataclass(frozen=True)
 class TerrainConfig(Config):
-    """Terrain coefficient along the track.
+    """Terrain coefficient and elevation along the track.
 
     Exactly one of: a constant ``xt`` (optionally with ``patches`` of other snow on it), a
-    ``profile`` table of ``[position_m, xt]`` pairs, or a seeded ``random`` profile.  All of
-    them compile to one :class:`~snoworm.terrain.TerrainProfile` (:meth:`compile`).
+    ``profile`` table of ``[position_m, xt]`` pairs, a seeded ``random`` profile, or a ``route``
+    file (which gives the elevation too).  All of them compile to one
+    :class:`~snoworm.terrain.TerrainProfile` (:meth:`compile`).  The elevation (docs/model.md
+    section 7): level unless ``grade_deg`` (optionally with ``grade_patches``), an ``elevation``
+    table or a ``route`` is given; it compiles to one :class:`~snoworm.slope.ElevationProfile`
+    (:meth:`elevation_profile`).
     """
 
     _section = "terrain"
@@ -176,13 +185,21 @@ class TerrainConfig(Config):
     profile: Optional[tuple[tuple[float, ...], ...]] = field(None, doc="list of [position_m, xt] pairs")
     patches: Optional[tuple[PatchConfig, ...]] = field(None, doc="patches of other snow on the base xt")
     random: Optional[RandomTerrainConfig] = field(None, doc="seeded random X_t profile")
+    grade_deg: Optional[float] = field(None, **GRADE_DOMAIN, unit="deg",
+                                       doc="constant grade, positive uphill (the base grade with grade_patches)")
+    grade_patches: Optional[tuple[GradePatchConfig, ...]] = field(None, doc="stretches of other grade on grade_deg")
+    elevation: Optional[tuple[tuple[float, ...], ...]] = field(None, doc="list of [distance_m, elevation_m] pairs")
+    route: Optional[str] = field(None, doc="CSV route file (distance_m, elevation_m, xt columns), relative to the "
+                                           "scenario's folder")
 
     def _check(self, path):
-        given = [k for k in ("xt", "profile", "random") if getattr(self, k) is not None]
+        given = [k for k in ("xt", "profile", "random", "route") if getattr(self, k) is not None]
         if len(given) != 1:
             raise ScenarioError(f"{path}: give exactly one of 'xt' (a constant X_t, optionally with 'patches'), "
-                                f"'profile' (a list of [position_m, xt] pairs) or 'random' (a seeded random profile); "
+                                f"'profile' (a list of [position_m, xt] pairs), 'random' (a seeded random profile) or "
+                                f"'route' (a route file); "
                                 f"got {' and '.join(repr(g) for g in given) if given else 'none of them'}.")
+        self._check_grade(path)
         if self.patches is not None:
             if self.xt is None:
                 raise ScenarioError(f"{path}.patches: patches lie on a base X_t; give 'xt' (the X_t outside the "
@@ -208,6 +225,51 @@ class TerrainConfig(Config):
                 check_field(PatchConfig, "xt", pair[1], f"{path}.profile[{j}][1]")
                 prev = pair[0]
 
+    def _check_grade(self, path):
+        grades = [k for k in ("grade_deg", "elevation", "route") if getattr(self, k) is not None]
+        if len(grades) > 1:
+            raise ScenarioError(f"{path}: give at most one of 'grade_deg', 'elevation' and 'route' (a route file "
+                                f"carries its elevation); got {' and '.join(repr(g) for g in grades)}.")
+        if self.grade_patches is not None and self.grade_deg is None:
+            raise ScenarioError(f"{path}.grade_patches: grade patches lie on a base grade; give 'grade_deg' "
+                                "(the grade outside the patches, 0 for level).")
+        prev_end, prev_j = -math.inf, None
+        for j, pt in enumerate(self.grade_patches or ()):
+            if pt.start_m - pt.ramp_m < prev_end:
+                raise ScenarioError(f"{path}.grade_patches[{j}]: overlaps grade_patches[{prev_j}] (with its ramps); "
+                                    "list grade patches in order along the route, without overlap.")
+            prev_end, prev_j = pt.end_m + pt.ramp_m, j
+        if self.elevation is not None:
+            check_elevation_table(self.elevation, f"{path}.elevation")
+        if self.route is not None:
+            route = Path(self.route)
+            route = route if route.is_absolute() else (base_dir() / route)
+            object.__setattr__(self, "route", str(route.resolve()))
+            object.__setattr__(self, "_route", read_route(self.route))
+
+    def files(self) -> list:
+        """The files this section refers to (the route file), as absolute paths."""
+        return [self.route] if self.route is not None else []
+
+    def route_data(self):
+        """The :class:`~snoworm.config.routes.Route` read from ``route`` (None without one)."""
+        if self.route is None:
+            return None
+        if "_route" not in self.__dict__:
+            object.__setattr__(self, "_route", read_route(self.route))
+        return self.__dict__["_route"]
+
+    def elevation_profile(self) -> ElevationProfile | None:
+        """The elevation along the track (docs/model.md section 7), or None on level ground."""
+        if self.route is not None:
+            return self.route_data().elevation_profile()
+        if self.elevation is not None:
+            return ElevationProfile(tuple(p[0] for p in self.elevation), tuple(p[1] for p in self.elevation))
+        if self.grade_deg is not None:
+            return grade_patch_profile(self.grade_deg, [(p.start_m, p.end_m, p.grade_deg, p.ramp_m)
+                                                        for p in self.grade_patches or ()])
+        return None
+
     def compile(self) -> TerrainProfile:
         """Compile ``xt``, ``xt`` + ``patches``, ``profile`` or ``random`` to one X_t table.
 
@@ -216,6 +278,9 @@ class TerrainConfig(Config):
         """
         if self.profile is not None:
             return TerrainProfile(tuple(p[0] for p in self.profile), tuple(p[1] for p in self.profile))
+        if self.route is not None:
+            r = self.route_data()
+            return TerrainProfile(r.distance_m, r.xt)
         if self.random is not None:
             r = self.random
             return random_profile(r.mean, r.std, r.correlation_length_m, r.seed, r.length_m, r.min_xt, r.start_m)

@@ -30,6 +30,7 @@ class SegmentArrays:
     drivetrain_efficiency: np.ndarray
     speed_kp_Nms_per_rad: np.ndarray
     speed_ki_Nm_per_rad: np.ndarray
+    com_height_m: np.ndarray
 
     @classmethod
     def from_list(cls, segments) -> "SegmentArrays":

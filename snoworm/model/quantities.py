@@ -53,6 +53,11 @@ def output_series(model, ys, ctl):
         "motor_electrical_power_W": (np.maximum(Tm * w, 0.0)).sum(-1) * nw / eta,
     }
     x = seg["x_m"]
+    # the grade under each segment and its potential-energy height (docs/model.md section 7)
+    seg["grade_deg"] = np.degrees(np.arcsin(model.grade_terms(x)[0]))
+    seg["elevation_m"] = (np.zeros(x.shape) if model.elevation is None
+                          else model.elevation.mean_elevation(x, model.seg.wheelbase_m / 2.0))
+    seg["gravity_N"] = np.asarray(out["gravity_N"], float)
     lk = {"force_N": out["link_force_N"], "length_m": x[..., :-1] - x[..., 1:],
           "spring_force_N": out["link_spring_N"], "damper_power_W": out["link_damper_W"]}
     if model.has_joints:

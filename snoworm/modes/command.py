@@ -32,7 +32,8 @@ COMMAND_KEYS = {
 
 #: Observation arrays: name -> (table of :func:`output_series`, its column).
 _SOURCES = {"x_m": (0, "x_m"), "v_mps": (0, "v_mps"), "wheel_speed_mps": (0, "wheel_speed_mps"), "slip": (0, "slip"),
-            "motor_torque_Nm": (0, "motor_torque_Nm"), "xt": (0, "xt"), "link_force_N": (1, "force_N"),
+            "motor_torque_Nm": (0, "motor_torque_Nm"), "xt": (0, "xt"), "grade_deg": (0, "grade_deg"),
+            "link_force_N": (1, "force_N"),
             "link_length_m": (1, "length_m"), "joint_extension_m": (1, "extension_m")}
 
 
@@ -48,10 +49,12 @@ class Observation:
     ----------
     t_s : float
         Time [s].
-    x_m, v_mps, wheel_speed_mps, slip, motor_torque_Nm, xt : ndarray (N,)
+    x_m, v_mps, wheel_speed_mps, slip, motor_torque_Nm, xt, grade_deg : ndarray (N,)
         Per segment, as in the results' ``segments`` (:data:`snoworm.results.result.SEGMENT_COLUMNS`):
         position [m], ground speed [m/s], wheel speed R_w*omega [m/s] and slip (means of the
-        axles), motor torque per wheel [N m] and the terrain coefficient X_t under the segment.
+        axles), motor torque per wheel [N m], the terrain coefficient X_t and the grade under the
+        segment [deg, positive uphill] (docs/model.md section 7; built from values without
+        ``grade_deg``, an observation is on level ground: zeros).
     link_force_N, link_length_m, joint_extension_m : ndarray (N-1,)
         Per link, as in the results' ``links``: force (tension positive) [N], centre-to-centre
         distance [m] and prismatic joint extension (0 for a fixed link) [m].
@@ -61,6 +64,8 @@ class Observation:
     FIELDS = ("t_s",) + tuple(_SOURCES)
 
     def __init__(self, t_s, **arrays):
+        if "grade_deg" not in arrays and "x_m" in arrays:      # level ground unless given
+            arrays["grade_deg"] = np.zeros(np.shape(arrays["x_m"]))
         if set(arrays) != set(_SOURCES):
             raise TypeError(f"Observation needs t_s and exactly {', '.join(_SOURCES)}; "
                             f"missing {sorted(set(_SOURCES) - set(arrays))}, unknown {sorted(set(arrays) - set(_SOURCES))}")

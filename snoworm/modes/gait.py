@@ -118,8 +118,11 @@ def gait_plan(phases, n, link_types, path="mode.gait"):
     return plans
 
 
-def progress_conditions(F_c, Ft_front, Ftr_front, Ftr_rear):
-    """The paper's conditions for inchworm progress of a 2-segment push phase, Eqs. 4-6.
+def progress_conditions(F_c, Ft_front, Ftr_front, Ftr_rear, G_front=0.0, G_rear=0.0):
+    """The paper's conditions for inchworm progress of a 2-segment push phase, Eqs. 4-6, with gravity.
+
+    On a grade (docs/model.md section 7) gravity along the track ``G = -m g sin(theta)`` (negative
+    uphill) acts on each segment; the paper's level-ground Eqs. 4-6 are the case ``G = 0``.
 
     Parameters
     ----------
@@ -129,17 +132,19 @@ def progress_conditions(F_c, Ft_front, Ftr_front, Ftr_rear):
         Tractive and terrain-resistance force of the moving (front) segment [N].
     Ftr_rear : float
         Terrain resistance the held (rear) segment can provide [N].
+    G_front, G_rear : float
+        Gravity along the track on the moving and the held segment [N] (0 on level ground).
 
     Returns
     -------
     dict
-        ``eq4_N = F_c + F_t,front - F_tr,front`` (> 0: the mover advances),
-        ``eq5_N = F_tr,rear - F_c`` (>= 0: the anchor holds),
-        ``eq6_N = F_t,front + F_tr,rear - F_tr,front`` (> 0: some F_c satisfies both),
+        ``eq4_N = F_c + F_t,front - F_tr,front + G_front`` (> 0: the mover advances),
+        ``eq5_N = F_tr,rear + G_rear - F_c`` (>= 0: the anchor holds; uphill gravity pulls it back too),
+        ``eq6_N = F_t,front + F_tr,rear - F_tr,front + G_front + G_rear`` (> 0: some F_c satisfies both),
         and ``progress`` (Eqs. 4 and 5 both hold).
     """
-    eq4 = F_c + Ft_front - Ftr_front
-    eq5 = Ftr_rear - F_c
-    eq6 = Ft_front + Ftr_rear - Ftr_front
+    eq4 = F_c + Ft_front - Ftr_front + G_front
+    eq5 = Ftr_rear + G_rear - F_c
+    eq6 = Ft_front + Ftr_rear - Ftr_front + G_front + G_rear
     return {"eq4_N": float(eq4), "eq5_N": float(eq5), "eq6_N": float(eq6),
             "progress": bool(eq4 > 0 and eq5 >= 0)}

@@ -138,19 +138,24 @@ class InchwormMode(Mode):
 
     # ------------------------------------------------------------ terrain forces for the plan
     def _segment_forces(self, y):
-        """Per segment: full forward terrain resistance and locked-wheel traction (i = 1) [N]."""
+        """Per segment: full forward terrain resistance, locked-wheel traction (i = 1) and gravity along
+        the track [N], at the normal loads on the grade (docs/model.md section 7)."""
         m = self.model
-        X = m.xt_at_axles(m.field(m.unpack(y), "x_m"))
-        Fn = m.normal_force_N
+        x = m.field(m.unpack(y), "x_m")
+        X = m.xt_at_axles(x)
+        _, _, Fn, G = m.grade_terms(x)
         nw = m.wheels_per_axle[:, None]
         Ftr = (nw * terrain.resistance_force(np.inf, Fn, X, m.tp)).sum(-1)
         Ft1 = (nw * terrain.traction_force(1.0, Fn, X, m.tp)).sum(-1)
-        return Ftr, Ft1
+        return Ftr, Ft1, G
 
     def _joint_commands(self, plan, y):
         cfg, m = self.cfg, self.model
         n = m.n
-        Ftr, Ft1 = self._segment_forces(y)
+        Ftr, Ft1, G = self._segment_forces(y)
+        # gravity (negative uphill) adds to what a mover must overcome and takes from what an anchor
+        # holds (every planned joint force on an anchor pushes or pulls it backward): Eqs. 4-5 with gravity
+        need = Ftr - G
         active = (plan.role != 0) & (plan.group_of_joint >= 0)
         active &= ~self.group_done[np.maximum(plan.group_of_joint, 0)]
         ff = np.zeros(n - 1)
@@ -159,10 +164,10 @@ class InchwormMode(Mode):
             if cfg.joint_control == "force":
                 ff[js] = cfg.joint_force_N
             elif js.size and cfg.feedforward == "resistance":
-                ff[js] = Ftr[list(grp)].sum() / js.size
+                ff[js] = need[list(grp)].sum() / js.size
         Fmax = m.links.force_max_N
         limit = Fmax.copy()
-        capacity = np.array([(Ftr[list(cl)] + Ft1[list(cl)]).sum() for cl in plan.clusters])
+        capacity = np.array([(Ftr[list(cl)] + Ft1[list(cl)] + G[list(cl)]).sum() for cl in plan.clusters])
         if cfg.hold_margin is not None:
             for c in range(len(plan.clusters)):
                 js = np.nonzero(active & (plan.cluster_of_joint == c))[0]
@@ -185,7 +190,7 @@ class InchwormMode(Mode):
                     w = ff[js] / ff[js].sum() if ff[js].sum() > 0 else np.full(js.size, 1.0 / js.size)
                     limit[js] = np.minimum(limit[js], ff[js] + common * w)
         ff = np.minimum(ff, limit)
-        return active, ff, limit, capacity, Ftr, Ft1
+        return active, ff, limit, capacity, Ftr, Ft1, G
 
     @staticmethod
     def _group_joints(plan, active):
@@ -202,7 +207,7 @@ class InchwormMode(Mode):
         if self.group_done is None:
             self.group_done = np.zeros(len(plan.groups), bool)
             self._begin_phase(t, y)
-        active, ff, limit, capacity, _, _ = self._joint_commands(plan, y)
+        active, ff, limit, capacity, _, _, _ = self._joint_commands(plan, y)
         moving = np.zeros(n, bool)
         for g, grp in enumerate(plan.groups):
             if not self.group_done[g]:
@@ -238,7 +243,7 @@ class InchwormMode(Mode):
 
     def _begin_phase(self, t, y):
         plan = self.plans[self.phase]
-        active, ff, limit, capacity, Ftr, Ft1 = self._joint_commands(plan, y)
+        active, ff, limit, capacity, Ftr, Ft1, G = self._joint_commands(plan, y)
         diag = []
         for g, grp in enumerate(plan.groups):
             js = np.nonzero(active & (plan.group_of_joint == g))[0]
@@ -247,8 +252,9 @@ class InchwormMode(Mode):
             # Eq. 5 per anchor cluster: its capacity against every planned joint force on it
             eq5 = min(float(capacity[c] - limit[np.nonzero(active & (plan.cluster_of_joint == c))[0]].sum())
                       for c in cl)
+            # (the anchors' capacity already includes their gravity)
             pc = progress_conditions(Fc, float(Ft1[list(grp)].sum()), float(Ftr[list(grp)].sum()),
-                                     float(min(capacity[c] for c in cl)))
+                                     float(min(capacity[c] for c in cl)), G_front=float(G[list(grp)].sum()))
             pc["eq5_N"] = eq5
             pc["progress"] = bool(pc["eq4_N"] > 0 and eq5 >= 0)
             diag.append({"segments": list(grp), "joints": [int(j) for j in js], "joint_force_limit_N": Fc, **pc})

@@ -108,8 +108,9 @@ class SupervisorConfig(ModeConfig):
 def chain_drawbar_surplus_N(model, segments, x_m, wheel_speed_mps) -> float:
     """Steady drawbar the chain could develop rolling at its current position, minus the tow [N].
 
-    ``sum_k sum_axles max_drawbar_N(X_t(axle)) / 2 - F_tow`` (docs/model.md section 2 per-segment
-    maximum drawbar; each axle carries half a segment).  Positive: the chain can roll.
+    ``sum_k sum_axles max_drawbar_N(X_t(axle), grade_k) / 2 - F_tow`` (docs/model.md section 2 per-segment
+    maximum drawbar, on the grade under the segment of section 7; each axle carries half a segment).
+    Positive: the chain can roll.
 
     Parameters
     ----------
@@ -123,10 +124,12 @@ def chain_drawbar_surplus_N(model, segments, x_m, wheel_speed_mps) -> float:
         Rolling wheel-speed set-point [m/s].
     """
     X = model.xt_at_axles(x_m)
+    grade = np.degrees(np.arcsin(model.grade_terms(x_m)[0]))     # the grade under each segment (section 7)
     total = 0.0
     for k, seg in enumerate(segments):
         for a in range(X.shape[1]):
-            total += 0.5 * steady.max_drawbar_N(float(X[k, a]), seg, model.tp, wheel_speed_mps)
+            total += 0.5 * steady.max_drawbar_N(float(X[k, a]), seg, model.tp, wheel_speed_mps,
+                                                grade_deg=float(grade[k]))
     return total - model.tow_force_N
 
 

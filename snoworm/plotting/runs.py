@@ -10,7 +10,7 @@ from matplotlib.patches import Rectangle
 from .style import force_text, legend_outside, new_figure, save, series_style
 
 __all__ = ["plot_forces", "plot_speeds", "plot_positions", "plot_force_diagram", "plot_groups", "plot_result",
-           "moving_groups", "PLOT_KINDS"]
+           "moving_groups", "plot_route", "PLOT_KINDS"]
 
 
 def _seg_label(k):
@@ -252,16 +252,44 @@ def plot_force_diagram(result, window_s=1.0, *, ax=None, fig=None):
 
 
 #: ``Result.plot(kind)``: kind -> function drawing it.
+def plot_route(result, *, ax=None, fig=None):
+    """The run along the route (docs/model.md section 7): each segment's ground speed against its
+    position, over the elevation z(s) and the terrain coefficient X_t(s) of the stretch driven
+    (shared distance axis).  Drawn for every run on a grade.  Returns the Figure."""
+    own = ax is None and fig is None
+    x, v = result.segments["x_m"], result.segments["v_mps"]
+    fig, axes = new_figure(ax, fig, 3, 1, figsize=(9, 7.5), sharex=True, gridspec_kw={"height_ratios": [2.2, 1.4, 1.0]})
+    a0, a1, a2 = axes[:, 0]
+    for k in range(x.shape[1]):
+        a0.plot(x[:, k], v[:, k], label=_seg_label(k), lw=1.2, **series_style(k, x.shape[0]))
+    a0.set_ylabel("ground speed\n[m/s]")
+    legend_outside(a0)
+    xs = np.linspace(x.min() - 1.0, x.max() + 1.0, 600)
+    elev = result.scenario.terrain.elevation_profile()
+    z = np.zeros_like(xs) if elev is None else np.asarray(elev.elevation(xs), float)
+    a1.fill_between(xs, z.min() - 0.05 * (np.ptp(z) + 1.0), z, color="#d9d9d9")
+    a1.plot(xs, z, color="0.25")
+    a1.set_ylabel("elevation\n[m]")
+    a2.plot(xs, np.asarray(result.scenario.terrain.compile()(xs), float), color="#8c510a")
+    a2.set_ylabel("X_t")
+    a2.set_xlabel("distance along the route [m]")
+    for a in (a0, a1, a2):
+        a.grid(alpha=0.3)
+    _title(fig, axes, f"{result.scenario.name}: speeds along the route, elevation and X_t", own)
+    return fig
+
+
 PLOT_KINDS = {"forces": plot_forces, "speeds": plot_speeds, "positions": plot_positions,
-              "force_diagram": plot_force_diagram, "groups": plot_groups}
+              "force_diagram": plot_force_diagram, "groups": plot_groups, "route": plot_route}
 
 
 def plot_result(result, out_dir, fmt: str = "png") -> list:
     """Every standard plot of a run, saved in ``out_dir``: ``forces``, ``speeds``, ``positions``
-    (and the mode's extra plots, e.g. ``force_diagram``), as ``fmt`` files (png, pdf, svg).
+    (and the mode's extra plots, e.g. ``force_diagram``; ``route`` on a grade), as ``fmt`` files (png, pdf, svg).
 
     Returns the paths written.
     """
     out = Path(out_dir)
     names = ["forces", "speeds", "positions"] + list(getattr(result.scenario.mode, "extra_plots", ()))
+    names += ["route"] if result.scenario.terrain.elevation_profile() is not None else []
     return [save(PLOT_KINDS[name](result), out / f"{name}.{fmt}", fmt) for name in names]

@@ -10,7 +10,8 @@ from matplotlib.patches import Patch
 
 from .style import COLOURS, LINESTYLES, MARKERS, legend_outside, new_figure, quantity_label
 
-__all__ = ["plot_table2", "plot_terrain_curves", "plot_sweep", "plot_sweep_heatmap", "plot_mobility_map"]
+__all__ = ["plot_table2", "plot_terrain_curves", "plot_sweep", "plot_sweep_heatmap", "plot_mobility_map",
+           "plot_gradeability"]
 
 
 def plot_table2(rows, *, ax=None, fig=None):
@@ -174,8 +175,11 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     values), with the steady rolling limit X_t(tow)
     (:func:`snoworm.steady.immobilisation_limit_xt`) drawn as a line; cells where inching costs
     less electrical energy per metre than rolling are marked with a star.  Right: electrical
-    energy per metre of each mode against X_t, one colour per tow.  ``ax``: two axes.
+    energy per metre of each mode against X_t, one colour per tow.  ``ax``: two axes.  With several
+    grades: the regions over X_t and grade instead, one panel per tow (:func:`_plot_grade_map`).
     """
+    if len(mmap.get("grades", (0.0,))) > 1:
+        return _plot_grade_map(mmap, ax=ax, fig=fig)
     REGIONS = tuple(mmap["regions"])
     xts, tows = np.asarray(mmap["xts"], float), np.asarray(mmap["tows"], float)
     code = {r: j for j, r in enumerate(REGIONS)}
@@ -225,4 +229,76 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     if a2.get_legend_handles_labels()[0]:
         legend_outside(a2)
     a2.set_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)", fontsize=10)
+    return fig
+
+
+_REGION_COLOURS = ["#d9d9d9", COLOURS[1], COLOURS[5]]
+
+
+def _plot_grade_map(mmap, *, ax=None, fig=None):
+    """Regions (rolling, inching only, immobile) over X_t and grade, one panel per tow, with the steady
+    maximum grade of a rolling chain (:func:`snoworm.steady.max_grade_deg`) as a line."""
+    REGIONS = tuple(mmap["regions"])
+    xts, grades = np.asarray(mmap["xts"], float), np.asarray(mmap["grades"], float)
+    code = {r: j for j, r in enumerate(REGIONS)}
+    tows = list(mmap["tows"])
+    fig, axes = new_figure(ax, fig, 1, len(tows), figsize=(5.5 * len(tows) + 2, 4.8))
+    xe, ye = _cell_edges(xts), _cell_edges(grades)
+    for a, f in zip(axes[0], tows):
+        Z = np.zeros((grades.size, xts.size))
+        for r in mmap["rows"]:
+            if r["tow_N"] == f:
+                Z[list(grades).index(r["grade_deg"]), list(xts).index(r["xt"])] = code[r["region"]]
+        a.pcolormesh(xe, ye, Z, cmap=ListedColormap(_REGION_COLOURS[:len(REGIONS)]), vmin=-0.5,
+                     vmax=len(REGIONS) - 0.5, edgecolors="white", lw=0.5)
+        mg = mmap["rolling_max_grade_deg"][f]
+        pts = [(x, mg[x]) for x in mmap["xts"] if mg[x] is not None]
+        if pts:
+            a.plot(*zip(*pts), "k--", lw=1.2, marker="o", ms=3, label="steady rolling limit")
+        a.set_xlim(xe[0], xe[-1])
+        a.set_ylim(ye[0], ye[-1])
+        a.set_xlabel("terrain coefficient X_t")
+        a.set_ylabel("grade [deg]")
+        a.set_title(f"{mmap['scenario']}, tow {f:g} N", fontsize=10)
+    handles = [Patch(color=c, label=lab) for c, lab in zip(_REGION_COLOURS, REGIONS)]
+    handles += axes[0][-1].get_legend_handles_labels()[0]
+    legend_outside(axes[0][-1], handles=handles)
+    return fig
+
+
+def plot_gradeability(mmap, *, ax=None, fig=None):
+    """Gradeability: the steepest grade climbed against X_t, one curve per gait (rolling: its steady
+    limit; each inchworm gait: the steepest grid grade it climbed), and the electrical energy per
+    metre climbed at that grade (``mmap["gradeability"]``, :func:`snoworm.gradeability.gradeability`).
+    A colour per gait, a line style per tow.  ``ax``: two axes.  Returns the Figure."""
+    fig, axes = new_figure(ax, fig, 1, 2, figsize=(13, 4.8))
+    a1, a2 = axes[0]
+    for j, f in enumerate(mmap["tows"]):
+        g = mmap["gradeability"][f]
+        ls = LINESTYLES[j % len(LINESTYLES)]
+        sfx = f", tow {f:g} N" if len(mmap["tows"]) > 1 else ""
+        pick = lambda xs, vs: [(x, v) for x, v in zip(xs, vs) if v is not None]
+        curves = [("rolling (steady limit)", "rolling", g["rolling_max_grade_deg"], g["rolling_J_per_m_climbed"], {})]
+        curves += [(f"{'inching' if lab == 'inching' else lab} (grid)", "inching" if lab == "inching" else lab,
+                    c["grid_deg"], c["J_per_m_climbed"], {"mfc": "none"}) for lab, c in g["inching"].items()]
+        for k, (lab1, lab2, grade, energy, kw) in enumerate(curves):
+            c, mk = COLOURS[k % len(COLOURS)], MARKERS[k % len(MARKERS)]
+            for a, vals, lab in ((a1, grade, lab1), (a2, energy, lab2)):
+                pts = pick(g["xt"], vals)
+                if pts:
+                    a.plot(*zip(*pts), ls=ls, marker=mk, color=c, ms=5, label=lab + sfx, **kw)
+    grades = mmap["grades"]
+    a1.set_ylim(min(grades) - 1, max(grades) + 1)
+    a1.set_xlabel("terrain coefficient X_t")
+    a1.set_ylabel("steepest grade climbed [deg]")
+    a1.set_title(f"{mmap['scenario']}: gradeability (grid {min(grades):g} to {max(grades):g} deg)", fontsize=10)
+    a2.set_xlabel("terrain coefficient X_t")
+    a2.set_ylabel("electrical energy per metre climbed [J/m]")
+    a2.set_title("at the steepest grid grade climbed", fontsize=10)
+    if a2.get_lines():
+        a2.set_yscale("log")
+    for a in (a1, a2):
+        a.grid(alpha=0.3, which="both")
+        if a.get_legend_handles_labels()[0]:
+            legend_outside(a)
     return fig

@@ -18,8 +18,11 @@ in series with the link spring, ``Result.links['joint_power_W']``).  Electrical 
 positive mechanical work divided by ``vehicle.links.joint_efficiency`` [assumed]; work done on
 the actuator (``P_j < 0``) is not recovered and holding a force at constant length costs nothing.
 
-Per metre and cost of transport use the distance of the chain's mean position:
-``E / d`` and ``CoT = E / (m_total g d)`` (dimensionless).
+Per metre and cost of transport use the distance of the chain's mean position along the track (the
+route as driven): ``E / d`` and ``CoT = E / (m_total g d)`` (dimensionless).  On a grade
+(docs/model.md section 7) the elevation gained is that of the chain's mean height ``dz`` (each
+segment's wheelbase-mean elevation), and the energy per metre climbed is ``E / dz`` (None unless
+the chain climbed).
 """
 from __future__ import annotations
 
@@ -50,7 +53,8 @@ def energy_metrics(result) -> dict:
         ``joint_mechanical_J`` (positive work, per link), ``joint_electrical_J`` (per link),
         ``motor_electrical_total_J``, ``joint_electrical_total_J``, ``total_electrical_J``,
         ``distance_m``, ``energy_per_metre_J_per_m`` and ``cost_of_transport`` (None when the
-        chain did not advance), ``mass_total_kg``.
+        chain did not advance), ``mass_total_kg``, ``elevation_gain_m`` and
+        ``energy_per_metre_climbed_J_per_m`` (None unless the chain climbed).
     """
     sc = result.scenario
     t = result.t
@@ -68,6 +72,8 @@ def energy_metrics(result) -> dict:
     g = float(segs[0].gravity_mps2)
     total = float(motor_el.sum() + joint_el.sum())
     moved = dist > 1e-6
+    z = result.segments["elevation_m"]
+    rise = float(np.mean(z[-1] - z[0])) if t.size else 0.0
     return {
         "motor_electrical_J": motor_el.tolist(), "motor_mechanical_J": motor_mech.tolist(),
         "motor_braking_J": braking.tolist(),
@@ -76,17 +82,20 @@ def energy_metrics(result) -> dict:
         "total_electrical_J": total, "distance_m": dist, "mass_total_kg": mass,
         "energy_per_metre_J_per_m": total / dist if moved else None,
         "cost_of_transport": total / (mass * g * dist) if moved else None,
+        "elevation_gain_m": rise, "energy_per_metre_climbed_J_per_m": total / rise if rise > 1e-6 else None,
     }
 
 
 def energy_balance(result) -> dict:
     """Mechanical energy balance of a run (every term in J; the residual should be ~0).
 
-    ``motor + joint = terrain + damper + tow + d(kinetic) + d(spring) + residual`` with
+    ``motor + joint = terrain + damper + tow + d(kinetic) + d(spring) + d(potential) + residual`` with
     motor and joint the net mechanical work of the motors (at the wheels) and the prismatic
     actuators, terrain the power dissipated at the wheel-terrain contacts (slip and
     resistance, :meth:`ChainModel.evaluate`), damper the link dampers' dissipation, tow the work
-    done against the towed load, and kinetic the chassis and wheel kinetic energy.  The wheel
+    done against the towed load, kinetic the chassis and wheel kinetic energy, and potential
+    ``sum_k m_k g dz_k`` with ``z_k`` the segment's wheelbase-mean elevation (docs/model.md section 7;
+    exactly the work against gravity along the track, 0 on level ground).  The wheel
     kinetic energy uses the mean of each segment's two axle speeds (exact on uniform terrain).
     Drivetrain losses are outside this balance: ``electrical - motoring mechanical`` work.
     """
@@ -110,9 +119,12 @@ def energy_balance(result) -> dict:
         "tow_J": float(np.trapezoid(sc.tow.force_N * v[:, -1], t)),
         "kinetic_change_J": float(kinetic[-1] - kinetic[0]),
         "spring_change_J": float(spring_E[-1] - spring_E[0]),
+        "potential_change_J": float(np.sum(m * np.array([s.gravity_mps2 for s in segs])
+                                           * (result.segments["elevation_m"][-1] - result.segments["elevation_m"][0]))),
     }
     terms["residual_J"] = (terms["motor_J"] + terms["joint_J"] - terms["terrain_J"] - terms["damper_J"]
-                           - terms["tow_J"] - terms["kinetic_change_J"] - terms["spring_change_J"])
+                           - terms["tow_J"] - terms["kinetic_change_J"] - terms["spring_change_J"]
+                           - terms["potential_change_J"])
     terms["throughput_J"] = float(np.trapezoid(np.abs(result.segments["motor_power_W"]).sum(1)
                                                + np.abs(result.links["joint_power_W"]).sum(1), t))
     return terms

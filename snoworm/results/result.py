@@ -39,6 +39,9 @@ SEGMENT_COLUMNS = {
     "terrain_dissipation_W": "power dissipated at the wheel-terrain contacts of the segment [W]",
     "motor_electrical_power_W": "electrical power drawn by the segment's motors: motoring power / drivetrain "
                                 "efficiency, braking not recovered [W]",
+    "grade_deg": "grade under the segment (the chord between its axles), positive uphill [deg]",
+    "elevation_m": "elevation of the segment, the mean over its wheelbase (its potential-energy height) [m]",
+    "gravity_N": "gravity along the track on the segment, -m g sin(grade), forward positive [N]",
 }
 
 #: Columns of ``links.csv`` (after ``t_s, link``).

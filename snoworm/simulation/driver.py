@@ -306,8 +306,8 @@ def batch_key(sc):
     """A hashable key shared by the scenarios that can run as one stacked system, or None.
 
     Members must share the mode's batch signature (:meth:`ModeConfig.batch_signature`: the same
-    intervals, no events), the state layout, link types, solver settings, terrain coefficients
-    and the X_t profile (or all have constant X_t).
+    intervals, no events), the state layout, link types, solver settings, terrain coefficients,
+    the X_t profile (or all have constant X_t) and the elevation profile (docs/model.md section 7).
     """
     sig = sc.mode.batch_signature()
     if sig is None:
@@ -316,7 +316,8 @@ def batch_key(sc):
     sim = sc.simulation
     profile = "constant" if model.profile.is_constant else model.profile
     return (sig, model.n, model.layout.fields, tuple(model.links.prismatic.tolist()), sim.duration_s,
-            sim.output_dt_s, sim.rtol, sim.atol_scale, sim.method, sim.max_step_s, model.tp, profile)
+            sim.output_dt_s, sim.rtol, sim.atol_scale, sim.method, sim.max_step_s, model.tp, profile,
+            model.elevation)
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""Mobility map: which modes move a vehicle over terrain coefficient X_t and towed load.
+"""Mobility map: which modes move a vehicle over terrain coefficient X_t, grade and towed load.
 
 Beyond the paper: the paper shows rolling (section 5.2) and inching (section 5.1) on chosen
 terrain; this map sweeps X_t and the tow for one vehicle.
@@ -26,13 +26,26 @@ Which cells are simulated
     empty (None).  ``every_cell=True`` (``--every-cell``) simulates every cell, which is needed
     to compare inching's and rolling's energy per metre where both move.
 
+Grades (``grades``, docs/model.md section 7)
+    Every cell can sit on a constant grade: rolling then uses the steady state on the grade
+    (:func:`snoworm.steady.max_drawbar_N` with ``grade_deg``), inching a run on the grade.  With
+    several grades, the inching runs of one X_t and tow are bisected over the grades where the chain
+    does not roll: gravity along the track only adds a backward force on every segment, so a gait
+    that fails on a grade is taken to fail on every steeper one and one that climbs a grade to
+    climb every gentler one (an assumption of monotonicity, checked against ``every_cell=True`` in
+    ``tests/test_studies_mobility.py``).  Cells decided that way say so in ``inching_note`` and have no
+    inching speed nor energy.  ``every_cell=True`` simulates every cell.
+
 Runtime: rolling cells are ~10 ms; each inching cell costs about 0.1 s of wall time per
 simulated second (0.25-0.9 s for an 8 s run of six segments, longer at higher X_t), run in
 ``jobs`` worker processes, highest X_t first so that the longest runs do not finish last.
 """
 from __future__ import annotations
 
+import json
+import math
 import time
+
 import numpy as np
 
 from .. import steady
@@ -43,11 +56,12 @@ from ..infra.pool import ProcessExecutor
 from ..config.scenario import SimulationConfig, TerrainConfig, TowConfig, load_scenario, scenario_from_dict
 from ..modes import InchwormMode, SupervisorConfig
 from ..config.schema import ScenarioError, check_field, dump, quote
+from .gradeability import grade_text, gradeability
 from .sweep.spec import RANGE, parse_spec
 from ..infra.csvwriter import CellFormat, csv_text, write_csv
 
-__all__ = ["parse_grid", "parse_list", "rolling_cell", "inching_scenario", "mobility_map", "map_csv",
-           "rolling_speed_of", "REGIONS"]
+__all__ = ["parse_grid", "parse_list", "parse_gait", "gait_label", "rolling_cell", "inching_scenario", "mobility_map", "map_csv",
+           "rolling_speed_of", "gradeability", "REGIONS"]
 
 #: Region labels of the map, in plotting order.
 REGIONS = ("immobile", "inching only", "rolling")
@@ -69,6 +83,22 @@ def parse_grid(text: str, name: str = "--xt") -> np.ndarray:
     name the option ``name``.
     """
     return _numbers(text, name, "START:STOP:COUNT (e.g. 0.2:1.0:9) or a comma-separated list of numbers")
+
+
+def parse_gait(text: str):
+    """``--gait``: a gait name (``six_segment``) or its phases as a list (``[[0],[1],[2]]``)."""
+    t = text.strip()
+    if not t.startswith("["):
+        return t
+    try:
+        phases = json.loads(t)
+    except ValueError:
+        phases = None
+    if not (isinstance(phases, list) and phases and all(isinstance(p, list) and p for p in phases)
+            and all(isinstance(k, int) and not isinstance(k, bool) for p in phases for k in p)):
+        raise ScenarioError(f"--gait {quote(text, 60)}: expected a gait name or a list of phases, each a list of "
+                            "segment indices, e.g. [[0],[1],[2]].")
+    return phases
 
 
 def parse_list(text: str, name: str = "--tow") -> np.ndarray:
@@ -100,8 +130,8 @@ def _inching_mode_raw(sc) -> dict:
     return raw
 
 
-def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float) -> dict:
-    """Steady rolling of the scenario's vehicle on uniform X_t with a tow (one map cell).
+def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float, grade_deg: float = 0.0) -> dict:
+    """Steady rolling of the scenario's vehicle on uniform X_t and grade with a tow (one map cell).
 
     Returns ``rolling`` (bool), ``rolling_speed_mps``, ``rolling_slip``,
     ``rolling_energy_per_metre_J_per_m`` (electrical) and ``rolling_max_drawbar_N`` (per segment).
@@ -111,13 +141,13 @@ def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float) -> dict:
     tp = sc.terrain.model.params()
     n = sc.vehicle.segments
     share = tow_N / n
-    dmax = steady.max_drawbar_N(xt, seg, tp, wheel_speed_mps)
+    dmax = steady.max_drawbar_N(xt, seg, tp, wheel_speed_mps, grade_deg=grade_deg)
     out = {"rolling": False, "rolling_speed_mps": 0.0, "rolling_slip": None,
            "rolling_energy_per_metre_J_per_m": None, "rolling_max_drawbar_N": dmax}
     if share >= dmax:
         return out
     try:
-        ss = steady.steady_state(xt, seg, tp, drawbar_N=share, wheel_speed_mps=wheel_speed_mps)
+        ss = steady.steady_state(xt, seg, tp, drawbar_N=share, wheel_speed_mps=wheel_speed_mps, grade_deg=grade_deg)
     except steady.Immobilised:
         return out
     if ss.ground_speed_mps <= 0:
@@ -129,13 +159,18 @@ def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float) -> dict:
     return out
 
 
-def inching_scenario(sc, xt: float, tow_N: float, duration_s: float) -> dict:
-    """Raw scenario mapping of a short inchworm run on uniform X_t with a tow (one map cell)."""
+def inching_scenario(sc, xt: float, tow_N: float, duration_s: float, grade_deg: float = 0.0, gait=None) -> dict:
+    """Raw scenario mapping of a short inchworm run on uniform X_t and grade with a tow (one map cell);
+    ``gait`` (a gait name or list of phases) replaces the scenario's gait."""
     raw = sc.to_dict()
-    raw["name"] = f"{sc.name}_inch_xt{xt:g}_tow{tow_N:g}"
+    raw["name"] = f"{sc.name}_inch_xt{xt:g}_tow{tow_N:g}" + (f"_grade{grade_deg:g}" if grade_deg else "")
     raw["terrain"] = {"xt": float(xt), "model": raw["terrain"]["model"]}
+    if grade_deg:
+        raw["terrain"]["grade_deg"] = float(grade_deg)
     raw["tow"] = {"force_N": float(tow_N)}
     raw["mode"] = _inching_mode_raw(sc)
+    if gait is not None:
+        raw["mode"]["gait"] = gait
     raw["simulation"]["duration_s"] = float(duration_s)
     return raw
 
@@ -161,92 +196,104 @@ def _indexed_inch_run(item):
     return j, _inch_run(task)
 
 
-def _inch_all(tasks, jobs, progress, cost=None):
-    """The inching runs' outcomes, in the order of ``tasks`` (``jobs`` processes).
+def _inch_all(tasks, pool, cost=None, report=None):
+    """The inching runs' outcomes, in the order of ``tasks`` (in ``pool``, a :class:`ProcessExecutor`, or
+    here when None).
 
     ``cost`` (one number per task, optional): the pool starts the costliest tasks first, so that
     no long run starts last while the other workers idle; the outcomes do not depend on the order.
+    ``report()`` is called after each run.
     """
     outs = [None] * len(tasks)
-    if jobs > 1:
+    if pool is not None:
         order = range(len(tasks)) if cost is None else sorted(range(len(tasks)), key=lambda j: -cost[j])
-        with ProcessExecutor(jobs) as pool:
-            done = pool.map_unordered(_indexed_inch_run, ((j, tasks[j]) for j in order))
-            for n, (j, o) in enumerate(done, 1):
-                outs[j] = o
-                if progress is not None:
-                    progress(n, len(tasks))
+        for j, o in pool.map_unordered(_indexed_inch_run, ((j, tasks[j]) for j in order)):
+            outs[j] = o
+            if report is not None:
+                report()
         return outs
     for j, tk in enumerate(tasks):
         outs[j] = _inch_run(tk)
-        if progress is not None:
-            progress(j + 1, len(tasks))
+        if report is not None:
+            report()
     return outs
 
 
-def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, inching: bool = True, inch_duration_s: float = 8.0,
-                 inch_min_speed_mps: float = 0.02, jobs: int = 1, every_cell: bool = False, progress=None) -> dict:
-    """Mobility map of a scenario's vehicle over ``xts`` x ``tows``.
-
-    Parameters
-    ----------
-    sc : Scenario
-        Gives the vehicle, terrain model, inching gait (supervisor ``inching`` or inchworm mode).
-    xts, tows : sequence of float
-        Terrain coefficients and tow forces [N] of the grid.
-    wheel_speed_mps : float
-        Rolling wheel-speed set-point [m/s].
-    inching : bool
-        Simulate inching (else rolling only, steady state).
-    inch_duration_s : float
-        Simulated time of each inching run [s].
-    inch_min_speed_mps : float
-        Mean chain speed above which inching counts as moving [m/s].
-    jobs : int
-        Worker processes for the inching runs.
-    every_cell : bool
-        Simulate inching in every cell; by default only where the chain does not roll (the
-        regions are the same; rolling cells then have no inching speed, energy nor
-        ``inching_cheaper``, all None).
-    progress : callable, optional
-        ``progress(done, total)`` after each inching cell (e.g. a :class:`snoworm.infra.progress.Progress`).
-
-    Returns
-    -------
-    dict
-        ``rows`` (one dict per cell), ``rolling_limit_xt`` (per tow, the steady immobilisation
-        limit, None if above 1), ``wall_time_s``, and the settings.
-    """
-    wall0 = time.perf_counter()
-    xts = [check_field(TerrainConfig, "xt", x, "--xt") for x in xts]
-    tows = [check_field(TowConfig, "force_N", f, "--tow") for f in tows]
-    wheel_speed_mps = check_field(SupervisorConfig, "rolling_speed_mps", wheel_speed_mps, "--rolling-speed")
-    if inching:
-        check_field(SimulationConfig, "duration_s", inch_duration_s, "--inch-duration")
-    rows = []
-    for f in tows:
-        for x in xts:
-            rows.append({"xt": x, "tow_N": f, **rolling_cell(sc, x, f, wheel_speed_mps)})
-    if inching:
-        _add_inching(sc, rows, inch_duration_s, inch_min_speed_mps, jobs, every_cell, progress)
-    _classify(rows, inching)
-    limits = _rolling_limits(sc, tows, wheel_speed_mps)
-    return {"rows": rows, "xts": xts, "tows": tows, "regions": REGIONS, "rolling_limit_xt": limits, "inching": inching,
-            "every_cell": bool(every_cell), "inch_duration_s": inch_duration_s, "wheel_speed_mps": wheel_speed_mps,
-            "wall_time_s": time.perf_counter() - wall0, "scenario": sc.name}
+_INFERRED = {True: "not simulated: climbs a steeper grade (bisection over the grades)",
+             False: "not simulated: fails on a gentler grade (bisection over the grades)"}
 
 
-def _add_inching(sc, rows, inch_duration_s, inch_min_speed_mps, jobs, every_cell, progress):
-    """Simulate inching in the cells that do not roll (every cell if ``every_cell``), in ``jobs``
-    processes, and add its results to the rows (None where it was not simulated)."""
+def _inch_cells(sc, rows, grades, every_cell, duration_s, min_speed, pool, progress, gait=None):
+    """Fill the inching columns of ``rows``: every cell that does not roll (every cell with
+    ``every_cell``), bisected over the grades of each X_t and tow (module docstring)."""
     todo = [r for r in rows if every_cell or not r["rolling"]]
-    tasks = [(inching_scenario(sc, r["xt"], r["tow_N"], inch_duration_s), inch_min_speed_mps) for r in todo]
-    for r, o in zip(todo, _inch_all(tasks, jobs, progress, cost=[r["xt"] for r in todo])):
-        r.update(o)
-    for r in rows:
-        if "inching" not in r:
-            r.update(inching=None, inching_speed_mps=None, inching_energy_per_metre_J_per_m=None,
-                     inching_note="")
+    chains = {}
+    for r in todo:
+        chains.setdefault((r["xt"], r["tow_N"]), []).append(r)
+    chains = [sorted(c, key=lambda r: r["grade_deg"]) for c in chains.values()]
+    bounds = [[0, len(c)] for c in chains]         # cells below lo climb, cells from hi on fail
+    every = every_cell or len(grades) == 1
+    total = len(todo) if every else sum(int(np.ceil(np.log2(len(c) + 1))) for c in chains)
+    done = [0]
+
+    def report():
+        done[0] += 1
+        if progress is not None:
+            progress(done[0], max(total, done[0]))
+    while True:
+        if every:
+            picks = [(c, b, j) for c, b in zip(chains, bounds) for j in range(b[0], b[1])]
+        else:
+            picks = [(c, b, (b[0] + b[1]) // 2) for c, b in zip(chains, bounds) if b[0] < b[1]]
+        if not picks:
+            break
+        tasks = [(inching_scenario(sc, c[j]["xt"], c[j]["tow_N"], duration_s, c[j]["grade_deg"], gait), min_speed)
+                 for c, _, j in picks]
+        for (c, b, j), o in zip(picks, _inch_all(tasks, pool, [c[j]["xt"] for c, _, j in picks], report)):
+            c[j].update(o)
+            if every:
+                b[0] = b[1]
+            elif o["inching"]:
+                b[0] = j + 1
+            else:
+                b[1] = j
+    for c, (lo, _) in zip(chains, bounds):
+        for j, r in enumerate(c):
+            if "inching" not in r:
+                r.update(inching=j < lo, inching_speed_mps=None, inching_energy_per_metre_J_per_m=None,
+                         inching_note=_INFERRED[j < lo])
+
+
+_INCH_KEYS = ("inching", "inching_speed_mps", "inching_energy_per_metre_J_per_m", "inching_note")
+
+
+def gait_label(gait) -> str:
+    """A gait's name, or its phases written as a compact list (``[[0],[1]]``)."""
+    if isinstance(gait, str):
+        return gait
+    return "[" + ",".join("[" + ",".join(str(int(k)) for k in ph) + "]" for ph in gait) + "]"
+
+
+def _inch_gaits(sc, rows, grades, every_cell, duration_s, min_speed, pool, progress, gaits):
+    """The inching cells of every gait (:func:`_inch_cells` each); one gait fills ``rows`` directly."""
+    if gaits == [None]:
+        _inch_cells(sc, rows, grades, every_cell, duration_s, min_speed, pool, progress)
+        return
+    per, base = {}, [0]
+    for i, g in enumerate(gaits):
+        sub = [{k: r[k] for k in ("xt", "tow_N", "grade_deg", "rolling")} for r in rows]
+        prog = None if progress is None else (lambda d, t, i=i: progress(base[0] + d, base[0] + t * (len(gaits) - i)))
+        _inch_cells(sc, sub, grades, every_cell, duration_s, min_speed, pool, prog, g)
+        base[0] += sum(1 for c in sub if c.get("inching_speed_mps") is not None or c.get("inching_note", "")[:6] == "solver")
+        per[gait_label(g)] = sub
+    for j, r in enumerate(rows):
+        cells = {lab: {k: sub[j][k] for k in _INCH_KEYS} for lab, sub in per.items() if "inching" in sub[j]}
+        if not cells:
+            continue
+        moved = [lab for lab, c in cells.items() if c["inching"]]
+        cost = lambda lab: cells[lab]["inching_energy_per_metre_J_per_m"] or math.inf
+        best = min(moved, key=cost) if moved else next(iter(cells))
+        r.update(cells[best], inching_gait=best if moved else "", inching_by_gait=cells)
 
 
 def _classify(rows, inching):
@@ -259,22 +306,99 @@ def _classify(rows, inching):
                                 else bool(er is not None and ei is not None and ei < er))
 
 
-def _rolling_limits(sc, tows, wheel_speed_mps) -> dict:
-    """Per tow force, the X_t below which the chain cannot roll steadily (None if above 1)."""
+def _steady_limits(sc, xts, tows, wheel_speed_mps):
+    """Per tow: the level rolling limit X_t (None above 1) and, per X_t, the steepest rolling grade."""
     seg = sc.vehicle.segment_params()[0]
     tp = sc.terrain.model.params()
-    limits = {}
+    limits, max_grade = {}, {}
     for f in tows:
         try:
             limits[f] = steady.immobilisation_limit_xt(seg, tp, drawbar_N=f / sc.vehicle.segments,
                                                        wheel_speed_mps=wheel_speed_mps)
         except ValueError:
             limits[f] = None
-    return limits
+        max_grade[f] = {x: steady.max_grade_deg(x, seg, tp, wheel_speed_mps, f / sc.vehicle.segments) for x in xts}
+    return limits, max_grade
+
+
+def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, grades=(0.0,), inching: bool = True,
+                 inch_duration_s: float = 8.0, inch_min_speed_mps: float = 0.02, jobs: int = 1,
+                 every_cell: bool = False, progress=None, gaits=None) -> dict:
+    """Mobility map of a scenario's vehicle over ``xts`` x ``grades`` x ``tows``.
+
+    Parameters
+    ----------
+    sc : Scenario
+        Gives the vehicle, terrain model, inching gait (supervisor ``inching`` or inchworm mode).
+    xts, tows : sequence of float
+        Terrain coefficients and tow forces [N] of the grid.
+    wheel_speed_mps : float
+        Rolling wheel-speed set-point [m/s].
+    grades : sequence of float
+        Constant grades [deg] of the grid, positive uphill (docs/model.md section 7).
+    inching : bool
+        Simulate inching (else rolling only, steady state).
+    inch_duration_s : float
+        Simulated time of each inching run [s].
+    inch_min_speed_mps : float
+        Mean chain speed above which inching counts as moving [m/s].
+    jobs : int
+        Worker processes for the inching runs.
+    every_cell : bool
+        Simulate inching in every cell; by default only where the chain does not roll, bisected
+        over the grades (the regions are the same; rolling cells then have no inching speed,
+        energy nor ``inching_cheaper``, all None).
+    progress : callable, optional
+        ``progress(done, total)`` after each inching cell (e.g. a :class:`snoworm.infra.progress.Progress`).
+    gaits : sequence, optional
+        Inchworm gaits to map (names or lists of phases); None: the scenario's.  With several, a cell
+        is "inching only" when any gait moves the chain; its inching columns are those of the moving
+        gait with the least energy per metre (``inching_gait``), and ``inching_by_gait`` holds each
+        gait's.
+
+    Returns
+    -------
+    dict
+        ``rows`` (one dict per cell), ``rolling_limit_xt`` (per tow, the steady immobilisation
+        limit on level ground, None if above 1), ``rolling_max_grade_deg`` (per tow and X_t,
+        :func:`snoworm.steady.max_grade_deg`), ``gradeability`` (per tow, :func:`gradeability`),
+        ``wall_time_s``, and the settings.
+    """
+    wall0 = time.perf_counter()
+    xts = [check_field(TerrainConfig, "xt", x, "--xt") for x in xts]
+    tows = [check_field(TowConfig, "force_N", f, "--tow") for f in tows]
+    grades = [check_field(TerrainConfig, "grade_deg", g, "--grade") for g in grades]
+    wheel_speed_mps = check_field(SupervisorConfig, "rolling_speed_mps", wheel_speed_mps, "--rolling-speed")
+    if inching:
+        check_field(SimulationConfig, "duration_s", inch_duration_s, "--inch-duration")
+    rows = [{"xt": x, "tow_N": f, "grade_deg": g, **rolling_cell(sc, x, f, wheel_speed_mps, g)}
+            for f in tows for g in grades for x in xts]
+    labels = [None] if not gaits else list(gaits)
+    if inching:
+        for g in labels:      # check every gait here (a one-line error), not inside a worker
+            scenario_from_dict(inching_scenario(sc, xts[0], tows[0], inch_duration_s, grades[0], g))
+        if jobs > 1:
+            with ProcessExecutor(jobs) as pool:
+                _inch_gaits(sc, rows, grades, every_cell, inch_duration_s, inch_min_speed_mps, pool, progress, labels)
+        else:
+            _inch_gaits(sc, rows, grades, every_cell, inch_duration_s, inch_min_speed_mps, None, progress, labels)
+        for r in rows:
+            if "inching" not in r:
+                r.update(inching=None, inching_speed_mps=None, inching_energy_per_metre_J_per_m=None,
+                         inching_note="")
+    _classify(rows, inching)
+    limits, max_grade = _steady_limits(sc, xts, tows, wheel_speed_mps)
+    res = {"rows": rows, "xts": xts, "tows": tows, "grades": grades, "regions": REGIONS, "rolling_limit_xt": limits,
+           "gait_labels": [gait_label(g) for g in labels] if len(labels) > 1 else None,
+           "rolling_max_grade_deg": max_grade, "inching": inching, "every_cell": bool(every_cell),
+           "inch_duration_s": inch_duration_s, "wheel_speed_mps": wheel_speed_mps, "scenario": sc.name}
+    res["gradeability"] = {f: gradeability(res, f) for f in tows}
+    res["wall_time_s"] = time.perf_counter() - wall0
+    return res
 
 
 #: Columns of ``mobility_map.csv``.
-MAP_COLUMNS = ("xt", "tow_N", "region", "rolling", "rolling_speed_mps", "rolling_slip",
+MAP_COLUMNS = ("xt", "tow_N", "grade_deg", "region", "rolling", "rolling_speed_mps", "rolling_slip",
                "rolling_energy_per_metre_J_per_m", "rolling_max_drawbar_N", "inching", "inching_speed_mps",
                "inching_energy_per_metre_J_per_m", "inching_cheaper", "inching_note")
 
@@ -290,9 +414,9 @@ def map_csv(result: dict) -> str:
 
 def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, rolling_speed_mps=None,
                      inching=True, inch_duration_s=8.0, jobs=1, every_cell=False, plot=True, plot_format="png", overwrite=False,
-                     progress=None):
+                     progress=None, grade_spec="0", gaits=None):
     """Load a scenario, compute its map, write ``mobility_map.csv`` (and the plot, a ``plot_format`` file:
-    png, pdf or svg); return (map, text, paths).
+    png, pdf or svg; with several grades also ``gradeability``); return (map, text, paths).
 
     The output folder is checked before the map is computed and written all or nothing
     (:func:`snoworm.infra.folders.output_folder`).
@@ -300,15 +424,22 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
     sc = load_scenario(scenario_path, sets)
     v = rolling_speed_of(sc) if rolling_speed_mps is None else float(rolling_speed_mps)
     xts, tows = parse_grid(xt_spec, "--xt"), parse_list(tow_spec, "--tow")
+    grades = parse_grid(grade_spec, "--grade")
     check_output_folder(out_dir, overwrite)
-    res = mobility_map(sc, xts, tows, wheel_speed_mps=v, inching=inching, inch_duration_s=inch_duration_s,
-                       jobs=jobs, every_cell=every_cell, progress=progress)
+    res = mobility_map(sc, xts, tows, wheel_speed_mps=v, grades=grades, inching=inching,
+                       inch_duration_s=inch_duration_s, jobs=jobs, every_cell=every_cell, progress=progress,
+                       gaits=[parse_gait(g) for g in gaits] if gaits else None)
+    columns = MAP_COLUMNS + (("inching_gait",) if res["gait_labels"] else ())
     with output_folder(out_dir, overwrite) as out:
-        paths = [write_csv(out / "mobility_map.csv", MAP_COLUMNS, res["rows"], MAP_FORMAT)]
+        paths = [write_csv(out / "mobility_map.csv", columns, res["rows"], MAP_FORMAT)]
         if plot:
             from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
             paths.append(plotting.save(plotting.plot_mobility_map(res), out / "mobility_map.png", plot_format))
+            if len(res["grades"]) > 1:
+                paths.append(plotting.save(plotting.plot_gradeability(res), out / "gradeability.png", plot_format))
     paths = relocate(paths, out, out_dir)
+    if len(res["grades"]) > 1:
+        return res, grade_text(sc.name, res, inching, every_cell), paths
     lines = [f"{sc.name}: mobility map, {len(res['xts'])} X_t x {len(res['tows'])} tow values, "
              f"{res['wall_time_s']:.1f} s"]
     for f in res["tows"]:
@@ -320,7 +451,7 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
                      else f"tow {f:g} N: no rolling for X_t <= 1")
         lines.append(f"  rolling from X_t = {min(roll):g}" if roll else "  rolling nowhere on the grid")
         lines.append(f"  inching only at X_t = {', '.join(f'{x:g}' for x in inch)}" if inch else "  no inching-only cells")
-        failed = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r.get("inching_note")]
+        failed = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r.get("inching_note", "").startswith("solver")]
         if failed:
             lines.append(f"  inching run failed (solver) at X_t = {', '.join(f'{x:g}' for x in failed)}; see inching_note")
         if cheap:

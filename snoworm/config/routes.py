@@ -1,0 +1,188 @@
+"""Grade inputs of a scenario and route files (docs/model.md section 7, beyond the paper).
+
+A scenario's ``terrain`` section gives the elevation along the track in one of three ways:
+
+* ``grade_deg: 8`` -- a constant grade, optionally with ``grade_patches`` of other grade on it;
+* ``elevation: [[distance_m, elevation_m], ...]`` -- a piecewise-linear table;
+* ``route: FILE`` -- a CSV route file (:func:`read_route`) that gives the elevation *and* X_t
+  along the track, as a field survey or a GPS track resampled to distance along the track gives.
+
+All compile to one :class:`~snoworm.slope.ElevationProfile`.  Validation (one-line messages,
+exit status 2 at the command line): finite numbers, strictly increasing distances and
+``|grade| <= MAX_GRADE_DEG`` (40 deg).
+"""
+from __future__ import annotations
+
+import contextvars
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from .schema import Config, ScenarioError, field
+from ..slope import MAX_GRADE_DEG, ElevationProfile
+
+__all__ = ["BASE_DIR", "base_dir", "GRADE_DOMAIN", "ROUTE_COLUMNS", "GradePatchConfig", "Route", "read_route", "check_elevation_table",
+           "check_vehicle_on_grade"]
+
+#: Domain of every grade angle a scenario or a study gives [deg].
+GRADE_DOMAIN = dict(ge=-MAX_GRADE_DEG, le=MAX_GRADE_DEG,
+                    why=f"|grade| <= {MAX_GRADE_DEG:g} deg: no snow slope stands beyond its angle of repose "
+                        "(30-40 deg), and the 1-D chain assumes gentle curvature (docs/model.md section 7).")
+
+#: Columns a route file must have (units in the names); others are ignored.
+ROUTE_COLUMNS = ("distance_m", "elevation_m", "xt")
+
+_FAR_M = 1e7
+
+#: folder of the scenario file being validated (None: the working directory); see :func:`base_dir`
+BASE_DIR = contextvars.ContextVar("snoworm_scenario_dir", default=None)
+
+
+def base_dir() -> Path:
+    """The folder that relative file paths in the scenario being validated are taken from.
+
+    The scenario file's folder while ``load_scenario`` validates it, else the working directory.
+    A config section resolving a file path (``terrain.route``, ``mode.controller``) calls it.
+    """
+    d = BASE_DIR.get()
+    return Path.cwd() if d is None else d
+
+
+@dataclass(frozen=True)
+class GradePatchConfig(Config):
+    """A stretch of other grade on the base ``grade_deg`` (``terrain.grade_patches``)."""
+
+    _section = "terrain.grade_patches[]"
+    start_m: float = field(ge=-_FAR_M, le=_FAR_M, unit="m", doc="distance where the patch's grade is reached",
+                           why="A finite distance along the track.")
+    end_m: float = field(ge=-_FAR_M, le=_FAR_M, unit="m", doc="distance where the patch's grade ends",
+                         why="A finite distance along the track.")
+    grade_deg: float = field(**GRADE_DOMAIN, unit="deg", doc="grade inside the patch, positive uphill")
+    ramp_m: float = field(0.0, ge=0, le=_FAR_M, unit="m", why="A finite length.",
+                          doc="length over which the grade changes back to the base outside each edge (0: a kink)")
+
+    def _check(self, path):
+        if not self.end_m > self.start_m:
+            raise ScenarioError(f"{path}.end_m: must be greater than start_m ({self.start_m} m), got {self.end_m} m. "
+                                "A grade patch covers [start_m, end_m].")
+
+
+def check_elevation_table(pairs, where: str) -> None:
+    """Check ``[[distance_m, elevation_m], ...]``: finite, strictly increasing, |grade| within the limit."""
+    if len(pairs) < 2:
+        raise ScenarioError(f"{where}: needs at least two [distance_m, elevation_m] pairs (a level track needs none).")
+    prev = None
+    for j, pair in enumerate(pairs):
+        if len(pair) != 2:
+            raise ScenarioError(f"{where}[{j}]: expected a pair [distance_m, elevation_m], got {list(pair)!r}.")
+        _check_step(prev, pair, f"{where}[{j}]")
+        prev = pair
+
+
+def _check_step(prev, pair, where):
+    s, z = pair
+    for v, name in ((s, "distance_m"), (z, "elevation_m")):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or abs(v) > _FAR_M:
+            raise ScenarioError(f"{where}: {name} must be a finite number within +-{_FAR_M:g} m, got {v!r}.")
+    if prev is None:
+        return
+    if not s > prev[0]:
+        raise ScenarioError(f"{where}: distances must increase strictly; {s:g} m follows {prev[0]:g} m.")
+    rise = (z - prev[1]) / (s - prev[0])
+    lim = math.sin(math.radians(MAX_GRADE_DEG))
+    if abs(rise) > lim:
+        grade = math.degrees(math.asin(min(abs(rise), 1.0)))
+        raise ScenarioError(f"{where}: the grade from {prev[0]:g} m to {s:g} m is {grade:.1f} deg (rise {rise:.3f} per "
+                            f"metre along the track), over the {MAX_GRADE_DEG:g} deg limit; check the units and the "
+                            "distances (along the track, in metres).")
+
+
+@dataclass(frozen=True)
+class Route:
+    """A route read from a file: distances along the track [m], elevations [m] and X_t, one per row."""
+
+    path: str
+    distance_m: tuple
+    elevation_m: tuple
+    xt: tuple
+
+    def elevation_profile(self) -> ElevationProfile:
+        return ElevationProfile(self.distance_m, self.elevation_m)
+
+
+def _number(text, where):
+    try:
+        v = float(text)
+    except ValueError:
+        raise ScenarioError(f"{where}: expected a number, got {text.strip()!r}.") from None
+    if not math.isfinite(v):
+        raise ScenarioError(f"{where}: expected a finite number, got {text.strip()!r}.")
+    return v
+
+
+def read_route(path) -> Route:
+    """Read a route CSV: a header with ``distance_m``, ``elevation_m`` and ``xt`` (other columns ignored),
+    then one row per survey point; lines starting with ``#`` are comments (e.g. the provenance).
+
+    ``distance_m`` is the distance along the track (strictly increasing), ``elevation_m`` the
+    elevation, ``xt`` the terrain coefficient in (0, 1].  Errors name the file, line and column.
+
+    Raises
+    ------
+    ScenarioError
+        ``terrain.route: FILE, line L, column C (name): ...``.
+    """
+    p = Path(path)
+    where = f"terrain.route: {p}"
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ScenarioError(f"{where}: no such file; give a CSV route file relative to the scenario's folder.") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"{where}: cannot read it ({exc.__class__.__name__}: {exc}).") from None
+    rows = [(n, r) for n, r in enumerate(csv.reader(text.splitlines()), 1) if r and not r[0].lstrip().startswith("#")]
+    if not rows:
+        raise ScenarioError(f"{where}: empty; expected a header {','.join(ROUTE_COLUMNS)} and rows of numbers.")
+    hline, header = rows[0]
+    header = [h.strip() for h in header]
+    missing = [c for c in ROUTE_COLUMNS if c not in header]
+    if missing:
+        raise ScenarioError(f"{where}, line {hline}: the header lacks {', '.join(missing)}; expected the columns "
+                            f"{','.join(ROUTE_COLUMNS)} (units in the names: metres, metres, X_t).")
+    col = {c: header.index(c) for c in ROUTE_COLUMNS}
+    dist, elev, xts, prev = [], [], [], None
+    for n, row in rows[1:]:
+        vals = {}
+        for c in ROUTE_COLUMNS:
+            j = col[c]
+            cell = f"{where}, line {n}, column {j + 1} ({c})"
+            if j >= len(row):
+                raise ScenarioError(f"{cell}: missing; the row has {len(row)} columns, the header {len(header)}.")
+            vals[c] = _number(row[j], cell)
+        if not 0 < vals["xt"] <= 1:
+            raise ScenarioError(f"{where}, line {n}, column {col['xt'] + 1} (xt): X_t must be in (0, 1] "
+                                f"(paper section 3), got {vals['xt']:g}.")
+        pair = (vals["distance_m"], vals["elevation_m"])
+        _check_step(prev, pair, f"{where}, line {n}")
+        prev = pair
+        dist.append(pair[0])
+        elev.append(pair[1])
+        xts.append(vals["xt"])
+    if len(dist) < 2:
+        raise ScenarioError(f"{where}: needs at least two rows of numbers after the header.")
+    return Route(str(p), tuple(dist), tuple(elev), tuple(xts))
+
+
+def check_vehicle_on_grade(vehicle, elevation: ElevationProfile | None, path: str = "vehicle.segment") -> None:
+    """Every wheel keeps a positive normal load on the steepest grade (the pitch load transfer of
+    :func:`snoworm.terrain.normal_load_N` must not lift an axle: ``2 h / b tan(theta) < 1``)."""
+    if elevation is None or elevation.is_level:
+        return
+    theta = math.radians(elevation.max_abs_grade_deg())
+    for k, seg in enumerate(vehicle.segment_params()):
+        h, b = seg.com_height_m, seg.wheelbase_m
+        if h > 0 and (b <= 0 or 2.0 * h * math.tan(theta) >= b):
+            raise ScenarioError(f"{path}.com_height_m: segment {k} tips (an axle lifts off) on the steepest grade "
+                                f"{math.degrees(theta):.1f} deg: needs 2 h tan(theta) < wheelbase ({b:g} m), h = {h:g} m. "
+                                "Lower the centre of mass or the grade.")
