@@ -112,6 +112,17 @@ def bench_scenarios(repeats, report):
         report(f"  {name:16s} RTF {rows[name]['rtf']:7.1f}x  wall {wall:6.3f} s  nfev {res.stats['nfev']:6d}  "
                f"njev {res.stats['njev']:5d}  RHS {rows[name]['rhs_us']:6.1f} us  "
                f"max rel. err vs rtol 1e-9: {max(errs.values()):.2e} ({', '.join(f'{k} {v:.1e}' for k, v in errs.items())})")
+    # tow6 on a constant 5 deg grade and along an elevation table (docs/model.md section 7), against the
+    # level run of this session: a constant grade keeps the precomputed terrain factors, a table does not
+    for label, sets in (("tow6_uniform 5 deg", [("terrain.grade_deg", 5.0)]),
+                        ("tow6_uniform elevation table", [("terrain.elevation", [[-20, 0], [0, 0], [20, 1], [40, 1.5]])])):
+        sc = load_scenario(SC / "tow6_uniform.yaml", sets)
+        res, wall = run_timed(sc, 5 * repeats)
+        rhs = rhs_cost_us(sc)
+        rows[label] = {"duration_s": sc.simulation.duration_s, "wall_s": wall, "rtf": sc.simulation.duration_s / wall,
+                       "nfev": res.stats["nfev"], "rhs_us": rhs, "rhs_ratio_to_level": rhs / rows["tow6_uniform"]["rhs_us"]}
+        report(f"  {label:28s} RTF {rows[label]['rtf']:7.1f}x  wall {wall:6.3f} s  nfev {res.stats['nfev']:6d}  "
+               f"RHS {rhs:6.1f} us ({rows[label]['rhs_ratio_to_level']:.2f}x the level RHS)")
     # the same run on the previous solver settings (LSODA, rtol 1e-4, atol_scale 10), for the ratio
     sc = load_scenario(SC / "inchworm6.yaml", [("simulation.method", "LSODA"), ("simulation.rtol", 1e-4),
                                                ("simulation.atol_scale", 10)])
