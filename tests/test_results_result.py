@@ -111,3 +111,22 @@ def test_result_plot_returns_the_figure(short_run):
     assert isinstance(short_run.plot("forces"), Figure)
     with pytest.raises(ValueError, match="unknown plot kind 'nope'; kinds: forces, speeds"):
         short_run.plot("nope")
+
+
+def test_a_run_folder_written_before_the_grade_columns_reads_back_level(tmp_path):
+    """segments.csv without grade_deg, elevation_m, gravity_N (written before slopes existed, so on
+    level ground) reads back with those columns zero; any other column set is refused."""
+    from snoworm import load_result, load_scenario, simulate
+    res = simulate(load_scenario("tow6_uniform", ["simulation.duration_s=1"]))
+    res.write(tmp_path / "run")
+    path = tmp_path / "run" / "segments.csv"
+    lines = path.read_text().splitlines()
+    header = lines[0].split(",")
+    keep = [j for j, c in enumerate(header) if c not in ("grade_deg", "elevation_m", "gravity_N")]
+    path.write_text("\n".join(",".join(row.split(",")[j] for j in keep) for row in lines) + "\n")
+    back = load_result(tmp_path / "run")
+    np.testing.assert_array_equal(back.segments["grade_deg"], 0.0)
+    np.testing.assert_allclose(back.segments["v_mps"], res.segments["v_mps"], rtol=1e-5, atol=1e-9)
+    path.write_text("\n".join(",".join(row.split(",")[:-1]) for row in lines) + "\n")       # drop another column
+    with pytest.raises(ValueError, match="unexpected columns"):
+        load_result(tmp_path / "run")

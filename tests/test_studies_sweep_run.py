@@ -55,3 +55,20 @@ def test_bad_arguments_are_refused_before_anything_runs(tmp_path, kwargs, needle
     with pytest.raises(ScenarioError) as err:
         run_sweep(TOW6, sets, plot=False, **kwargs)
     assert needle in str(err.value)
+
+
+def test_cli_sweeps_the_grade(tmp_path):
+    """`--set terrain.grade_deg=0:10:3` (docs/model.md section 7): one case per grade; steeper is
+    slower; a grade beyond the 40 deg limit is an invalid case with the one-line message."""
+    r = CliRunner().invoke(main, ["sweep", str(TOW6), "--set", "terrain.grade_deg=0:10:3",
+                                  "--set", "simulation.duration_s=6", "--no-plot", "--out", str(tmp_path / "g")])
+    assert r.exit_code == 0, r.output
+    rows = sorted(csv_rows(tmp_path / "g" / "summary.csv"), key=lambda x: float(x["terrain.grade_deg"]))
+    assert [float(x["terrain.grade_deg"]) for x in rows] == [0.0, 5.0, 10.0]
+    speeds = [float(x["late_speed_mps"]) for x in rows]
+    assert speeds[0] > speeds[1] > speeds[2]
+    bad = CliRunner().invoke(main, ["sweep", str(TOW6), "--set", "terrain.grade_deg=0,45", "--no-plot",
+                                    "--set", "simulation.duration_s=1", "--out", str(tmp_path / "b")])
+    assert bad.exit_code == 0, bad.output
+    status = {x["terrain.grade_deg"]: (x["status"], x["error"]) for x in csv_rows(tmp_path / "b" / "summary.csv")}
+    assert status["0"][0] == "ok" and status["45"][0] == "invalid" and "at most 40 deg" in status["45"][1]

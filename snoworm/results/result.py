@@ -44,6 +44,9 @@ SEGMENT_COLUMNS = {
     "gravity_N": "gravity along the track on the segment, -m g sin(grade), forward positive [N]",
 }
 
+#: The segment columns of a run on a grade (docs/model.md section 7); zeros on level ground.
+GRADE_COLUMNS = ("grade_deg", "elevation_m", "gravity_N")
+
 #: Columns of ``links.csv`` (after ``t_s, link``).
 LINK_COLUMNS = {
     "force_N": "link force, tension positive [N]",
@@ -247,14 +250,17 @@ def _read_table(path, index, columns, n_t_hint=None):
     with open(path, encoding="utf-8") as fh:
         header = fh.readline().strip().split(",")
     expected = ["t_s", index] + list(columns)
-    if header != expected:
+    # a run written before the grade columns (docs/model.md section 7) was on level ground: zeros
+    level = [c for c in columns if c not in GRADE_COLUMNS]
+    if header != expected and header != ["t_s", index] + level:
         raise ValueError(f"{path}: unexpected columns {header}; expected {expected}")
     data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     n = int(data[:, 1].max()) + 1 if data.shape[0] else 0
     if n == 0:        # no links (a single segment): n_t rows of nothing
         return None, {c: np.zeros((n_t_hint or 0, 0)) for c in columns}
     t = data[::n, 0]
-    return t, {c: data[:, 2 + j].reshape(t.size, n) for j, c in enumerate(columns)}
+    got = {c: data[:, 2 + j].reshape(t.size, n) for j, c in enumerate(header[2:])}
+    return t, {c: got[c] if c in got else np.zeros((t.size, n)) for c in columns}
 
 
 def load_result(run_dir) -> Result:
