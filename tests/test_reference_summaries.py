@@ -19,6 +19,11 @@ forces; floors 0.01 m, 0.01 m/s, 1 J, 10 N) and ``K`` a factor per kind of run:
   ``rtol * scale`` (inchworm2 nfev 5 776 / 5 851 / 6 033), so a change of 1e-4 of a quantity's
   scale fails the test (a margin of 3.7 or more over what a CPU change does).  Their end values
   are replaced by last-window averages (see tests/reference_quantities.py).
+* Runs whose X_t varies along the track (``KINKED``: a profile table crossed by the axles, whose
+  breakpoints are kinks of the right-hand side) also take ``K_GAIT``: ramp_drift (a route file)
+  differs by 0.16 ``rtol * scale`` on the x86-64-v2 path (distance, 1.56e-6 of scale; nfev 3653 /
+  3680), while the same route with a constant X_t differs by 3e-3.  Raising b_trF or b_tF by
+  0.1 % still moves it by 7-9e-4 of scale, 7x the limit (measured once, not a committed test).
 
 It still catches a model change: raising the Eq. 3 resistance coefficient b_trF (or the Eq. 2
 coefficient b_tF) of the frostyboy parameter set by 0.1 % fails all 15 scenarios (measured once
@@ -41,6 +46,11 @@ REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_summaries.js
 SHIPPED = sorted(p.stem for p in SCENARIOS.glob("*.yaml"))
 SLOW = {"traverse_patch"}          # ~10 s: marked slow, still run by default
 K_SMOOTH, K_GAIT = 0.1, 10.0
+
+
+def kinked(scenario) -> bool:
+    """Whether the axles cross breakpoints of an X_t table (the right-hand side has kinks there)."""
+    return not scenario.terrain.compile().is_constant
 WORK_BAND = (0.8, 1.25)
 
 
@@ -71,7 +81,7 @@ def test_the_checks_can_fail():
 def test_summary_matches_reference(name):
     ref, res = REFERENCE[name], shipped_result(name)
     got, gait = quantities(res), is_gait(res.scenario)
-    tol = (K_GAIT if gait else K_SMOOTH) * res.scenario.simulation.rtol
+    tol = (K_GAIT if gait or kinked(res.scenario) else K_SMOOTH) * res.scenario.simulation.rtol
     errors = {k: scaled_error(got, ref, k) for k in compared(gait)}
     bad = {k: f"{e:.2e}" for k, e in errors.items() if e > tol}
     assert not bad, f"{name}: changed by more than {tol:.1e} of their scale: {bad}"
