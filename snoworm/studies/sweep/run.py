@@ -153,7 +153,7 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
 def _new_output_folder(out_dir, overwrite):
     """``out_dir`` as a Path (None: nothing is written), checked before any case runs unless it holds
     a sweep already (resumed or refused later, by :func:`~snoworm.studies.sweep.summary.prepare_dir`)."""
-    out = Path(out_dir) if out_dir is not None else None
+    out = Path(os.path.abspath(out_dir)) if out_dir is not None else None     # once: a chdir does not move it
     if out is not None and not (out / "sweep.json").exists():
         check_output_folder(out, overwrite)
     return out
@@ -299,7 +299,7 @@ class _Recorder:
 
     def open(self):
         if self.path is not None:
-            self.fd = os.open(self.path, os.O_WRONLY | os.O_APPEND)
+            self.fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | getattr(os, "O_NOFOLLOW", 0))
 
     def close(self):
         if self.fd is not None:

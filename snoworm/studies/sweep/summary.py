@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import shutil
 from pathlib import Path
 
@@ -16,7 +17,8 @@ import yaml
 
 from ..._version import __version__
 from ...results.frames import require_pandas
-from ...infra.folders import MANIFEST, atomic_write_text, folder_state, read_manifest
+from ...infra.folders import MANIFEST, atomic_write_text, folder_state, remove_listed
+from ...infra.manifest import STAGE, read_small_file
 from ...config.schema import ScenarioError
 from ...infra.csvwriter import FULL, csv_line, csv_text, write_csv
 from .metrics import METRIC_COLUMNS
@@ -24,6 +26,10 @@ from .series import SERIES_FILE, load_series
 from .spec import parse_scalar
 
 __all__ = ["SweepTable", "summary_columns", "read_summary", "prepare_dir", "load_sweep"]
+
+
+#: Largest sweep.json read (bytes): the definition lists every axis value.
+MAX_SWEEP_JSON = 64 * 2**20
 
 
 def summary_columns(axes, n_links) -> list:
@@ -174,15 +180,70 @@ def read_summary(path: Path, keys=None):
     return header, rows, dropped
 
 
+#: The files a sweep writes at the top of its folder (besides the manifest).
+SWEEP_FILES = ("summary.csv", "sweep.json", "sweep.png", "heatmap.png", "sweep.pdf", "heatmap.pdf", "sweep.svg",
+               "heatmap.svg", SERIES_FILE)
+
+
+def _case_entries(out: Path) -> list:
+    """The entries of ``out/cases`` a sweep wrote (case folders snoworm wrote, ``.npz`` series);
+    raises ScenarioError naming the first other entry (nothing is removed then)."""
+    cases = out / "cases"
+    if not os.path.lexists(cases):
+        return []
+    if cases.is_symlink() or not cases.is_dir():
+        raise ScenarioError(f"{cases} is not a folder snoworm wrote (a symbolic link or a file); nothing was "
+                            "touched. Move it away or give a new --out directory.")
+    found = []
+    for e in sorted(os.listdir(cases)):
+        p = cases / e
+        if STAGE in e or ".snoworm-old-" in e:     # a killed writer's staging folder: cleaned when rewritten
+            continue
+        if p.is_symlink():
+            ok = False
+        elif p.is_dir():
+            ok = folder_state(p) in ("snoworm", "empty")
+        else:
+            ok = p.is_file() and e.endswith(".npz")
+        if not ok:
+            raise ScenarioError(f"{p} was not written by this sweep (a symbolic link, or a file or folder without "
+                                f"snoworm's {MANIFEST}); nothing was touched. Move it away or give a new --out "
+                                "directory.")
+        found.append(p)
+    return found
+
+
 def _clear(out: Path):
-    """Remove an earlier snoworm folder's files (its manifest's, a sweep's files and case folders)."""
-    man = read_manifest(out) or {}
-    names = set(man.get("files", [])) | {"summary.csv", "sweep.json", "sweep.png", "heatmap.png", MANIFEST}
-    for rel in names:
-        p = out / rel
-        if isinstance(rel, str) and ".." not in Path(rel).parts and p.is_file():
+    """Remove an earlier snoworm folder's files: its manifest's (checked, see :mod:`snoworm.infra.manifest`),
+    a sweep's own files and case folders; an entry snoworm did not write stops it before anything
+    is removed (ScenarioError)."""
+    cases = _case_entries(out)
+    remove_listed(out)
+    for name in SWEEP_FILES + (MANIFEST,):
+        p = out / name
+        if p.is_symlink() or p.is_file():
             p.unlink()
-    shutil.rmtree(out / "cases", ignore_errors=True)
+    for p in cases:
+        if p.is_dir():
+            shutil.rmtree(p)
+        else:
+            p.unlink()
+    try:
+        os.rmdir(out / "cases")
+    except OSError:           # missing, or a killed writer's staging folder is left in it
+        pass
+
+
+def check_resumable(out: Path):
+    """Refuse (ScenarioError) a sweep folder whose files or case folders snoworm would write
+    through: a symlink, FIFO or device at ``summary.csv``, ``sweep.json`` or the manifest, or a
+    symlink at ``cases/`` or a case folder."""
+    for name in ("summary.csv", "sweep.json", MANIFEST):
+        p = out / name
+        if os.path.lexists(p) and (p.is_symlink() or not p.is_file()):
+            raise ScenarioError(f"{p} is not a regular file (a symbolic link, a folder, a FIFO or a device); "
+                                "snoworm will not read or write through it. Give a new --out directory.")
+    _case_entries(out)
 
 
 def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: bool = False) -> dict:
@@ -193,19 +254,22 @@ def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: 
     """
     out.mkdir(parents=True, exist_ok=True)
     spath, dpath = out / "summary.csv", out / "sweep.json"
+    check_resumable(out)
     if not dpath.exists() and folder_state(out) == "snoworm":
         _clear(out)
     if dpath.exists() and overwrite:
         try:
-            same = json.loads(dpath.read_text(encoding="utf-8")).get("definition") == definition
-        except (OSError, ValueError, AttributeError):
+            same = json.loads(read_small_file(dpath, MAX_SWEEP_JSON)).get("definition") == definition
+        except (OSError, ValueError, AttributeError, RecursionError):
             same = False
         if not same:
             _clear(out)
     if dpath.exists():
         try:
-            old = json.loads(dpath.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
+            old = json.loads(read_small_file(dpath, MAX_SWEEP_JSON))
+            if not isinstance(old, dict):
+                raise ValueError("not a JSON object")
+        except (OSError, ValueError, RecursionError) as exc:
             raise ScenarioError(f"{dpath}: unreadable ({exc}). Use another --out or delete the directory.") from None
         if old.get("definition") != definition:
             what = [k for k in definition if old.get("definition", {}).get(k) != definition[k]]
