@@ -267,6 +267,8 @@ def load_result(run_dir) -> Result:
     if missing:
         raise FileNotFoundError(f"{d} is not a snoworm run folder: {', '.join(missing)} missing")
     sc = load_scenario(d / "scenario.yaml")
+    if "_root" in vars(sc.mode):       # a controller: checked statically, never run from a results folder
+        object.__setattr__(sc.mode, "_root", None)
     t, segments = _read_table(d / "segments.csv", "segment", SEGMENT_COLUMNS)
     _, links = _read_table(d / "links.csv", "link", LINK_COLUMNS, n_t_hint=t.size)
     summary = json.loads((d / "summary.json").read_text(encoding="utf-8"))
