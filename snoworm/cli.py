@@ -191,6 +191,8 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
 @click.option("--overwrite", is_flag=True,
               help="Replace another sweep in --out (its files are removed), or write into a non-empty folder "
                    "snoworm did not write.")
+@click.option("--restart", is_flag=True, help="Run afresh a sweep in --out whose input files or snoworm version "
+              "changed since (its rows are removed); without it such a resume exits 2 naming the file.")
 @allow_code_option
 @handle_errors
 def sweep(scenario, sets, out_dir, no_plot, **options):
@@ -218,7 +220,7 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
     resume).
     """
     from .studies.sweep import SweepExecutionError, run_sweep  # lazy: start-up
-    # options: jobs, scheduler, zip_, save_cases, series, plot_format, batch, overwrite, allow_code (run_sweep's names)
+    # options: jobs, scheduler, zip_, save_cases, series, plot_format, batch, overwrite, allow_code, restart
     try:
         table = run_sweep(scenario, sets, out_dir=out_dir, plot=not no_plot, **options)
     except SweepExecutionError as exc:

@@ -208,15 +208,15 @@ def trust_problem(spec: str, root, path: str = "mode.controller") -> str | None:
             "(allow_code=[...] in Python), or move the file into the scenario's folder.")
 
 
-#: loaded controller files: absolute path -> (modification time, size, module)
+#: loaded controller files: absolute path -> (SHA-256 of the source, module)
 _FILES: dict = {}
 
 
 def _exec_file(p: Path, path):
-    st = p.stat()
+    digest = hashlib.sha256(p.read_bytes()).hexdigest()      # <= MAX_SOURCE_BYTES (check_reference)
     cached = _FILES.get(str(p))
-    if cached and cached[:2] == (st.st_mtime_ns, st.st_size):
-        return cached[2]
+    if cached and cached[0] == digest:
+        return cached[1]
     modname = "snoworm_controller_" + hashlib.sha1(str(p).encode()).hexdigest()[:12]
     spec = importlib.util.spec_from_file_location(modname, p)
     module = importlib.util.module_from_spec(spec)
@@ -227,7 +227,7 @@ def _exec_file(p: Path, path):
         sys.modules.pop(modname, None)
         raise ScenarioError(f"{path}: importing controller file {p} failed: {type(exc).__name__}: "
                             f"{quote(str(exc))}") from None
-    _FILES[str(p)] = (st.st_mtime_ns, st.st_size, module)
+    _FILES[str(p)] = (digest, module)
     return module
 
 

@@ -17,7 +17,9 @@ A controller that raises, or returns a bad command, stops the run with :class:`C
 from __future__ import annotations
 
 import os
+import time
 import traceback
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,6 +30,7 @@ from ..config.mode_registry import ModeConfig
 from .base import Interval, Mode, register_mode
 from .codeload import allow_code as allow_code_ctx, check_reference, code_files, import_class, resolve_spec, trust_problem
 from .command import CommandState, observe
+from .watchdog import WallLimit, wall_limit
 
 __all__ = ["ControllerConfig", "ControllerMode", "ControllerError", "load_controller", "construct", "user_traceback",
            "trust_problem_of", "code_notice"]
@@ -106,6 +109,22 @@ def user_traceback(exc, limit: int = 2000) -> str:
     return text
 
 
+@contextmanager
+def _guard(deadline, when: str, limit):
+    """Run a user's code: past ``deadline`` (``simulation.max_wall_s``, :mod:`snoworm.modes.watchdog`)
+    or on ``sys.exit`` it stops with ControllerError; the process never ends on the user's word."""
+    try:
+        with wall_limit(deadline):
+            yield
+    except WallLimit:
+        raise ControllerError(f"simulation.max_wall_s: the controller was still running {when} when the "
+                              f"wall-clock limit of {limit:g} s passed (an endless loop?). Fix the controller or "
+                              "raise max_wall_s.") from None
+    except SystemExit as exc:
+        raise ControllerError(f"controller called sys.exit({quote(exc.code, 40)}) {when}; a controller never ends "
+                              "the process. Raise an exception to stop the run.") from None
+
+
 @register_mode
 class ControllerMode(Mode):
     """One interval per control period, with the command the controller returned at its start."""
@@ -116,7 +135,10 @@ class ControllerMode(Mode):
 
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)
-        self.controller = construct(cfg, scenario)
+        limit = scenario.simulation.max_wall_s
+        self.deadline = time.perf_counter() + limit if limit is not None else None   # user code counts too
+        with _guard(self.deadline, "while importing and constructing it", limit):
+            self.controller = construct(cfg, scenario)
         self.commands = CommandState(model)
         self.calls = 0
 
@@ -131,7 +153,10 @@ class ControllerMode(Mode):
         """
         obs = observe(self.model, y, self.commands.controls, t)
         try:
-            command = self.controller(obs)
+            with _guard(self.deadline, f"at t = {t:.6g} s", self.scenario.simulation.max_wall_s):
+                command = self.controller(obs)
+        except ControllerError:            # the wall-clock limit or sys.exit (_guard's own message)
+            raise
         except Exception as exc:  # noqa: BLE001 - the user's code: report it with their frames
             raise ControllerError(f"controller raised at t = {t:.6g} s:\n{user_traceback(exc)}".rstrip()) from None
         self.calls += 1

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._version import __version__
 from ...results.frames import require_xarray
 from ...results.result import LINK_COLUMNS, SEGMENT_COLUMNS
 from ...config.scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
@@ -31,6 +32,7 @@ from .cases import build_cases
 from .executors import BatchExecutor, DaskExecutor, ProcessExecutor, SerialExecutor, SweepExecutionError
 from .metrics import METRIC_COLUMNS, case_metrics, one_line, run_case
 from .series import SERIES_FORMATS, case_series_path, combine_series
+from .inputs import input_hashes
 from .spec import as_axes
 from .summary import SweepTable, prepare_dir, summary_columns
 
@@ -74,18 +76,22 @@ def _base(scenario):
     return raw, str(path), str(path.resolve().parent)
 
 
-def _definition(raw, axes, zip_):
+def _definition(raw, axes, zip_, base_dir=None):
+    """The resume key: the scenario mapping, the axes, the snoworm version and the contents of
+    every file they name (:mod:`snoworm.sweep.inputs`)."""
     return json.loads(json.dumps({
         "scenario_sha256": hashlib.sha256(canonical_json(raw).encode()).hexdigest(),
         "axes": [{"key": a.key, "values": list(a.values)} for a in axes],
         "zip": bool(zip_),
+        "snoworm_version": __version__,
+        "inputs": input_hashes(raw, axes, base_dir),
     }, default=str))
 
 
 def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
               save_cases: bool = False, progress=None, plot: bool = True, executor=None,
               batch: int = 0, series: str = "folders", plot_format: str = "png",
-              overwrite: bool = False, allow_code=()) -> SweepTable:
+              overwrite: bool = False, allow_code=(), restart: bool = False) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
     Parameters
@@ -129,6 +135,8 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         non-empty folder snoworm did not write.
     allow_code : sequence of str or Path
         Paths whose controller code may run outside the scenario's folder (:func:`snoworm.simulate`).
+    restart : bool
+        Start afresh (removing its rows) over a sweep in ``out_dir`` run from other inputs.
 
     Returns
     -------
@@ -149,8 +157,8 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
     if own:                         # before anything is written: an unreachable scheduler writes nothing
         executor = _make_executor(scheduler, batch, jobs)
     try:
-        return _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases and series, overwrite,
-                          plot_format)
+        return _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases and series,
+                          overwrite or restart, plot_format)
     except OSError as exc:            # writing sweep.json, the manifest or the plot
         raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
 
@@ -292,7 +300,7 @@ def _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep) -> _Plan:
         raise ScenarioError(f"every case of the sweep is invalid, e.g. case {cases[0].case_id} "
                             f"({', '.join(f'{a.key}={v}' for a, v in zip(axes, cases[0].values))}): {first}")
     return _Plan(axes, raw, source, base_dir, cases, invalid, n_links, summary_columns(axes, n_links),
-                 _definition(raw, axes, zip_), kept)
+                 _definition(raw, axes, zip_, base_dir), kept)
 
 
 def _make_executor(scheduler, batch, jobs):

@@ -19,8 +19,9 @@ from ..._version import __version__
 from ...results.frames import require_pandas
 from ...infra.folders import MANIFEST, atomic_write_text, folder_state, remove_listed
 from ...infra.manifest import STAGE, read_small_file
-from ...config.schema import ScenarioError
+from ...config.schema import ScenarioError, quote
 from ...infra.csvwriter import FULL, csv_line, csv_text, write_csv
+from .inputs import changed_inputs
 from .metrics import METRIC_COLUMNS
 from .series import SERIES_FILE, load_series
 from .spec import parse_scalar
@@ -246,6 +247,23 @@ def check_resumable(out: Path):
     _case_entries(out)
 
 
+def _other_sweep(out, dpath, old, new) -> str:
+    """Why ``out``'s sweep (definition ``old``) cannot be resumed by this one (``new``)."""
+    old = old if isinstance(old, dict) else {}
+    if all(old.get(k) == new[k] for k in new if k not in ("inputs", "snoworm_version")):
+        changed = changed_inputs(old.get("inputs"), new.get("inputs"))
+        why = (f"{quote(changed[0], 200)} changed since it ran" + (f" (and {len(changed) - 1} more file(s))"
+                                                                     if len(changed) > 1 else "")
+               if changed else f"it was run by snoworm {quote(old.get('snoworm_version'), 40)}, this is "
+                               f"{new.get('snoworm_version')}")
+        return (f"{out} holds this sweep run from other inputs: {why}, so its rows would mix old and new results. "
+                "Pass --restart (restart=True in Python) to run it afresh (its rows are removed), or give a new "
+                "--out directory.")
+    what = [k for k in new if old.get(k) != new[k]]
+    return (f"{out} holds another sweep (its {', '.join(what) or 'definition'} differs from this one, see {dpath}). "
+            "Re-run the original command to resume it, give a new --out directory, or pass --overwrite to replace it.")
+
+
 def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: bool = False) -> dict:
     """Create or check ``out``; return the rows already finished, by case index.
 
@@ -272,10 +290,7 @@ def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: 
         except (OSError, ValueError, RecursionError) as exc:
             raise ScenarioError(f"{dpath}: unreadable ({exc}). Use another --out or delete the directory.") from None
         if old.get("definition") != definition:
-            what = [k for k in definition if old.get("definition", {}).get(k) != definition[k]]
-            raise ScenarioError(f"{out} holds another sweep (its {', '.join(what) or 'definition'} differs from "
-                                f"this one, see {dpath}). Re-run the original command to resume it, give a "
-                                "new --out directory, or pass --overwrite to replace it.")
+            raise ScenarioError(_other_sweep(out, dpath, old.get("definition"), definition))
     elif spath.exists():
         raise ScenarioError(f"{spath} exists but {dpath} does not, so the sweep it belongs to is unknown. "
                             "Give a new --out directory (or delete the old one).")
