@@ -11,14 +11,16 @@ import csv
 import json
 import os
 import shutil
+import warnings
 from pathlib import Path
 
 import yaml
 
 from ..._version import __version__
 from ...results.frames import require_pandas
+from ...results.result import ResultFileError, read_back
 from ...infra.folders import MANIFEST, atomic_write_text, folder_state, remove_listed
-from ...infra.manifest import STAGE, read_small_file
+from ...infra.manifest import STAGE, ManifestProblem, read_small_file
 from ...config.schema import ScenarioError, quote
 from ...infra.csvwriter import FULL, csv_line, csv_text, write_csv
 from .inputs import changed_inputs
@@ -76,6 +78,7 @@ class SweepTable:
         self.keys = list(keys)
         self.rows = sorted(rows, key=lambda r: r["case_id"])
         self.out_dir = Path(out_dir) if out_dir is not None else None
+        self.dropped = 0          #: lines of summary.csv dropped when read back (load_sweep)
 
     def __len__(self):
         return len(self.rows)
@@ -140,17 +143,39 @@ def load_sweep(out_dir) -> SweepTable:
     """Read a sweep's output directory (``sweep.json`` and ``summary.csv``) back into a :class:`SweepTable`.
 
     The swept values are parsed as in ``--set`` (numbers stay numbers); a truncated last line of
-    an interrupted sweep is ignored.  ``table.series()`` opens ``series.nc`` when the sweep kept
-    its series there.
+    an interrupted sweep is ignored.  Lines that do not parse are dropped and reported: a
+    :class:`UserWarning` and ``table.dropped`` (their count).  ``table.series()`` opens
+    ``series.nc`` when the sweep kept its series there.
+
+    Raises
+    ------
+    snoworm.results.ResultFileError
+        A file missing, not a regular file, malformed, or the two files disagreeing; the message
+        names the file.
     """
     out = Path(out_dir)
     spath, dpath = out / "summary.csv", out / "sweep.json"
     if not spath.is_file() or not dpath.is_file():
-        raise FileNotFoundError(f"{out} is not a sweep's output directory (it needs sweep.json and summary.csv)")
-    definition = json.loads(dpath.read_text(encoding="utf-8")).get("definition", {})
-    keys = [a["key"] for a in definition.get("axes", [])] or None
-    header, rows, _ = read_summary(spath, keys)
-    return SweepTable(header, rows, keys or _keys_from_header(header), out_dir=out)
+        raise ResultFileError(f"{out} is not a sweep's output directory (it needs sweep.json and summary.csv)")
+    try:
+        doc = json.loads(read_back(dpath, MAX_SWEEP_JSON))
+        definition = doc.get("definition", {})
+        keys = [a["key"] for a in definition.get("axes", [])] or None
+        if keys is not None and not all(isinstance(k, str) for k in keys):
+            raise TypeError("axis keys are not text")
+    except ResultFileError:
+        raise
+    except (ValueError, RecursionError, AttributeError, TypeError, KeyError):
+        raise ResultFileError(f"{dpath}: not a sweep definition (a JSON object with definition.axes[].key)") from None
+    header, rows, dropped = read_summary(spath, keys)
+    if header[:2] != ["case_id", "case_key"] or "status" not in header or (keys and header[2:2 + len(keys)] != keys):
+        raise ResultFileError(f"{spath}: its columns {quote(header)} are not those of the sweep in {dpath}")
+    table = SweepTable(header, rows, keys or _keys_from_header(header), out_dir=out)
+    table.dropped = dropped
+    if dropped:
+        warnings.warn(f"{spath}: {dropped} line(s) dropped (truncated or malformed); the table holds the "
+                      f"{len(rows)} others", stacklevel=2)
+    return table
 
 
 def _keys_from_header(header):
@@ -162,7 +187,12 @@ def _keys_from_header(header):
 
 def read_summary(path: Path, keys=None):
     """(header, complete rows, number of dropped lines) of a summary.csv."""
-    data = path.read_bytes().decode("utf-8", errors="replace")
+    try:
+        data = read_small_file(path, 2**34).decode("utf-8", errors="replace")
+    except FileNotFoundError:
+        raise ResultFileError(f"{path}: missing") from None
+    except ManifestProblem as exc:
+        raise ResultFileError(str(exc)) from None
     lines = data.split("\n")
     complete, dropped = lines[:-1], (1 if lines[-1] else 0)   # no final newline: truncated
     if not complete:
