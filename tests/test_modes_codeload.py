@@ -198,3 +198,37 @@ def test_shipped_example_controllers_still_validate_and_run_from_their_folder(tm
     assert r.exit_code == 0, r.output
     assert "running controller code" in r.output
     assert json.loads((tmp_path / "o" / "summary.json").read_text())["controller_calls"] > 0
+
+
+HUGE = """
+    import os
+
+    class Ctl:
+        def __init__(self, params, scenario):
+            if params.get("chdir"):
+                os.chdir(params["chdir"])
+        def __call__(self, obs):
+            if obs.t_s > 0.15 and not self.__dict__.get("quiet"):
+                raise RuntimeError("x" * 1_000_000)
+            return {"wheel_speed_mps": [0.5] * len(obs.x_m)}
+"""
+
+
+def test_a_controller_raising_a_1_mb_message_prints_a_short_one(tmp_path):
+    (tmp_path / "proj").mkdir()
+    (tmp_path / "proj" / "ctl.py").write_text(textwrap.dedent(HUGE))
+    p = _scenario(tmp_path / "proj", "ctl.py:Ctl")
+    r = cli("run", p, "--out", tmp_path / "o", "--no-plot")
+    assert r.exit_code == 1 and "controller raised at t = 0.2 s" in r.output, r.output[:500]
+    assert len(r.output) < 5000 and "characters cut" in r.output
+
+
+def test_a_controllers_chdir_does_not_move_a_relative_out(tmp_path, monkeypatch):
+    (tmp_path / "proj").mkdir()
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "proj" / "ctl.py").write_text(textwrap.dedent(HUGE.replace("obs.t_s > 0.15", "obs.t_s > 1e9")))
+    p = _scenario(tmp_path / "proj", "ctl.py:Ctl")
+    monkeypatch.chdir(tmp_path)
+    r = cli("run", p, "--out", "rel_out", "--no-plot", "--set", f"mode.params.chdir={tmp_path / 'elsewhere'}")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "rel_out" / "summary.json").exists() and not (tmp_path / "elsewhere" / "rel_out").exists()
