@@ -162,14 +162,34 @@ def find_module_source(target: str, path) -> Path:
     return src
 
 
+#: references found good: (source path, modification time, size, class name) -> True; a sweep
+#: validates the same reference once per case, and parsing the file each time would dominate
+_CHECKED: dict = {}
+
+
+def _check_source(src: Path, name: str, where: str, path):
+    try:
+        st = os.stat(src)
+        key = (str(src), st.st_mtime_ns, st.st_size, st.st_ino, name)
+    except (OSError, ValueError):
+        key = None
+    if key is not None and key in _CHECKED:
+        return
+    _check_class(_read_source(src, path), name, where, path)
+    if key is not None:
+        if len(_CHECKED) > 1000:
+            _CHECKED.clear()
+        _CHECKED[key] = True
+
+
 def check_reference(spec: str, path: str = "mode.controller"):
     """Check a resolved reference statically (nothing imported or run); ScenarioError if it is wrong."""
     target, name = split_spec(spec, path)
     if is_file_spec(target):
-        _check_class(_read_source(Path(target), path), name, f"controller file {quote(target)}", path)
+        _check_source(Path(target), name, f"controller file {quote(target)}", path)
     else:
         src = find_module_source(target, path)
-        _check_class(_read_source(src, path), name, f"module {target} ({src})", path)
+        _check_source(src, name, f"module {target} ({src})", path)
 
 
 # ------------------------------------------------------------------------------ trust
