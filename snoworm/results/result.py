@@ -242,7 +242,7 @@ _SUMMARY_KEYS = ("scenario", "snoworm_version", "segments", "duration_s", "dista
 
 
 class ResultFileError(ValueError):
-    """A folder read back (:func:`load_result`, :func:`snoworm.sweep.load_sweep`) is not as snoworm
+    """A folder read back (:func:`load_result`, :func:`snoworm.studies.sweep.load_sweep`) is not as snoworm
     wrote it: a file missing, unreadable, malformed, non-finite or inconsistent with the others.
     The message names the file and the problem."""
 

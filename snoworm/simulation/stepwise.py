@@ -44,7 +44,7 @@ class Simulator:
         ``simulation.duration_s`` does not limit stepping.
     record : bool
         Keep every step's output samples for :meth:`result` (default).  The record is bounded like
-        a scenario's output (:data:`~snoworm.sections.MAX_OUTPUT_SAMPLES` times x segments): a step
+        a scenario's output (:data:`~snoworm.config.sections.MAX_OUTPUT_SAMPLES` times x segments): a step
         past it raises ValueError (call :meth:`reset`).  ``False``: memory stays flat however long
         you step (only :attr:`last_step` is kept; :meth:`result` is unavailable), e.g. for
         reinforcement learning.

@@ -78,7 +78,7 @@ def _base(scenario):
 
 def _definition(raw, axes, zip_, base_dir=None):
     """The resume key: the scenario mapping, the axes, the snoworm version and the contents of
-    every file they name (:mod:`snoworm.sweep.inputs`)."""
+    every file they name (:mod:`snoworm.studies.sweep.inputs`)."""
     return json.loads(json.dumps({
         "scenario_sha256": hashlib.sha256(canonical_json(raw).encode()).hexdigest(),
         "axes": [{"key": a.key, "values": list(a.values)} for a in axes],
