@@ -276,7 +276,7 @@ _ENTRY = st.one_of(
 @given(entries=st.lists(_ENTRY, max_size=6), shape=st.sampled_from(["object", "list", "bytes", "files_not_list"]),
        junk=st.binary(max_size=200), symlinked=st.booleans(), overwrite=st.booleans())
 def test_fuzzed_manifests_never_touch_a_file_outside(tmp_path_factory, entries, shape, junk, symlinked, overwrite):
-    from snoworm.fileio import MANIFEST, OutputError, atomic_write_text, output_folder
+    from snoworm.infra.folders import MANIFEST, OutputError, atomic_write_text, output_folder
     root = tmp_path_factory.mktemp("m")
     outside = root / "outside"
     outside.mkdir()
@@ -312,7 +312,7 @@ _REF_PART = st.sampled_from(["ctl.py", "../ctl.py", "/", "sub/", "ctl", "x" * 30
 @given(parts=st.lists(_REF_PART, min_size=1, max_size=5), name=st.sampled_from(["Ctl", "Uniform", "print", "C", ""]))
 def test_fuzzed_controller_references_never_run_code_when_read(tmp_path_factory, parts, name):
     from snoworm import scenario_from_dict
-    from snoworm.schema import ScenarioError
+    from snoworm.config.schema import ScenarioError
     root = tmp_path_factory.mktemp("c")
     marker = root / "MARKER"
     (root / "proj" / "sub").mkdir(parents=True)
@@ -344,7 +344,7 @@ def good_run(tmp_path_factory):
        pos=st.floats(0, 1), token=st.sampled_from(["nan", "inf", "-1e300", "x", "", "1,2", "[", "{}", "7"]))
 def test_fuzzed_result_folders_load_or_raise_one_error(tmp_path_factory, good_run, name, how, pos, token):
     import shutil
-    from snoworm.results import ResultFileError, load_result
+    from snoworm.results.result import ResultFileError, load_result
     d = tmp_path_factory.mktemp("t") / "run"
     shutil.copytree(good_run, d)
     text = (d / name).read_text()
