@@ -34,7 +34,7 @@ _EXPORTS = {
     "simulate_batch": "simulation.driver",
     "OutputError": "infra.folders",
     "Mode": "modes", "register_mode": "modes",
-    "Result": "results.result", "load_result": "results.result",
+    "Result": "results.result", "ResultFileError": "results.result", "load_result": "results.result",
     "Scenario": "config.scenario", "ScenarioError": "config.scenario", "load_scenario": "config.scenario",
     "scenario_from_dict": "config.scenario", "shipped_scenarios": "config.scenario",
     "ModeConfig": "config.mode_registry",
@@ -42,7 +42,7 @@ _EXPORTS = {
     "SweepTable": "studies.sweep", "load_sweep": "studies.sweep", "run_sweep": "studies.sweep",
 }
 
-__all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Observation", "OutputError", "Result", "Scenario",
+__all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Observation", "OutputError", "Result", "ResultFileError", "Scenario",
            "ScenarioError", "Simulator", "SolverError", "SweepTable", "load_result", "load_scenario", "load_sweep",
            "register_mode", "run_sweep", "scenario_from_dict", "shipped_scenarios", "simulate", "simulate_batch"]
 
@@ -52,7 +52,7 @@ if TYPE_CHECKING:  # for type checkers and editors; at run time the names come f
     from .simulation.guard import SolverError
     from .infra.folders import OutputError
     from .modes import Mode, register_mode
-    from .results.result import Result, load_result
+    from .results.result import Result, ResultFileError, load_result
     from .config.scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios
     from .config.mode_registry import ModeConfig
     from .simulation.stepwise import Observation, Simulator

@@ -7,14 +7,15 @@ shares (error handling, exit statuses, common options, progress, logging) is in
 """
 from __future__ import annotations
 
+import os
 import sys
 
 import click
 
 from ._version import __version__
-from .cli_common import (EXIT_SOLVER, CommandGroup, configure_logging, echo_claims, echo_run, echo_sweep, fail,
-                         handle_errors, model_file_option, out_option, overwrite_option, param_set_option,
-                         plot_format_option, progress_bar, set_option, sweep_interrupted)
+from .cli_common import (EXIT_SOLVER, CommandGroup, allow_code_option, code_check, configure_logging, echo_claims,
+                         echo_run, echo_sweep, fail, handle_errors, model_file_option, out_option, overwrite_option,
+                         param_set_option, plot_format_option, progress_bar, set_option, sweep_interrupted)
 
 
 @click.group(cls=CommandGroup, context_settings={"help_option_names": ["-h", "--help"]})
@@ -36,21 +37,25 @@ def main(verbose=False):
 @click.option("--no-plot", is_flag=True, help="Skip the plots.")
 @plot_format_option
 @overwrite_option
+@allow_code_option
 @handle_errors
-def run(scenario, out_dir, sets, no_plot, plot_format, overwrite):
+def run(scenario, out_dir, sets, no_plot, plot_format, overwrite, allow_code):
     """Run SCENARIO (a YAML file or a shipped scenario's name) and write its results to --out.
 
     All or nothing: the files go to a temporary folder beside --out that replaces it at the
     end, with a manifest (.snoworm-manifest.json); nothing is written if the scenario is
     invalid (exit 2), the solver fails (exit 1) or the run is interrupted.  Progress in
-    simulated time goes to stderr.
+    simulated time goes to stderr, and so does which controller code runs (if any).
     """
     from .simulation.driver import simulate  # lazy: start-up
     from .infra.folders import check_output_folder  # lazy: start-up
     from .config.scenario import load_scenario  # lazy: start-up
+    out_dir = os.path.abspath(out_dir)          # once: a controller's os.chdir does not move it
     sc = load_scenario(scenario, sets)
+    code_check(sc, allow_code, "running")
     check_output_folder(out_dir, overwrite)
-    with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar:
+    from .modes.codeload import allow_code as allowed  # lazy: start-up
+    with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar, allowed(allow_code):
         res = simulate(sc, progress=bar.set)
     paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite)
     echo_run(sc.name, res, paths, out_dir)
@@ -59,11 +64,16 @@ def run(scenario, out_dir, sets, no_plot, plot_format, overwrite):
 @main.command()
 @click.argument("scenario", type=click.Path(dir_okay=False))
 @set_option
+@allow_code_option
 @handle_errors
-def validate(scenario, sets):
-    """Check SCENARIO without running it (exit 0 if valid, 2 with the reason if not)."""
+def validate(scenario, sets, allow_code):
+    """Check SCENARIO without running it (exit 0 if valid, 2 with the reason if not).
+
+    Nothing of the scenario runs: a controller is checked statically (the file or module exists,
+    parses and defines the class) and against --allow-code as `snoworm run` would."""
     from .config.scenario import load_scenario  # lazy: start-up
     sc = load_scenario(scenario, sets)
+    code_check(sc, allow_code)
     click.echo(f"{scenario}: valid ({sc.vehicle.segments} segments, mode {sc.mode.type}, "
                f"{sc.simulation.duration_s:g} s)")
 
@@ -181,6 +191,9 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
 @click.option("--overwrite", is_flag=True,
               help="Replace another sweep in --out (its files are removed), or write into a non-empty folder "
                    "snoworm did not write.")
+@click.option("--restart", is_flag=True, help="Run afresh a sweep in --out whose input files or snoworm version "
+              "changed since (its rows are removed); without it such a resume exits 2 naming the file.")
+@allow_code_option
 @handle_errors
 def sweep(scenario, sets, out_dir, no_plot, **options):
     """Run SCENARIO (a YAML file or a shipped scenario's name) over a grid of values and tabulate
@@ -207,7 +220,8 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
     resume).
     """
     from .studies.sweep import SweepExecutionError, run_sweep  # lazy: start-up
-    try:    # options: jobs, scheduler, zip_, save_cases, series, plot_format, batch, overwrite (run_sweep's names)
+    # options: jobs, scheduler, zip_, save_cases, series, plot_format, batch, overwrite, allow_code, restart
+    try:
         table = run_sweep(scenario, sets, out_dir=out_dir, plot=not no_plot, **options)
     except SweepExecutionError as exc:
         fail(str(exc), EXIT_SOLVER)

@@ -19,6 +19,7 @@ import sys
 import click
 
 __all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "out_option",
+           "allow_code_option", "code_check",
            "overwrite_option", "set_option", "plot_format_option", "param_set_option", "model_file_option",
            "progress_bar", "StderrHandler", "configure_logging", "echo_run", "echo_sweep", "sweep_interrupted",
            "echo_claims"]
@@ -138,6 +139,21 @@ set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
                                "(repeatable; VALUE is parsed as YAML).")
 plot_format_option = click.option("--plot-format", type=click.Choice(["png", "pdf", "svg"]), default="png",
                                   show_default=True, help="File format of the plots (PNG at 200 dpi).")
+
+
+allow_code_option = click.option(
+    "--allow-code", "allow_code", multiple=True, type=click.Path(), metavar="PATH",
+    help="Let controller code under PATH (a file or folder) run although it lies outside the scenario's folder "
+         "(repeatable). A scenario with a controller is a program: see docs/controllers.md.")
+
+
+def code_check(sc, allow_code, verb=None):
+    """Refuse (exit 2) a controller that may not run; with ``verb``, say on stderr which code runs."""
+    if getattr(sc.mode, "type", None) == "controller":
+        from .modes.controller import code_notice  # lazy: start-up (only controller scenarios)
+        notice = code_notice(sc.mode, allow_code)
+        if verb:
+            click.echo(f"snoworm: {verb} {notice}", err=True)
 
 
 def configure_logging(verbose: bool):

@@ -73,6 +73,10 @@ class SnowormEnv(gymnasium.Env):
                  stall_speed_mps=0.01, stall_time_s=2.0):
         if not dt_s > 0:
             raise ValueError(f"dt_s: the step length must be positive, got {dt_s!r}")
+        for name, v in (("dt_s", dt_s), ("energy_weight", energy_weight), ("stall_speed_mps", stall_speed_mps),
+                        ("stall_time_s", stall_time_s)):
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.number)) or not np.isfinite(v) or v < 0:
+                raise ValueError(f"{name}: expected a finite number >= 0, got {v!r:.60}")
         self.sim = Simulator(scenario)
         self.scenario, self.dt_s = scenario, float(dt_s)
         self.reward_fn = reward
@@ -82,7 +86,7 @@ class SnowormEnv(gymnasium.Env):
         self.action_space = spaces.Box(lo, hi, dtype=np.float64)
         n_obs = self._vector(self.sim.observation()).size
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(n_obs,), dtype=np.float64)
-        self._obs, self._stalled_s = None, 0.0
+        self._obs, self._stalled_s, self._ended = None, 0.0, False
 
     def _action_bounds(self):
         model = self.sim.model
@@ -105,9 +109,10 @@ class SnowormEnv(gymnasium.Env):
         return np.concatenate([getattr(obs, f) for f in OBSERVATION_FIELDS]).astype(np.float64)
 
     def _command(self, action):
-        a = np.clip(np.asarray(action, float).reshape(-1), self.action_space.low, self.action_space.high)
-        if a.size != self.action_space.shape[0]:
+        a = np.asarray(action, float).reshape(-1)
+        if a.size != self.action_space.shape[0]:        # checked before clipping, which would broadcast a scalar
             raise ValueError(f"action: expected {self.action_space.shape[0]} values, got {a.size}")
+        a = np.clip(a, self.action_space.low, self.action_space.high)
         cmd, j = {}, 0
         for key in self.action_keys:
             size = self.sim.model.n - (1 if key.startswith("joint_") else 0)
@@ -118,12 +123,15 @@ class SnowormEnv(gymnasium.Env):
     def reset(self, *, seed=None, options=None):
         """Back to t = 0 (the chain is deterministic; ``seed`` seeds the spaces' sampling): ``(obs, info)``."""
         super().reset(seed=seed)
-        self._obs, self._stalled_s = self.sim.reset(), 0.0
+        self._obs, self._stalled_s, self._ended = self.sim.reset(), 0.0, False
         return self._vector(self._obs), {"t_s": self._obs.t_s}
 
     def step(self, action):
         """Hold ``action`` for ``dt_s``: ``(obs, reward, terminated, truncated, info)``; ``info`` has
         ``t_s`` and ``motor_energy_J``, the motors' electrical energy in the step [J]."""
+        if self._obs is None or self._ended:
+            raise gymnasium.error.ResetNeeded("SnowormEnv.step: call reset() first" + (
+                " (the episode has ended: terminated or truncated)" if self._ended else ""))
         prev = self._obs
         obs = self.sim.step(self._command(action), self.dt_s)
         ts, ys, ctl = self.sim.last_step
@@ -135,5 +143,5 @@ class SnowormEnv(gymnasium.Env):
         self._stalled_s = 0.0 if moving else self._stalled_s + self.dt_s
         terminated = self._stalled_s >= self.stall_time_s - 1e-9
         truncated = obs.t_s >= self.scenario.simulation.duration_s - 1e-9
-        self._obs = obs
+        self._obs, self._ended = obs, bool(terminated or truncated)
         return self._vector(obs), float(reward), bool(terminated), bool(truncated), info

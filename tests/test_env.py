@@ -74,3 +74,26 @@ def test_observation_carries_the_grade_under_each_segment(short6):
     obs, _ = env.reset(seed=0)
     j = OBSERVATION_FIELDS.index("grade_deg") * 6
     np.testing.assert_allclose(obs[j:j + 6], 6.0, rtol=1e-12)
+
+
+def test_misuse_is_refused_with_clear_errors(short6):
+    """Issue 24: a scalar action, NaN/negative arguments, step before reset or after the episode ended."""
+    import gymnasium
+    from snoworm.env import SnowormEnv
+    for kw in ({"dt_s": float("nan")}, {"dt_s": -0.1}, {"energy_weight": float("nan")}, {"energy_weight": -1.0},
+               {"stall_speed_mps": -0.01}, {"stall_time_s": float("inf")}):
+        with pytest.raises(ValueError, match=next(iter(kw))):
+            SnowormEnv(short6, **kw)
+    env = SnowormEnv(short6, dt_s=0.5)
+    with pytest.raises(gymnasium.error.ResetNeeded, match="reset"):
+        env.step(np.full(6, 1.0))
+    env.reset()
+    with pytest.raises(ValueError, match="expected 6 values, got 1"):
+        env.step(1.0)
+    truncated = False
+    while not truncated:
+        truncated = env.step(np.full(6, 1.0))[3]
+    with pytest.raises(gymnasium.error.ResetNeeded, match="ended"):
+        env.step(np.full(6, 1.0))
+    env.reset()
+    env.step(np.full(6, 1.0))                                   # a new episode steps again

@@ -8,6 +8,10 @@ evaluations per simulated second), checked on every successful run; runs are 1.5
 time.  ``SNOWORM_FUZZ_EXAMPLES`` raises the number of examples (default 40, derandomised so CI is
 reproducible).
 
+Issue 24 adds three derandomised fuzzers (``SNOWORM_FUZZ_TRUST_EXAMPLES``, default 25 each): hostile
+manifests never touch a file outside the output folder, controller references never run code
+when read, and mutated run folders load consistently or raise ResultFileError naming the file.
+
 Then the categories of the issue, one representative set each: the former hangs, the former
 internal errors, the 1e300 solver breakdowns, the command options, and YAML abuse.  The former
 hangs run as subprocesses with a generous timeout (60 s; they now end in about a second).
@@ -256,3 +260,117 @@ def test_yaml_abuse_is_bad_input(tmp_path):
         assert r.exit_code == 2, (name, r.output[:300])
         assert len(r.output) < 600, (name, r.output[:300])
         assert not (tmp_path / "o").exists()
+
+
+# ------------------------------------------------------------------ issue 24: manifests, controllers, read-back
+TRUST_EXAMPLES = int(os.environ.get("SNOWORM_FUZZ_TRUST_EXAMPLES", 25))
+_ENTRY = st.one_of(
+    st.sampled_from(["a.csv", "sub/b.csv", "../outside/thesis.tex", "/OUTSIDE/thesis.tex", "link/thesis.tex",
+                     "./a.csv", "a//b", "a\\b", "", ".", "..", "\x00", "x" * 5000, ".snoworm-manifest.json"]),
+    st.text(min_size=0, max_size=30), st.integers(), st.none(), st.floats(allow_nan=True),
+    st.lists(st.integers(), max_size=2), st.dictionaries(st.text(max_size=3), st.integers(), max_size=2))
+
+
+@settings(max_examples=TRUST_EXAMPLES, deadline=None, derandomize=not os.environ.get("SNOWORM_FUZZ_RANDOM"),
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(entries=st.lists(_ENTRY, max_size=6), shape=st.sampled_from(["object", "list", "bytes", "files_not_list"]),
+       junk=st.binary(max_size=200), symlinked=st.booleans(), overwrite=st.booleans())
+def test_fuzzed_manifests_never_touch_a_file_outside(tmp_path_factory, entries, shape, junk, symlinked, overwrite):
+    from snoworm.infra.folders import MANIFEST, OutputError, atomic_write_text, output_folder
+    root = tmp_path_factory.mktemp("m")
+    outside = root / "outside"
+    outside.mkdir()
+    (outside / "thesis.tex").write_text("precious")
+    out = root / "out"
+    (out / "sub").mkdir(parents=True)
+    (out / "a.csv").write_text("old")
+    (out / "sub" / "b.csv").write_text("old")
+    if symlinked:
+        os.symlink(outside, out / "link")
+    entries = [str(outside / "thesis.tex") if e == "/OUTSIDE/thesis.tex" else e for e in entries]
+    doc = {"object": {"files": entries}, "list": entries, "files_not_list": {"files": "a.csv"}}
+    if shape == "bytes":
+        (out / MANIFEST).write_bytes(junk)
+    else:
+        (out / MANIFEST).write_text(json.dumps(doc[shape]))
+    try:
+        with output_folder(out, overwrite=overwrite) as stage:
+            atomic_write_text(stage / "a.csv", "new")
+    except OutputError as exc:
+        assert len(str(exc)) < 1500
+    assert (outside / "thesis.tex").read_text() == "precious"
+    assert sorted(os.listdir(outside)) == ["thesis.tex"]
+
+
+_REF_PART = st.sampled_from(["ctl.py", "../ctl.py", "/", "sub/", "ctl", "x" * 300, "\x00", "this", "builtins",
+                             "os.path", "tests.controller_helpers", "json", ".py", ":", "Ctl", "print", "Uniform",
+                             "schedule", "..", "~", "\\", " ", "é"])
+
+
+@settings(max_examples=TRUST_EXAMPLES, deadline=None, derandomize=not os.environ.get("SNOWORM_FUZZ_RANDOM"),
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(parts=st.lists(_REF_PART, min_size=1, max_size=5), name=st.sampled_from(["Ctl", "Uniform", "print", "C", ""]))
+def test_fuzzed_controller_references_never_run_code_when_read(tmp_path_factory, parts, name):
+    from snoworm import scenario_from_dict
+    from snoworm.config.schema import ScenarioError
+    root = tmp_path_factory.mktemp("c")
+    marker = root / "MARKER"
+    (root / "proj" / "sub").mkdir(parents=True)
+    code = f"import pathlib\npathlib.Path({str(marker)!r}).write_text('ran')\nclass Ctl:\n    pass\n"
+    for f in (root / "ctl.py", root / "proj" / "ctl.py", root / "proj" / "sub" / "ctl.py"):
+        f.write_text(code)
+    raw = load_scenario(SCENARIOS / "tow6_uniform.yaml").to_dict()
+    raw["mode"] = {"type": "controller", "controller": "".join(parts) + ":" + name, "period_s": 0.1, "params": {}}
+    try:
+        sc = scenario_from_dict(raw, "fuzz", base_dir=root / "proj")
+        assert sc.mode.controller.endswith(":" + name)
+    except ScenarioError as exc:
+        assert len(str(exc)) < 1500
+    assert not marker.exists()
+
+
+@pytest.fixture(scope="module")
+def good_run(tmp_path_factory):
+    from snoworm import simulate
+    d = tmp_path_factory.mktemp("r") / "run"
+    simulate(load_scenario(SCENARIOS / "tow6_uniform.yaml", ["simulation.duration_s=0.5"])).write(d, plot=False)
+    return d
+
+
+@settings(max_examples=TRUST_EXAMPLES, deadline=None, derandomize=not os.environ.get("SNOWORM_FUZZ_RANDOM"),
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(name=st.sampled_from(["segments.csv", "links.csv", "summary.json", "scenario.yaml"]),
+       how=st.sampled_from(["truncate", "cell", "drop_line", "dup_line", "append", "empty"]),
+       pos=st.floats(0, 1), token=st.sampled_from(["nan", "inf", "-1e300", "x", "", "1,2", "[", "{}", "7"]))
+def test_fuzzed_result_folders_load_or_raise_one_error(tmp_path_factory, good_run, name, how, pos, token):
+    import shutil
+    from snoworm.results.result import ResultFileError, load_result
+    d = tmp_path_factory.mktemp("t") / "run"
+    shutil.copytree(good_run, d)
+    text = (d / name).read_text()
+    lines = text.splitlines(keepends=True)
+    k = min(int(pos * len(lines)), len(lines) - 1)
+    if how == "truncate":
+        text = text[:int(pos * len(text))]
+    elif how == "cell":
+        cells = lines[k].rstrip("\n").split(",")
+        cells[min(int(pos * len(cells)), len(cells) - 1)] = token
+        lines[k] = ",".join(cells) + "\n"
+        text = "".join(lines)
+    elif how == "drop_line":
+        text = "".join(lines[:k] + lines[k + 1:])
+    elif how == "dup_line":
+        text = "".join(lines[:k + 1] + lines[k:])
+    elif how == "append":
+        text = text + token + "\n"
+    else:
+        text = ""
+    (d / name).write_text(text)
+    try:
+        res = load_result(d)
+    except ResultFileError as exc:
+        assert name in str(exc) or str(d) in str(exc)
+        return
+    n = res.scenario.vehicle.segments
+    assert res.segments["x_m"].shape == (res.t.size, n) and res.links["force_N"].shape == (res.t.size, n - 1)
+    assert all(np.all(np.isfinite(v)) for v in (*res.segments.values(), *res.links.values(), res.t))

@@ -67,7 +67,8 @@ def test_a_run_imports_only_its_own_mode():
                 "from snoworm import load_scenario, simulate\n"
                 f"simulate(load_scenario({str(SCENARIOS / 'tow6_uniform.yaml')!r}, [('simulation.duration_s', 1.0)]))\n"
                 "print(sorted(m for m in sys.modules if m.startswith('snoworm.modes.')))")
-    assert out.strip() == "['snoworm.modes.base', 'snoworm.modes.command', 'snoworm.modes.uniform']"
+    # codeload: the controller allowance the driver sets (no mode of its own)
+    assert out.strip() == "['snoworm.modes.base', 'snoworm.modes.codeload', 'snoworm.modes.command', 'snoworm.modes.uniform']"
 
 
 def test_a_users_mode_registers_in_a_fresh_process():

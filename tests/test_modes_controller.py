@@ -69,9 +69,8 @@ def test_relative_path_resolved_from_scenario_folder_and_recorded(tmp_path, monk
 @pytest.mark.parametrize("mode, words", [
     (_mode("Nope"), ["mine.py", "no class 'Nope'", "Const"]),
     ({**_mode("Const"), "controller": "ctl/missing.py:Const"}, ["missing.py", "does not exist"]),
-    (_mode("BadCtor"), ["mine.py:BadCtor", "constructing", "gain_missing"]),
     ({**_mode("Const"), "controller": "ctl/mine.py"}, ["mode.controller", "ClassName"]),
-    ({**_mode("Const"), "controller": "no_such_pkg_xyz.mod:Const"}, ["cannot import", "no_such_pkg_xyz"]),
+    ({**_mode("Const"), "controller": "no_such_pkg_xyz.mod:Const"}, ["not found", "no_such_pkg_xyz"]),
     ({**_mode("Const", v=1.0), "period_s": 0}, ["mode.period_s", "greater than 0"]),
 ])
 def test_bad_controller_is_scenario_error(tmp_path, mode, words):
@@ -79,6 +78,14 @@ def test_bad_controller_is_scenario_error(tmp_path, mode, words):
     with pytest.raises(ScenarioError) as err:
         load_scenario(p)
     for w in words:
+        assert w in str(err.value)
+
+
+def test_a_failing_constructor_is_scenario_error_when_the_run_starts_not_at_loading(tmp_path):
+    sc = load_scenario(_write(tmp_path, GOOD, _mode("BadCtor")))          # loading runs no code
+    with pytest.raises(ScenarioError) as err:
+        simulate(sc)
+    for w in ["mine.py:BadCtor", "constructing", "gain_missing"]:
         assert w in str(err.value)
 
 

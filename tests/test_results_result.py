@@ -2,13 +2,14 @@
 import csv
 import io
 import json
+import os
 
 import numpy as np
 import pytest
 import yaml
 
 from snoworm import load_scenario, scenario_from_dict, simulate
-from snoworm.results.result import LINK_COLUMNS, SEGMENT_COLUMNS, load_result
+from snoworm.results.result import LINK_COLUMNS, SEGMENT_COLUMNS, ResultFileError, load_result
 from tests.conftest import SCENARIOS
 
 #: ``%.6g`` in the CSV files: half a unit in the 6th significant digit, relative
@@ -100,7 +101,7 @@ def test_load_result_round_trip(tmp_path, name):
 
 def test_load_result_of_a_folder_that_is_not_a_run(tmp_path):
     (tmp_path / "segments.csv").write_text("t_s,segment\n")
-    with pytest.raises(FileNotFoundError, match="links.csv, summary.json, scenario.yaml missing"):
+    with pytest.raises(ResultFileError, match="links.csv, summary.json, scenario.yaml missing"):
         load_result(tmp_path)
 
 
@@ -130,3 +131,53 @@ def test_a_run_folder_written_before_the_grade_columns_reads_back_level(tmp_path
     path.write_text("\n".join(",".join(row.split(",")[:-1]) for row in lines) + "\n")       # drop another column
     with pytest.raises(ValueError, match="unexpected columns"):
         load_result(tmp_path / "run")
+
+
+# ------------------------------------------------------------------ tampered folders (issue 24)
+def _tamper_csv(name, fn):
+    def tamper(d):
+        lines = (d / name).read_text().splitlines()
+        (d / name).write_text("\n".join(fn(lines)) + "\n")
+    return tamper
+
+
+def _set_yaml(key, value):
+    def tamper(d):
+        import yaml
+        raw = yaml.safe_load((d / "scenario.yaml").read_text())
+        raw["vehicle" if key == "segments" else "simulation"][key] = value
+        (d / "scenario.yaml").write_text(yaml.safe_dump(raw))
+    return tamper
+
+
+TAMPERED = {
+    "nan_value": ("segments.csv", _tamper_csv("segments.csv", lambda ls: ls[:3] + [ls[3].rsplit(",", 1)[0] + ",nan"] + ls[4:])),
+    "text_value": ("segments.csv", _tamper_csv("segments.csv", lambda ls: ls[:3] + [ls[3].replace(",", ",x", 1)] + ls[4:])),
+    "header": ("segments.csv", _tamper_csv("segments.csv", lambda ls: ["t_s,segment,foo"] + ls[1:])),
+    "segment_index": ("segments.csv", _tamper_csv("segments.csv", lambda ls: [ls[0], ls[2], ls[1]] + ls[3:])),
+    "row_dropped": ("segments.csv", _tamper_csv("segments.csv", lambda ls: ls[:5] + ls[6:])),
+    "header_only": ("segments.csv", _tamper_csv("segments.csv", lambda ls: ls[:1])),
+    "links_shorter": ("links.csv", _tamper_csv("links.csv", lambda ls: ls[:-5])),
+    "more_segments": ("segments.csv", _set_yaml("segments", 200)),
+    "fewer_segments": ("segments.csv", _set_yaml("segments", 2)),
+    "summary_not_json": ("summary.json", lambda d: (d / "summary.json").write_text("{not json")),
+    "summary_a_list": ("summary.json", lambda d: (d / "summary.json").write_text("[1, 2]")),
+    "summary_deep": ("summary.json", lambda d: (d / "summary.json").write_text("[" * 100000)),
+    "summary_events": ("summary.json", lambda d: (d / "summary.json").write_text('{"events": 3}')),
+    "scenario_broken": ("scenario.yaml", lambda d: (d / "scenario.yaml").write_text("vehicle: [\n")),
+    "scenario_deep": ("scenario.yaml", lambda d: (d / "scenario.yaml").write_text("a: " + "[" * 5000)),
+    "fifo": ("segments.csv", lambda d: ((d / "segments.csv").unlink(), os.mkfifo(d / "segments.csv"))),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(TAMPERED))
+def test_a_tampered_run_folder_raises_one_error_type_naming_the_file(tmp_path, kind):
+    res = simulate(load_scenario(SCENARIOS / "tow6_uniform.yaml", ["simulation.duration_s=0.5"]))
+    d = tmp_path / "run"
+    res.write(d, plot=False)
+    load_result(d)                                   # intact: reads back
+    name, tamper = TAMPERED[kind]
+    tamper(d)
+    with pytest.raises(ResultFileError) as err:
+        load_result(d)
+    assert name in str(err.value) and len(str(err.value)) < 700

@@ -66,3 +66,48 @@ def test_batch_executor_without_pool_yields_every_task_once():
     ex.close()
     assert sorted(r["index"] for r in out) == list(range(7)) == sorted(seen)
     assert list(SerialExecutor().map_unordered(lambda t: 2 * t, [1, 2, 3])) == [2, 4, 6]
+
+
+def _listener(answer: bytes):
+    """A local TCP service that is not Dask: it accepts and stays silent (``b""``) or answers junk."""
+    import socket
+    import threading
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(4)
+    conns = []
+
+    def serve():
+        while True:
+            try:
+                c, _ = srv.accept()
+            except OSError:
+                return
+            conns.append(c)
+            if answer:
+                c.sendall(answer)
+    threading.Thread(target=serve, daemon=True).start()
+    return srv, conns
+
+
+@pytest.mark.parametrize("answer", [b"", b"HTTP/1.0 200 OK\r\n\r\n" + b"hello" * 1000])
+def test_a_service_other_than_dask_is_exit_2_not_a_hang(monkeypatch, answer):
+    pytest.importorskip("distributed", reason="dask[distributed] not installed")
+    from snoworm.studies.sweep import executors
+    monkeypatch.setattr(executors, "HANDSHAKE_TIMEOUT_S", 1.0)    # the bound under test, shortened
+    srv, conns = _listener(answer)
+    try:
+        with pytest.raises(ScenarioError, match=r"--scheduler .*cannot connect to the Dask scheduler"):
+            run_sweep(TOW6, ["terrain.xt=0.7", SHORT], scheduler=f"tcp://127.0.0.1:{srv.getsockname()[1]}",
+                      plot=False)
+    finally:
+        srv.close()
+        for c in conns:
+            c.close()
+
+
+@pytest.mark.parametrize("address", ["tls://127.0.0.1:1", "ucx://127.0.0.1:1", "inproc://x"])
+def test_other_protocols_are_refused_naming_the_option(address):
+    pytest.importorskip("distributed", reason="dask[distributed] not installed")
+    with pytest.raises(ScenarioError, match=r"--scheduler: .*tcp://host:port addresses only"):
+        run_sweep(TOW6, ["terrain.xt=0.7", SHORT], scheduler=address, plot=False)

@@ -6,6 +6,7 @@ import pytest
 import xarray as xr
 
 from snoworm import load_scenario, load_sweep, simulate
+from snoworm.results.result import ResultFileError
 from snoworm.config.schema import ScenarioError
 from snoworm.studies.sweep import run_sweep
 from tests.sweep_helpers import TOW6, comparable
@@ -66,7 +67,7 @@ def test_load_sweep_round_trip(tmp_path):
     assert df["terrain.xt"].tolist() == [0.7, 0.7, 0.9, 0.9]
     with pytest.raises(FileNotFoundError, match="--series netcdf"):
         back.series()
-    with pytest.raises(FileNotFoundError, match="not a sweep's output directory"):
+    with pytest.raises(ResultFileError, match="not a sweep's output directory"):
         load_sweep(tmp_path / "nowhere")
 
 

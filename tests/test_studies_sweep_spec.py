@@ -63,3 +63,11 @@ def test_axes_from_strings_pairs_and_none():
     assert [(a.key, a.values) for a in axes] == [("terrain.xt", (0.5, 0.6)), ("tow.force_N", (0, 100))]
     with pytest.raises(ScenarioError, match="needs at least one key"):
         as_axes([])
+
+
+def test_a_yaml_alias_bomb_in_a_swept_value_is_refused_at_once():
+    levels = ["a: &a [x,x,x,x,x,x,x,x,x]"] + [f"{c}: &{c} [{', '.join(['*' + p] * 9)}]"
+                                               for p, c in zip("abcdef", "bcdefg")]
+    bomb = "{" + ", ".join(levels) + "}"
+    with pytest.raises(ScenarioError, match=r"mode\.params.*alias"):
+        parse_spec("mode.params", bomb)

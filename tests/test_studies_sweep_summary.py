@@ -4,12 +4,14 @@ from __future__ import annotations
 import csv
 import json
 
+import pytest
+
 from click.testing import CliRunner
 
 import snoworm.studies.sweep as sweep_mod
 import snoworm.studies.sweep.run as run_mod
 from snoworm.cli import main
-from snoworm.studies.sweep import run_sweep
+from snoworm.studies.sweep import load_sweep, run_sweep
 from tests.sweep_helpers import TOW6, SHORT, comparable, csv_rows
 
 
@@ -70,3 +72,40 @@ def test_summary_cells_full_precision_and_empty_for_none(tmp_path):
     back = sweep_mod.SweepTable.from_csv(tmp_path / "summary.csv")
     assert back.rows[1]["distance_m"] == 0.1 + 0.2 and back.rows[1]["mode.speed_mps"] == [1.8, 1.5]
     assert back.rows[0]["immobilised"] is None and back.rows[1]["immobilised"] is False
+
+
+# ------------------------------------------------------------------ tampered sweep folders (issue 24)
+@pytest.fixture(scope="module")
+def sweep_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("sw") / "s"
+    run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], out_dir=out, plot=False, progress=False)
+    return out
+
+
+def _copy(src, tmp_path):
+    import shutil
+    dst = tmp_path / "s"
+    shutil.copytree(src, dst)
+    return dst
+
+
+@pytest.mark.parametrize("name, text", [
+    ("sweep.json", "{not json"), ("sweep.json", "[" * 100000), ("sweep.json", '{"definition": {"axes": [3]}}'),
+    ("sweep.json", '{"definition": {"axes": [{"key": 5}]}}'), ("sweep.json", '{"definition": []}'),
+    ("summary.csv", "a,b,c\n1,2,3\n"), ("summary.csv", ""),
+])
+def test_a_tampered_sweep_folder_raises_one_error_type_naming_the_file(sweep_dir, tmp_path, name, text):
+    from snoworm.results.result import ResultFileError
+    d = _copy(sweep_dir, tmp_path)
+    (d / name).write_text(text)
+    with pytest.raises(ResultFileError, match=name.replace(".", r"\.")):
+        load_sweep(d)
+
+
+def test_dropped_rows_are_reported(sweep_dir, tmp_path):
+    d = _copy(sweep_dir, tmp_path)
+    lines = (d / "summary.csv").read_text().splitlines(keepends=True)
+    (d / "summary.csv").write_text(lines[0] + "0000,garbage\n" + "".join(lines[1:]))
+    with pytest.warns(UserWarning, match="1 line\\(s\\) dropped"):
+        table = load_sweep(d)
+    assert table.dropped == 1 and len(table) == 2

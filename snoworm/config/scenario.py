@@ -123,7 +123,8 @@ class Scenario(Config):
         keys (``sc.with_(name="other")``).  Raises :class:`ScenarioError` like a scenario file.
         """
         items = list((changes or {}).items()) + list(kw.items())
-        return scenario_from_dict(apply_overrides(self.to_dict(), items), self.name)
+        return scenario_from_dict(apply_overrides(self.to_dict(), items), self.name,
+                                  base_dir=self.__dict__.get("_base_dir"))
 
 
 _TOP_KEYS = ("name", "description", "vehicle", "terrain", "tow", "mode", "simulation", "sources")
@@ -198,6 +199,7 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
         _BASE_DIR.reset(token)
     object.__setattr__(sc, "_notes", notes)
     object.__setattr__(sc, "_entries", entries)
+    object.__setattr__(sc, "_base_dir", base_dir)     # with_ and sweeps validate edits from the same folder
     return sc
 
 

@@ -33,16 +33,12 @@ except ImportError:  # pragma: no cover - not POSIX
     fcntl = None
 
 from .._version import __version__
+from .manifest import LOCK, MANIFEST, STAGE as _STAGE, ManifestProblem, folder_files, listed_files, load_manifest
 
 __all__ = ["atomic_write_text", "atomic_path", "OutputError", "output_folder", "check_output_folder",
-           "folder_state", "read_manifest", "write_manifest", "folder_lock", "FolderLocked", "MANIFEST", "LOCK",
-           "os_error_message", "file_mode"]
+           "folder_state", "folder_report", "read_manifest", "write_manifest", "remove_listed", "folder_lock",
+           "FolderLocked", "MANIFEST", "LOCK", "os_error_message", "file_mode"]
 
-#: Name of the manifest a snoworm output folder holds.
-MANIFEST = ".snoworm-manifest.json"
-#: Name of the lock file of a folder in use (:func:`folder_lock`).
-LOCK = ".snoworm-lock"
-_STAGE = ".snoworm-tmp-"
 _OLD = ".snoworm-old-"
 
 
@@ -103,25 +99,16 @@ def atomic_write_text(path, text: str) -> Path:
 
 
 # ------------------------------------------------------------------------------ manifest
-def _files(folder: Path) -> list:
-    """Relative paths (POSIX) of every file under ``folder`` but the manifest and the lock."""
-    out = []
-    for root, dirs, names in os.walk(folder):
-        dirs[:] = [d for d in dirs if _STAGE not in d]
-        for n in names:
-            rel = (Path(root) / n).relative_to(folder).as_posix()
-            if rel not in (MANIFEST, LOCK):
-                out.append(rel)
-    return sorted(out)
+_files = folder_files
 
 
 def read_manifest(folder) -> dict | None:
-    """The manifest of a snoworm output folder, or None (no manifest or unreadable)."""
+    """The manifest of a snoworm output folder, or None (none, or one that fails the checks of
+    :func:`snoworm.infra.manifest.load_manifest`: never trusted then)."""
     try:
-        data = json.loads((Path(folder) / MANIFEST).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        return load_manifest(folder)
+    except ManifestProblem:
         return None
-    return data if isinstance(data, dict) and isinstance(data.get("files"), list) else None
 
 
 #: The command recorded in manifests when none is given (the CLI sets it to its own command line).
@@ -146,28 +133,41 @@ def write_manifest(folder, command: str | None = None, **extra) -> Path:
     return atomic_write_text(folder / MANIFEST, json.dumps(doc, indent=2) + "\n")
 
 
+def folder_report(path) -> tuple:
+    """(:func:`folder_state`, why it is foreign or None)."""
+    path = Path(path)
+    if not path.exists():
+        return "missing", None
+    if not path.is_dir():
+        return "file", None
+    entries = [e for e in os.listdir(path) if e != LOCK and _STAGE not in e]
+    if not entries:
+        return "empty", None
+    try:
+        man = load_manifest(path)
+        if man is None:
+            return "foreign", f"it has no {MANIFEST} listing its files"
+        listed_files(path, man)
+    except ManifestProblem as exc:
+        return "foreign", f"{exc}; snoworm acts on no entry of it"
+    extra = sorted(set(_files(path)) - set(man["files"]))
+    if extra:
+        return "foreign", f"{path / extra[0]} is not listed in its {MANIFEST}"
+    return "snoworm", None
+
+
 def folder_state(path) -> str:
     """What ``path`` is as an output folder.
 
-    ``"missing"``, ``"empty"``, ``"snoworm"`` (a manifest listing every file in it, or a sweep
-    folder), ``"foreign"`` (non-empty, not all written by snoworm), ``"file"`` (not a folder).
+    ``"missing"``, ``"empty"``, ``"snoworm"`` (a manifest, passing the checks of
+    :func:`snoworm.infra.manifest.load_manifest`, listing every file in it), ``"foreign"`` (non-empty,
+    not all written by snoworm, or a manifest snoworm does not trust), ``"file"`` (not a folder).
     """
-    path = Path(path)
-    if not path.exists():
-        return "missing"
-    if not path.is_dir():
-        return "file"
-    entries = [e for e in os.listdir(path) if e != LOCK and _STAGE not in e]
-    if not entries:
-        return "empty"
-    man = read_manifest(path)
-    if man is not None and set(_files(path)) <= set(man["files"]):
-        return "snoworm"
-    return "foreign"
+    return folder_report(path)[0]
 
 
-def _refusal(path) -> str:
-    return (f"{path} is not empty and was not written by snoworm (it has no {MANIFEST} listing its files). "
+def _refusal(path, why=None) -> str:
+    return (f"{path} is not empty and was not written by snoworm ({why or f'it has no {MANIFEST} listing its files'}). "
             "Give an empty or new --out folder, or pass --overwrite (overwrite=True in Python) to write into "
             "it anyway (same-named files are replaced, the others kept).")
 
@@ -190,9 +190,9 @@ def check_output_folder(path, overwrite: bool = False) -> str:
             raise OutputError(f"{path}: {what}, not a folder. Give a folder path for --out.")
         if parent.exists():
             break
-    state = folder_state(path)
+    state, why = folder_report(path)
     if state == "foreign" and not overwrite:
-        raise OutputError(_refusal(path))
+        raise OutputError(_refusal(path, why))
     return state
 
 
@@ -264,14 +264,49 @@ def _commit_swap(stage: Path, target: Path):
     shutil.rmtree(old, ignore_errors=True)
 
 
+def remove_listed(folder) -> list:
+    """Remove the files ``folder``'s manifest lists (only those passing the checks of
+    :mod:`snoworm.infra.manifest`: regular files or symlinks inside ``folder``, reached without a symlink);
+    a missing or untrusted manifest removes nothing.  Returns the removed paths."""
+    try:
+        man = load_manifest(folder)
+        paths = listed_files(folder, man) if man is not None else []
+    except ManifestProblem:
+        return []
+    for p in paths:
+        os.unlink(p)
+    return paths
+
+
+def _ours(path: Path, listed: set, root: Path) -> bool:
+    """Whether the folder ``path`` holds only files the manifest lists (so snoworm wrote it)."""
+    rels = [(path / f).relative_to(root).as_posix() for f in _files(path)]
+    return all(r in listed for r in rels)
+
+
+def _check_in_place(stage: Path, target: Path, listed: set):
+    """Refuse (before anything is touched) to replace a folder of ``target`` snoworm did not write."""
+    for e in os.listdir(stage):
+        dst = target / e
+        if dst.is_dir() and not dst.is_symlink() and not _ours(dst, listed, target):
+            raise OutputError(f"{dst} is a folder snoworm did not write, and a result file of the same name "
+                              f"would replace it; nothing was written. Move it away or give another --out.")
+
+
 def _commit_in_place(stage: Path, target: Path):
-    """Move the staged entries into ``target`` one by one (files of an earlier manifest removed first)."""
+    """Move the staged entries into ``target`` one by one (files of an earlier, trusted manifest
+    removed first; a folder snoworm did not write is never removed)."""
     target.mkdir(parents=True, exist_ok=True)
-    man = read_manifest(target)
-    for rel in (man or {}).get("files", []):
-        p = target / rel
-        if isinstance(rel, str) and ".." not in Path(rel).parts and p.is_file():
-            p.unlink()
+    target = Path(os.path.realpath(target))
+    try:
+        man = load_manifest(target)
+        listed_files(target, man or {"files": []})
+        listed = set((man or {}).get("files", []))
+    except ManifestProblem:
+        listed = set()
+    _check_in_place(stage, target, listed)
+    if listed:
+        remove_listed(target)
     for e in sorted(os.listdir(stage), key=lambda n: n == MANIFEST):   # the manifest last
         dst = target / e
         if dst.is_dir() and not dst.is_symlink():

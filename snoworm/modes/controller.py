@@ -1,9 +1,11 @@
 """The ``controller`` mode: a user's discrete-time controller drives the chain (docs/controllers.md).
 
 ``mode: {type: controller, controller: "controllers/my.py:MyController", period_s: 0.02,
-params: {...}}``.  The class is loaded and constructed once at validation (a missing file or
-class, or a constructor that raises, is bad input: :class:`~snoworm.config.schema.ScenarioError`), and
-constructed afresh for every run as ``MyController(params, scenario)``.  The run is one
+params: {...}}``.  A scenario with a controller is a program.  Validation checks the reference
+statically and runs nothing (:mod:`snoworm.modes.codeload`: the file or module exists, parses
+and defines the class); the code is imported, and the class constructed as
+``MyController(params, scenario)``, only when a simulation starts, and only if the file lies in
+the scenario's folder tree or a folder the user allowed (``--allow-code``).  The run is one
 integration interval per period: at its start ``t`` the controller is called with the
 :class:`~snoworm.modes.command.Observation` of the state at ``t`` and returns a command (a
 mapping, :data:`~snoworm.modes.command.COMMAND_KEYS`), held until ``t + period_s`` (zero-order
@@ -14,11 +16,10 @@ A controller that raises, or returns a bad command, stops the run with :class:`C
 """
 from __future__ import annotations
 
-import hashlib
-import importlib
-import importlib.util
-import sys
+import os
+import time
 import traceback
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -27,9 +28,12 @@ from ..config.schema import ScenarioError, field, quote
 from ..config.scenario import base_dir
 from ..config.mode_registry import ModeConfig
 from .base import Interval, Mode, register_mode
+from .codeload import allow_code as allow_code_ctx, check_reference, code_files, import_class, resolve_spec, trust_problem
 from .command import CommandState, observe
+from .watchdog import WallLimit, wall_limit
 
-__all__ = ["ControllerConfig", "ControllerMode", "ControllerError", "load_controller", "construct", "user_traceback"]
+__all__ = ["ControllerConfig", "ControllerMode", "ControllerError", "load_controller", "construct", "user_traceback",
+           "trust_problem_of", "code_notice"]
 
 _PKG_DIR = Path(__file__).resolve().parents[1]
 
@@ -49,101 +53,76 @@ class ControllerConfig(ModeConfig):
     params: dict[str, Any] = field(default_factory=dict, doc="parameters handed to the controller's constructor")
 
     def _check(self, path):
-        spec = _resolve(self.controller, f"{path}.controller")
+        spec = resolve_spec(self.controller, f"{path}.controller", base_dir())
         object.__setattr__(self, "controller", spec)    # file paths made absolute (scenario.yaml records them)
-        load_controller(spec, f"{path}.controller")
-
-    def check_scenario(self, scenario, path):
-        construct(self, scenario, f"{path}.controller")
+        check_reference(spec, f"{path}.controller")      # static: nothing imported, nothing run
+        object.__setattr__(self, "_root", os.path.realpath(base_dir()))   # the folder trusted to run code
 
 
-def _is_file_spec(target: str) -> bool:
-    return target.endswith(".py") or "/" in target or "\\" in target
+def trust_problem_of(cfg, path="mode.controller") -> str | None:
+    """Why ``cfg``'s controller may not run here (see :func:`snoworm.modes.codeload.trust_problem`)."""
+    return trust_problem(cfg.controller, cfg.__dict__.get("_root"), path)
 
 
-def _split(spec, path):
-    target, sep, name = str(spec).rpartition(":")
-    if not sep or not target or not name.isidentifier():
-        raise ScenarioError(f"{path}: expected 'file.py:ClassName' or 'package.module:ClassName', got {quote(spec)}. "
-                            "Name the class after a colon.")
-    return target, name
+def code_notice(cfg, allow_code=()) -> str:
+    """``controller code <spec> (<files>)`` for the CLI's notice; ScenarioError if it may not run
+    (with ``allow_code`` allowed too)."""
+    with allow_code_ctx(allow_code):
+        why = trust_problem_of(cfg)
+    if why is not None:
+        raise ScenarioError(why)
+    return f"controller code {cfg.controller} ({', '.join(str(f) for f in code_files(cfg.controller))})"
 
 
-def _resolve(spec, path):
-    """``spec`` with a relative file path made absolute (from the scenario file's folder)."""
-    target, name = _split(spec, path)
-    if _is_file_spec(target) and not Path(target).is_absolute():
-        target = str((base_dir() / target).resolve())
-    return f"{target}:{name}"
-
-
-#: loaded controller files: absolute path -> (modification time, module)
-_FILES: dict = {}
-
-
-def _load_file(target, path):
-    p = Path(target)
-    if not p.is_file():
-        raise ScenarioError(f"{path}: controller file {p} does not exist (a relative path is taken from the "
-                            "scenario file's folder). Fix the path.")
-    mtime = p.stat().st_mtime_ns
-    cached = _FILES.get(str(p))
-    if cached and cached[0] == mtime:
-        return cached[1]
-    modname = "snoworm_controller_" + hashlib.sha1(str(p).encode()).hexdigest()[:12]
-    spec = importlib.util.spec_from_file_location(modname, p)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[modname] = module
-    try:
-        spec.loader.exec_module(module)
-    except Exception as exc:  # noqa: BLE001 - any error in the user's file is bad input
-        sys.modules.pop(modname, None)
-        raise ScenarioError(f"{path}: importing controller file {p} failed: {type(exc).__name__}: {exc}") from None
-    _FILES[str(p)] = (mtime, module)
-    return module
-
-
-def load_controller(spec: str, path: str = "mode.controller"):
-    """The controller class named by ``spec`` ('file.py:Name' or 'package.module:Name').
+def load_controller(spec: str, path: str = "mode.controller", root=None):
+    """Import the controller class named by ``spec`` ('file.py:Name' or 'package.module:Name'):
+    this RUNS the file's or module's code.  A file must lie under ``root`` or an allowed path
+    (:func:`snoworm.modes.codeload.allow_code`).
 
     Raises
     ------
     ScenarioError
-        If the file or module cannot be found or imported, or does not define ``Name``.
+        If the file or module cannot be found or imported, does not define class ``Name``, or
+        may not run.
     """
-    target, name = _split(spec, path)
-    if _is_file_spec(target):
-        module, where = _load_file(target, path), f"controller file {target}"
-    else:
-        try:
-            module = importlib.import_module(target)
-        except Exception as exc:  # noqa: BLE001 - a missing or broken module is bad input
-            raise ScenarioError(f"{path}: cannot import module {target!r} ({type(exc).__name__}: {exc}). "
-                                "Give an importable module or a file path ending in .py.") from None
-        where = f"module {target}"
-    cls = getattr(module, name, None)
-    if cls is None or not callable(cls):
-        found = sorted(k for k, v in vars(module).items() if isinstance(v, type) and not k.startswith("_"))
-        raise ScenarioError(f"{path}: {where} has no class {name!r}"
-                            + (f" (it defines: {', '.join(found)})." if found else "."))
-    return cls
+    return import_class(spec, root, path)
 
 
 def construct(cfg, scenario, path="mode.controller"):
     """A new controller instance, ``cls(params, scenario)`` (ScenarioError if the constructor fails)."""
-    cls = load_controller(cfg.controller, path)
+    cls = import_class(cfg.controller, cfg.__dict__.get("_root"), path)
     try:
         return cls(dict(cfg.params), scenario)
     except Exception as exc:  # noqa: BLE001 - a failing constructor is bad input
-        raise ScenarioError(f"{path}: constructing {cfg.controller} with params {dict(cfg.params)!r} failed: "
-                            f"{type(exc).__name__}: {exc}\n{user_traceback(exc)}".rstrip()) from None
+        raise ScenarioError(f"{path}: constructing {quote(cfg.controller)} with params {quote(dict(cfg.params))} "
+                            f"failed: {type(exc).__name__}: {quote(str(exc))}\n{user_traceback(exc)}".rstrip()) from None
 
 
-def user_traceback(exc) -> str:
-    """The traceback of ``exc`` keeping only the frames outside the snoworm package (the user's)."""
+def user_traceback(exc, limit: int = 2000) -> str:
+    """The traceback of ``exc`` keeping only the frames outside the snoworm package (the user's),
+    cut to about ``limit`` characters (a 1 MB message prints its head and tail)."""
     frames = [f for f in traceback.extract_tb(exc.__traceback__)
               if not Path(f.filename).resolve().is_relative_to(_PKG_DIR)]
-    return "".join(traceback.format_list(frames) + traceback.format_exception_only(type(exc), exc))
+    text = "".join(traceback.format_list(frames) + traceback.format_exception_only(type(exc), exc))
+    if len(text) > limit:
+        text = text[:limit // 2] + f"\n... [{len(text) - limit} characters cut] ...\n" + text[-limit // 2:]
+    return text
+
+
+@contextmanager
+def _guard(deadline, when: str, limit):
+    """Run a user's code: past ``deadline`` (``simulation.max_wall_s``, :mod:`snoworm.modes.watchdog`)
+    or on ``sys.exit`` it stops with ControllerError; the process never ends on the user's word."""
+    try:
+        with wall_limit(deadline):
+            yield
+    except WallLimit:
+        raise ControllerError(f"simulation.max_wall_s: the controller was still running {when} when the "
+                              f"wall-clock limit of {limit:g} s passed (an endless loop?). Fix the controller or "
+                              "raise max_wall_s.") from None
+    except SystemExit as exc:
+        raise ControllerError(f"controller called sys.exit({quote(exc.code, 40)}) {when}; a controller never ends "
+                              "the process. Raise an exception to stop the run.") from None
 
 
 @register_mode
@@ -156,7 +135,10 @@ class ControllerMode(Mode):
 
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)
-        self.controller = construct(cfg, scenario)
+        limit = scenario.simulation.max_wall_s
+        self.deadline = time.perf_counter() + limit if limit is not None else None   # user code counts too
+        with _guard(self.deadline, "while importing and constructing it", limit):
+            self.controller = construct(cfg, scenario)
         self.commands = CommandState(model)
         self.calls = 0
 
@@ -171,7 +153,10 @@ class ControllerMode(Mode):
         """
         obs = observe(self.model, y, self.commands.controls, t)
         try:
-            command = self.controller(obs)
+            with _guard(self.deadline, f"at t = {t:.6g} s", self.scenario.simulation.max_wall_s):
+                command = self.controller(obs)
+        except ControllerError:            # the wall-clock limit or sys.exit (_guard's own message)
+            raise
         except Exception as exc:  # noqa: BLE001 - the user's code: report it with their frames
             raise ControllerError(f"controller raised at t = {t:.6g} s:\n{user_traceback(exc)}".rstrip()) from None
         self.calls += 1

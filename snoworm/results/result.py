@@ -17,10 +17,12 @@ from . import frames
 from .._version import __version__
 from .energy import energy_metrics
 from ..infra.folders import atomic_write_text, output_folder, relocate
+from ..infra.manifest import ManifestProblem, read_small_file
 from ..model.quantities import output_series
 from ..config.scenario import dump_scenario, load_scenario
+from ..config.schema import ScenarioError, quote
 
-__all__ = ["Result", "SEGMENT_COLUMNS", "LINK_COLUMNS", "load_result"]
+__all__ = ["Result", "ResultFileError", "SEGMENT_COLUMNS", "LINK_COLUMNS", "load_result", "read_back"]
 
 #: Columns of ``segments.csv`` (after ``t_s, segment``): name -> description.
 SEGMENT_COLUMNS = {
@@ -245,22 +247,72 @@ _SUMMARY_KEYS = ("scenario", "snoworm_version", "segments", "duration_s", "dista
                  "energy", "energy_per_metre_J_per_m", "energy_metrics", "solver", "events", "sources")
 
 
-def _read_table(path, index, columns, n_t_hint=None):
-    """(t, {column: ndarray (n_t, n)}) of a ``segments.csv`` / ``links.csv``."""
-    with open(path, encoding="utf-8") as fh:
-        header = fh.readline().strip().split(",")
+class ResultFileError(ValueError):
+    """A folder read back (:func:`load_result`, :func:`snoworm.studies.sweep.load_sweep`) is not as snoworm
+    wrote it: a file missing, unreadable, malformed, non-finite or inconsistent with the others.
+    The message names the file and the problem."""
+
+
+#: Largest file read back from a results folder (bytes): the output-sample cap in CSV text.
+MAX_READ_BYTES = 2**31
+
+
+def read_back(path, limit: int = MAX_READ_BYTES) -> str:
+    """The text of ``path``, a regular file (a FIFO or a device refused unread; ResultFileError)."""
+    try:
+        return read_small_file(path, limit).decode("utf-8")
+    except FileNotFoundError:
+        raise ResultFileError(f"{path}: missing") from None
+    except ManifestProblem as exc:
+        raise ResultFileError(str(exc)) from None
+    except UnicodeDecodeError:
+        raise ResultFileError(f"{path}: not UTF-8 text") from None
+
+
+def _read_table(path, index, columns, n_rows):
+    """(t, {column: ndarray (n_t, n_rows)}) of a ``segments.csv`` / ``links.csv`` with ``n_rows``
+    segments or links, every shape and value checked (ResultFileError naming the file)."""
+    text = read_back(path)
+    header = text.split("\n", 1)[0].strip().split(",")
     expected = ["t_s", index] + list(columns)
     # a run written before the grade columns (docs/model.md section 7) was on level ground: zeros
-    level = [c for c in columns if c not in GRADE_COLUMNS]
-    if header != expected and header != ["t_s", index] + level:
-        raise ValueError(f"{path}: unexpected columns {header}; expected {expected}")
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    n = int(data[:, 1].max()) + 1 if data.shape[0] else 0
-    if n == 0:        # no links (a single segment): n_t rows of nothing
-        return None, {c: np.zeros((n_t_hint or 0, 0)) for c in columns}
-    t = data[::n, 0]
-    got = {c: data[:, 2 + j].reshape(t.size, n) for j, c in enumerate(header[2:])}
-    return t, {c: got[c] if c in got else np.zeros((t.size, n)) for c in columns}
+    level = ["t_s", index] + [c for c in columns if c not in GRADE_COLUMNS]
+    if header != expected and header != level:
+        raise ResultFileError(f"{path}: unexpected columns {quote(header)}; expected {', '.join(expected)}")
+    body = text.split("\n", 1)[1] if "\n" in text else ""
+    if not body.strip():
+        return None, {c: np.zeros((0, n_rows)) for c in columns}
+    try:
+        data = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2)
+    except ValueError as exc:
+        raise ResultFileError(f"{path}: not a table of numbers ({quote(str(exc))})") from None
+    if data.shape[0] == 0 or n_rows == 0:
+        if data.shape[0] and n_rows == 0:
+            raise ResultFileError(f"{path}: holds rows, but the scenario has no {index}s")
+        return None, {c: np.zeros((0, n_rows)) for c in columns}
+    if data.shape[1] != len(header) or not np.isfinite(data).all():
+        raise ResultFileError(f"{path}: rows with missing, NaN or infinite values")
+    if data.shape[0] % n_rows or not np.array_equal(data[:, 1], np.tile(np.arange(n_rows), data.shape[0] // n_rows)):
+        raise ResultFileError(f"{path}: the {index} column does not run 0..{n_rows - 1} at every time "
+                              f"(the scenario has {n_rows} {index}s)")
+    t = data[::n_rows, 0]
+    if np.any(data[:, 0] != np.repeat(t, n_rows)) or np.any(np.diff(t) < 0):
+        raise ResultFileError(f"{path}: the times t_s are not the same within a sample or go backwards")
+    got = {c: data[:, 2 + j].reshape(t.size, n_rows) for j, c in enumerate(header[2:])}
+    return t, {c: got[c] if c in got else np.zeros((t.size, n_rows)) for c in columns}
+
+
+def _read_summary_json(path) -> dict:
+    try:
+        summary = json.loads(read_back(path, 2**26))
+    except (ValueError, RecursionError) as exc:
+        if isinstance(exc, ResultFileError):
+            raise
+        raise ResultFileError(f"{path}: not valid JSON") from None
+    if not isinstance(summary, dict) or not isinstance(summary.get("events", []), list) \
+            or not isinstance(summary.get("solver", {}), dict):
+        raise ResultFileError(f"{path}: not a run summary (a JSON object with an 'events' list and a 'solver' mapping)")
+    return summary
 
 
 def load_result(run_dir) -> Result:
@@ -268,17 +320,38 @@ def load_result(run_dir) -> Result:
 
     The series come from ``segments.csv`` and ``links.csv``, so they carry the files' precision:
     6 significant digits (times: 4 decimals, more for an ``output_dt_s`` below 1e-3).  The scenario is ``scenario.yaml`` (validated
-    again); ``stats``, ``events`` and the mode's metrics come from ``summary.json``.  The
-    integration intervals (``phases``) are not written to disk and come back empty.
+    again, and never run: its controller, if any, is checked statically and trusts no folder, see
+    docs/controllers.md); ``stats``, ``events`` and the mode's metrics come from ``summary.json``.
+    The integration intervals (``phases``) are not written to disk and come back empty.
+
+    Raises
+    ------
+    ResultFileError
+        A file missing, unreadable (a FIFO, a device), malformed, with NaN values, or whose shape
+        disagrees with the scenario or the other files; the message names the file.
     """
     d = Path(run_dir)
     missing = [f for f in ("segments.csv", "links.csv", "summary.json", "scenario.yaml") if not (d / f).is_file()]
     if missing:
-        raise FileNotFoundError(f"{d} is not a snoworm run folder: {', '.join(missing)} missing")
-    sc = load_scenario(d / "scenario.yaml")
-    t, segments = _read_table(d / "segments.csv", "segment", SEGMENT_COLUMNS)
-    _, links = _read_table(d / "links.csv", "link", LINK_COLUMNS, n_t_hint=t.size)
-    summary = json.loads((d / "summary.json").read_text(encoding="utf-8"))
+        raise ResultFileError(f"{d} is not a snoworm run folder: {', '.join(missing)} missing")
+    try:
+        sc = load_scenario(d / "scenario.yaml")
+    except (ScenarioError, RecursionError) as exc:
+        raise ResultFileError(f"{d / 'scenario.yaml'}: {quote(str(exc), 300)}") from None
+    if "_root" in vars(sc.mode):       # a controller: checked statically, never run from a results folder
+        object.__setattr__(sc.mode, "_root", None)
+    n = sc.vehicle.segments
+    t, segments = _read_table(d / "segments.csv", "segment", SEGMENT_COLUMNS, n)
+    t_links, links = _read_table(d / "links.csv", "link", LINK_COLUMNS, n - 1)
+    if t is None:
+        raise ResultFileError(f"{d / 'segments.csv'}: no samples")
+    if t_links is not None and not np.array_equal(t_links, t):
+        raise ResultFileError(f"{d / 'links.csv'}: its times differ from segments.csv's ({t_links.size} vs {t.size} samples)")
+    if t_links is None and n > 1:
+        raise ResultFileError(f"{d / 'links.csv'}: no samples, but the scenario has {n - 1} links")
+    if t_links is None:
+        links = {c: np.zeros((t.size, 0)) for c in LINK_COLUMNS}
+    summary = _read_summary_json(d / "summary.json")
     mode_summary = {k: v for k, v in summary.items() if k not in _SUMMARY_KEYS}
     return Result(sc, t, segments, links, [], list(summary.get("events", [])), dict(summary.get("solver", {})),
                   mode_summary)

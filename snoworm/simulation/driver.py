@@ -19,6 +19,7 @@ from scipy.integrate import solve_ivp
 from ..model.inputs import Controls
 from ..dynamics import ChainModel
 from ..modes import mode_class
+from ..modes.codeload import allow_code as allowed_code
 from ..results.result import Result
 from .guard import SolverError, check_sane, guarded
 from .vode import VodeStepper
@@ -283,11 +284,14 @@ def _guarded_integrate(model, modes, sim, name, progress=None):
     return pieces, phases, stats
 
 
-def simulate(sc, progress=None) -> Result:
+def simulate(sc, progress=None, allow_code=()) -> Result:
     """Run a scenario and return its :class:`~snoworm.results.result.Result`.
 
     ``progress``: optional callable ``progress(t_s, duration_s)``, called after each integration
     interval with the simulated time reached (e.g. a :class:`snoworm.infra.progress.Progress`).
+    ``allow_code``: paths (files or folders) whose controller code may run although they lie
+    outside the scenario's folder (a controller in the scenario's folder tree runs without it;
+    docs/controllers.md).
 
     Raises
     ------
@@ -296,8 +300,9 @@ def simulate(sc, progress=None) -> Result:
         messages, the time reached and the interval's label).
     """
     wall0 = time.perf_counter()
-    case = assemble(sc)
-    pieces, phases, stats = _guarded_integrate(case.model, [case.mode], sc.simulation, sc.name, progress)
+    with allowed_code(allow_code):
+        case = assemble(sc)
+        pieces, phases, stats = _guarded_integrate(case.model, [case.mode], sc.simulation, sc.name, progress)
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
 

@@ -25,8 +25,13 @@ from .driver import assemble, output_grid, solve_interval
 from ..modes import Mode
 from ..modes.command import COMMAND_KEYS, CommandState, Observation, observe
 from ..results.result import Result
+from ..config.schema import quote
+from ..config.sections import MAX_OUTPUT_SAMPLES
 
-__all__ = ["Simulator", "Observation", "COMMAND_KEYS"]
+__all__ = ["Simulator", "Observation", "COMMAND_KEYS", "DT_MIN_S"]
+
+#: Shortest step [s]: well below any control period, far above the solver's resolution at t ~ 1e3 s.
+DT_MIN_S = 1e-6
 
 
 class Simulator:
@@ -37,6 +42,12 @@ class Simulator:
     scenario : Scenario
         The validated scenario (vehicle, terrain, tow, solver settings; its mode's initial state).
         ``simulation.duration_s`` does not limit stepping.
+    record : bool
+        Keep every step's output samples for :meth:`result` (default).  The record is bounded like
+        a scenario's output (:data:`~snoworm.config.sections.MAX_OUTPUT_SAMPLES` times x segments): a step
+        past it raises ValueError (call :meth:`reset`).  ``False``: memory stays flat however long
+        you step (only :attr:`last_step` is kept; :meth:`result` is unavailable), e.g. for
+        reinforcement learning.
 
     Attributes
     ----------
@@ -46,8 +57,8 @@ class Simulator:
         ``(ts, ys, controls)`` of the last step: its output times, flat states and controls.
     """
 
-    def __init__(self, scenario):
-        self.scenario = scenario
+    def __init__(self, scenario, record: bool = True):
+        self.scenario, self.record = scenario, bool(record)
         case = assemble(scenario)
         self.model = case.model
         self._y0 = np.array(case.mode.initial_state(), float)
@@ -58,7 +69,7 @@ class Simulator:
         self.t_s = 0.0
         self._y = self._y0.copy()
         self.commands = CommandState(self.model)
-        self._pieces, self._phases = [], []
+        self._pieces, self._phases, self._samples = [], [], 0
         self._stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "wall_time_s": 0.0}
         self._opts = {"continue": True}     # VODE (simulation.method) carries its history across steps
         self.last_step = None
@@ -86,9 +97,7 @@ class Simulator:
         SolverError
             If every solver method fails (the simulator stays at the start of the step).
         """
-        if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating, np.integer)) \
-                or not math.isfinite(dt) or dt <= 0:
-            raise ValueError(f"dt: the step length must be a positive number of seconds, got {dt!r}")
+        dt = self._check_dt(dt)
         wall0 = time.perf_counter()
         saved = self.commands.snapshot()
         ctl = self.commands.apply(command)
@@ -101,15 +110,40 @@ class Simulator:
         except Exception:
             self.commands.restore(saved)
             raise
-        self._pieces.append((ts, ys, ctl))
+        if self.record:
+            self._pieces.append((ts, ys, ctl))
+            self._samples += len(ts)
         self.last_step = (ts, ys, ctl)
         self._phases.append({"t_start_s": t, "t_end_s": t_next, "label": "step"})
+        if not self.record:
+            self._phases = self._phases[-1:]        # only "a step was made" matters: memory stays flat
         self.t_s, self._y = t_next, y_next
         self._stats["wall_time_s"] += time.perf_counter() - wall0
         return self.observation()
 
+    def _check_dt(self, dt) -> float:
+        """``dt`` as a float within [:data:`DT_MIN_S`, the output cap] (ValueError naming it otherwise)."""
+        ok = not isinstance(dt, bool) and isinstance(dt, (int, float, np.floating, np.integer))
+        try:
+            value = float(dt) if ok else math.nan
+        except OverflowError:
+            value = math.inf
+        sim = self.scenario.simulation
+        n = self.model.n
+        dt_max = sim.output_dt_s * MAX_OUTPUT_SAMPLES / n
+        if not math.isfinite(value) or not DT_MIN_S <= value <= dt_max:
+            raise ValueError(f"dt: the step length must be a number of seconds from {DT_MIN_S:g} to {dt_max:g} "
+                             f"(at most {MAX_OUTPUT_SAMPLES} output samples x segments a step), got {quote(dt, 60)}")
+        if self.record and (self._samples + value / sim.output_dt_s + 2) * n > MAX_OUTPUT_SAMPLES:
+            raise ValueError(f"Simulator: the recorded history would pass {MAX_OUTPUT_SAMPLES} output samples x "
+                             f"segments (memory) at t = {self.t_s:.6g} s. Call reset(), or use "
+                             "Simulator(scenario, record=False) to step without recording.")
+        return value
+
     def result(self) -> Result:
         """A :class:`~snoworm.results.result.Result` of everything stepped since the last reset."""
+        if not self.record:
+            raise ValueError("Simulator.result: this Simulator was made with record=False and keeps no history")
         if not self._pieces:
             raise ValueError("Simulator.result: nothing simulated yet; call step() first")
         sc = self.scenario

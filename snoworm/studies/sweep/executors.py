@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import functools
 import itertools
+import threading
 import time
 
 from ...simulation.driver import batch_key, simulate_batch
 from ...infra.pool import ProcessExecutor
 from ...config.scenario import scenario_from_dict
-from ...config.schema import ScenarioError
+from ...config.schema import ScenarioError, quote
 from .series import save_series
 from .metrics import case_metrics
 
@@ -44,6 +45,41 @@ class SerialExecutor:
 CONNECT_TIMEOUT_S = 5
 
 
+#: Seconds the whole connection (TCP connect and Dask's handshake) may take: a service other than
+#: Dask listening at the address accepts the connection and never answers.
+HANDSHAKE_TIMEOUT_S = 2 * CONNECT_TIMEOUT_S
+
+
+def _connect(client_class, address):
+    """A ``distributed.Client`` of ``address``, bounded by :data:`HANDSHAKE_TIMEOUT_S` (ScenarioError otherwise).
+
+    Only ``tcp://host:port`` (or ``host:port``) addresses: a ``tls://`` scheduler needs a security
+    configuration, ``ucx://`` a UCX install; connect such a ``Client`` yourself and pass it.  The
+    client is made in a daemon thread, so a handshake that never ends cannot hang the sweep."""
+    text = str(address)
+    scheme = text.split("://", 1)[0] if "://" in text else "tcp"
+    if scheme != "tcp":
+        raise ScenarioError(f"--scheduler: {quote(text)} uses {scheme}://; snoworm connects to tcp://host:port "
+                            "addresses only (for another protocol make a distributed.Client yourself and pass it: "
+                            "run_sweep(..., scheduler=client)).")
+    box = {}
+
+    def connect():
+        try:
+            box["client"] = client_class(text, timeout=f"{CONNECT_TIMEOUT_S}s")
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller as bad input
+            box["error"] = exc
+    th = threading.Thread(target=connect, name="snoworm-dask-connect", daemon=True)
+    th.start()
+    th.join(HANDSHAKE_TIMEOUT_S)
+    if "client" in box:
+        return box["client"]
+    why = (f"no Dask scheduler answered within {HANDSHAKE_TIMEOUT_S} s (something else may be listening there)"
+           if th.is_alive() else f"{type(box['error']).__name__}: {quote(str(box['error']))}")
+    raise ScenarioError(f"--scheduler {quote(text)}: cannot connect to the Dask scheduler ({why}). "
+                        "Check the address (tcp://host:port) and that the scheduler is running.")
+
+
 class DaskExecutor:
     """Run the cases on a Dask distributed cluster at ``address`` (``tcp://host:port``).
 
@@ -59,11 +95,7 @@ class DaskExecutor:
             raise ScenarioError(f"--scheduler {address}: Dask is not installed. Install it with "
                                 "pip install 'snoworm[dask]' (or pip install 'dask[distributed]').") from None
         self.address = address
-        try:
-            self.client = address if hasattr(address, "submit") else Client(address, timeout=f"{CONNECT_TIMEOUT_S}s")
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise ScenarioError(f"--scheduler {address}: cannot connect to the Dask scheduler ({exc}). "
-                                "Check the address (tcp://host:port) and that the scheduler is running.") from None
+        self.client = address if hasattr(address, "submit") else _connect(Client, address)
         self._own = not hasattr(address, "submit")
 
     def map_unordered(self, fn, tasks):

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ...simulation.driver import SolverError, simulate
+from ...modes.codeload import allow_code
 from ...modes.controller import ControllerError
 from ...config.scenario import scenario_from_dict
 from ...config.schema import ScenarioError
@@ -138,7 +139,8 @@ def run_case(task: dict) -> dict:
     try:
         sc = task.get("scenario") or scenario_from_dict(task["raw"], task.get("source", "scenario"),
                                                         base_dir=task.get("base_dir"))
-        res = simulate(sc)
+        with allow_code(task.get("allow_code", ())):
+            res = simulate(sc)
         out.update(case_metrics(res))
         if task.get("save_dir"):
             save_series(res, task["save_dir"])

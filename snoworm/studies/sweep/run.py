@@ -18,9 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._version import __version__
 from ...results.frames import require_xarray
 from ...results.result import LINK_COLUMNS, SEGMENT_COLUMNS
 from ...config.scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
+from ...modes.codeload import allow_code as allowed_code
+from ...modes.controller import trust_problem_of
 from ...infra.folders import OutputError, check_output_folder, folder_lock, os_error_message, write_manifest
 from ...infra.progress import Progress
 from ...config.schema import ScenarioError
@@ -29,6 +32,7 @@ from .cases import build_cases
 from .executors import BatchExecutor, DaskExecutor, ProcessExecutor, SerialExecutor, SweepExecutionError
 from .metrics import METRIC_COLUMNS, case_metrics, one_line, run_case
 from .series import SERIES_FORMATS, case_series_path, combine_series
+from .inputs import input_hashes
 from .spec import as_axes
 from .summary import SweepTable, prepare_dir, summary_columns
 
@@ -64,25 +68,30 @@ class _Progress:
 def _base(scenario):
     """(raw mapping, source name, base_dir) of a path or a Scenario object."""
     if isinstance(scenario, Scenario):
-        return scenario.to_dict(), scenario.name, None
+        bd = scenario.__dict__.get("_base_dir")
+        return scenario.to_dict(), scenario.name, (str(bd) if bd is not None else None)
     if isinstance(scenario, dict):
         return scenario, "scenario", None
     raw, path = read_scenario_yaml(scenario)
     return raw, str(path), str(path.resolve().parent)
 
 
-def _definition(raw, axes, zip_):
+def _definition(raw, axes, zip_, base_dir=None):
+    """The resume key: the scenario mapping, the axes, the snoworm version and the contents of
+    every file they name (:mod:`snoworm.studies.sweep.inputs`)."""
     return json.loads(json.dumps({
         "scenario_sha256": hashlib.sha256(canonical_json(raw).encode()).hexdigest(),
         "axes": [{"key": a.key, "values": list(a.values)} for a in axes],
         "zip": bool(zip_),
+        "snoworm_version": __version__,
+        "inputs": input_hashes(raw, axes, base_dir),
     }, default=str))
 
 
 def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
               save_cases: bool = False, progress=None, plot: bool = True, executor=None,
               batch: int = 0, series: str = "folders", plot_format: str = "png",
-              overwrite: bool = False) -> SweepTable:
+              overwrite: bool = False, allow_code=(), restart: bool = False) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
     Parameters
@@ -124,6 +133,10 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
     overwrite : bool
         Start afresh in a folder holding another sweep (its files are removed), or write into a
         non-empty folder snoworm did not write.
+    allow_code : sequence of str or Path
+        Paths whose controller code may run outside the scenario's folder (:func:`snoworm.simulate`).
+    restart : bool
+        Start afresh (removing its rows) over a sweep in ``out_dir`` run from other inputs.
 
     Returns
     -------
@@ -138,14 +151,14 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
     """
     save_cases = _check_series(series) or save_cases
     local = executor is None and scheduler is None     # this process or its own pool: pass scenarios on
-    plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=local)
+    plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=local, allow_code=allow_code)
     out = _new_output_folder(out_dir, overwrite)
     own = executor is None
     if own:                         # before anything is written: an unreachable scheduler writes nothing
         executor = _make_executor(scheduler, batch, jobs)
     try:
-        return _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases and series, overwrite,
-                          plot_format)
+        return _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases and series,
+                          overwrite or restart, plot_format)
     except OSError as exc:            # writing sweep.json, the manifest or the plot
         raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
 
@@ -153,7 +166,7 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
 def _new_output_folder(out_dir, overwrite):
     """``out_dir`` as a Path (None: nothing is written), checked before any case runs unless it holds
     a sweep already (resumed or refused later, by :func:`~snoworm.studies.sweep.summary.prepare_dir`)."""
-    out = Path(out_dir) if out_dir is not None else None
+    out = Path(os.path.abspath(out_dir)) if out_dir is not None else None     # once: a chdir does not move it
     if out is not None and not (out / "sweep.json").exists():
         check_output_folder(out, overwrite)
     return out
@@ -231,6 +244,8 @@ class _Plan:
     definition: dict
     #: case index -> its validated Scenario, kept for local executors (see _plan)
     scenarios: dict = dc_field(default_factory=dict)
+    #: resolved paths whose controller code may run (run_sweep's allow_code), handed to every task
+    allow_code: list = dc_field(default_factory=list)
 
     @property
     def keys(self):
@@ -243,11 +258,20 @@ class _Plan:
 KEEP_VALIDATED_MAX = 20_000
 
 
-def _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=False) -> _Plan:
+def _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=False, allow_code=()) -> _Plan:
     """Parse the axes, build the cases and validate each one (about 2 ms a case).
 
     ``keep``: the cases run in this process or its own worker pool; keep their validated
-    scenarios (up to :data:`KEEP_VALIDATED_MAX` cases) for the tasks."""
+    scenarios (up to :data:`KEEP_VALIDATED_MAX` cases) for the tasks.  ``allow_code``: see
+    :func:`run_sweep` (a controller that may not run refuses the whole sweep here)."""
+    allow = [os.path.realpath(os.path.expanduser(str(p))) for p in (allow_code or ())]
+    with allowed_code(allow):
+        plan = _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep)
+    plan.allow_code = allow
+    return plan
+
+
+def _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep) -> _Plan:
     axes = as_axes(sets)
     raw, source, base_dir = _base(scenario)
     if not isinstance(raw, dict):
@@ -262,17 +286,21 @@ def _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=False) -> _Plan:
     for c in cases:
         try:
             sc = scenario_from_dict(apply_overrides(raw, c.overrides(axes)), source, base_dir=base_dir)
-            n_links = max(n_links, sc.vehicle.segments - 1)
-            if keep:
-                kept[c.index] = sc
         except ScenarioError as exc:
             invalid[c.index] = one_line(exc)
+            continue
+        why = trust_problem_of(sc.mode) if sc.mode.type == "controller" else None
+        if why is not None:                 # refused for the whole sweep, before anything runs
+            raise ScenarioError(f"case {c.case_id}: {why}")
+        n_links = max(n_links, sc.vehicle.segments - 1)
+        if keep:
+            kept[c.index] = sc
     if len(invalid) == len(cases):
         first = invalid[cases[0].index]
         raise ScenarioError(f"every case of the sweep is invalid, e.g. case {cases[0].case_id} "
                             f"({', '.join(f'{a.key}={v}' for a, v in zip(axes, cases[0].values))}): {first}")
     return _Plan(axes, raw, source, base_dir, cases, invalid, n_links, summary_columns(axes, n_links),
-                 _definition(raw, axes, zip_), kept)
+                 _definition(raw, axes, zip_, base_dir), kept)
 
 
 def _make_executor(scheduler, batch, jobs):
@@ -299,7 +327,7 @@ class _Recorder:
 
     def open(self):
         if self.path is not None:
-            self.fd = os.open(self.path, os.O_WRONLY | os.O_APPEND)
+            self.fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | getattr(os, "O_NOFOLLOW", 0))
 
     def close(self):
         if self.fd is not None:
@@ -335,7 +363,8 @@ def _tasks(plan: _Plan, todo, out, keep_series):
         if c.index in plan.invalid:
             continue
         save = case_series_path(out, c.case_id, keep_series) if keep_series else None
-        task = {"index": c.index, "source": plan.source, "base_dir": plan.base_dir, "save_dir": save}
+        task = {"index": c.index, "source": plan.source, "base_dir": plan.base_dir, "save_dir": save,
+                "allow_code": plan.allow_code}
         sc = plan.scenarios.pop(c.index, None)        # validated by _plan: not again
         if sc is not None:
             task["scenario"] = sc

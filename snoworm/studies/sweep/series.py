@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ...results.frames import require_xarray, units_of, versions
-from ...infra.folders import atomic_path
+from ...infra.folders import OutputError, atomic_path
 
 __all__ = ["SERIES_FORMATS", "SERIES_FILE", "save_series", "case_series_path", "combine_series", "load_series"]
 
@@ -44,6 +44,10 @@ def save_series(result, save_dir) -> None:
     """Write a case's time series: a run folder (:meth:`Result.write`, no plots) or, for a
     ``.npz`` path, the arrays (``t_s``, ``segments/<column>``, ``links/<column>``) atomically."""
     path = Path(save_dir)
+    for p in (path.parent, path):
+        if p.is_symlink():
+            raise OutputError(f"{p} is a symbolic link: a sweep's case series are never written through one. "
+                              "Give a new --out directory.")
     if path.suffix != ".npz":
         result.write(path, plot=False)
         return

@@ -15,6 +15,7 @@ import numpy as np
 import yaml
 
 from ...config.schema import ScenarioError, quote
+from ...config.yamlio import load_yaml_text
 from ...infra.csvwriter import canonical_json
 
 __all__ = ["Axis", "MAX_CASES", "RANGE", "as_axes", "parse_scalar", "parse_spec", "parse_sweep_option"]
@@ -34,8 +35,9 @@ class Axis:
     spec: str = ""
 
 
-def parse_scalar(text: str):
-    """A number if ``text`` is one (``1e-3`` included), else the YAML value."""
+def parse_scalar(text: str, source: str = "--set value"):
+    """A number if ``text`` is one (``1e-3`` included), else the YAML value (read by the hardened
+    reader, :func:`snoworm.yamlio.load_yaml_text`: an alias bomb is refused, ScenarioError)."""
     t = text.strip()
     for conv in (int, float):
         try:
@@ -43,7 +45,7 @@ def parse_scalar(text: str):
         except ValueError:
             continue
         return v
-    return yaml.safe_load(t)
+    return load_yaml_text(t, source)
 
 
 def _split_top_level(text: str):
@@ -114,7 +116,7 @@ def parse_spec(key: str, spec, option: str | None = None) -> tuple:
                 raise ScenarioError(f"{opt}: empty item in the list. Separate values by single commas, "
                                     "e.g. 0,100,200, with no trailing comma.")
             try:
-                values = tuple(parse_scalar(it) for it in items)
+                values = tuple(parse_scalar(it, opt) for it in items)
             except yaml.YAMLError as exc:
                 raise ScenarioError(f"{opt}: a value is not valid YAML ({getattr(exc, 'problem', exc)}).") from None
     if not values:

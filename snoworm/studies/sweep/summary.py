@@ -9,21 +9,30 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import shutil
+import warnings
 from pathlib import Path
 
 import yaml
 
 from ..._version import __version__
 from ...results.frames import require_pandas
-from ...infra.folders import MANIFEST, atomic_write_text, folder_state, read_manifest
-from ...config.schema import ScenarioError
+from ...results.result import ResultFileError, read_back
+from ...infra.folders import MANIFEST, atomic_write_text, folder_state, remove_listed
+from ...infra.manifest import STAGE, ManifestProblem, read_small_file
+from ...config.schema import ScenarioError, quote
 from ...infra.csvwriter import FULL, csv_line, csv_text, write_csv
+from .inputs import changed_inputs
 from .metrics import METRIC_COLUMNS
 from .series import SERIES_FILE, load_series
 from .spec import parse_scalar
 
 __all__ = ["SweepTable", "summary_columns", "read_summary", "prepare_dir", "load_sweep"]
+
+
+#: Largest sweep.json read (bytes): the definition lists every axis value.
+MAX_SWEEP_JSON = 64 * 2**20
 
 
 def summary_columns(axes, n_links) -> list:
@@ -69,6 +78,7 @@ class SweepTable:
         self.keys = list(keys)
         self.rows = sorted(rows, key=lambda r: r["case_id"])
         self.out_dir = Path(out_dir) if out_dir is not None else None
+        self.dropped = 0          #: lines of summary.csv dropped when read back (load_sweep)
 
     def __len__(self):
         return len(self.rows)
@@ -133,17 +143,39 @@ def load_sweep(out_dir) -> SweepTable:
     """Read a sweep's output directory (``sweep.json`` and ``summary.csv``) back into a :class:`SweepTable`.
 
     The swept values are parsed as in ``--set`` (numbers stay numbers); a truncated last line of
-    an interrupted sweep is ignored.  ``table.series()`` opens ``series.nc`` when the sweep kept
-    its series there.
+    an interrupted sweep is ignored.  Lines that do not parse are dropped and reported: a
+    :class:`UserWarning` and ``table.dropped`` (their count).  ``table.series()`` opens
+    ``series.nc`` when the sweep kept its series there.
+
+    Raises
+    ------
+    snoworm.results.ResultFileError
+        A file missing, not a regular file, malformed, or the two files disagreeing; the message
+        names the file.
     """
     out = Path(out_dir)
     spath, dpath = out / "summary.csv", out / "sweep.json"
     if not spath.is_file() or not dpath.is_file():
-        raise FileNotFoundError(f"{out} is not a sweep's output directory (it needs sweep.json and summary.csv)")
-    definition = json.loads(dpath.read_text(encoding="utf-8")).get("definition", {})
-    keys = [a["key"] for a in definition.get("axes", [])] or None
-    header, rows, _ = read_summary(spath, keys)
-    return SweepTable(header, rows, keys or _keys_from_header(header), out_dir=out)
+        raise ResultFileError(f"{out} is not a sweep's output directory (it needs sweep.json and summary.csv)")
+    try:
+        doc = json.loads(read_back(dpath, MAX_SWEEP_JSON))
+        definition = doc.get("definition", {})
+        keys = [a["key"] for a in definition.get("axes", [])] or None
+        if keys is not None and not all(isinstance(k, str) for k in keys):
+            raise TypeError("axis keys are not text")
+    except ResultFileError:
+        raise
+    except (ValueError, RecursionError, AttributeError, TypeError, KeyError):
+        raise ResultFileError(f"{dpath}: not a sweep definition (a JSON object with definition.axes[].key)") from None
+    header, rows, dropped = read_summary(spath, keys)
+    if header[:2] != ["case_id", "case_key"] or "status" not in header or (keys and header[2:2 + len(keys)] != keys):
+        raise ResultFileError(f"{spath}: its columns {quote(header)} are not those of the sweep in {dpath}")
+    table = SweepTable(header, rows, keys or _keys_from_header(header), out_dir=out)
+    table.dropped = dropped
+    if dropped:
+        warnings.warn(f"{spath}: {dropped} line(s) dropped (truncated or malformed); the table holds the "
+                      f"{len(rows)} others", stacklevel=2)
+    return table
 
 
 def _keys_from_header(header):
@@ -155,7 +187,12 @@ def _keys_from_header(header):
 
 def read_summary(path: Path, keys=None):
     """(header, complete rows, number of dropped lines) of a summary.csv."""
-    data = path.read_bytes().decode("utf-8", errors="replace")
+    try:
+        data = read_small_file(path, 2**34).decode("utf-8", errors="replace")
+    except FileNotFoundError:
+        raise ResultFileError(f"{path}: missing") from None
+    except ManifestProblem as exc:
+        raise ResultFileError(str(exc)) from None
     lines = data.split("\n")
     complete, dropped = lines[:-1], (1 if lines[-1] else 0)   # no final newline: truncated
     if not complete:
@@ -174,15 +211,87 @@ def read_summary(path: Path, keys=None):
     return header, rows, dropped
 
 
+#: The files a sweep writes at the top of its folder (besides the manifest).
+SWEEP_FILES = ("summary.csv", "sweep.json", "sweep.png", "heatmap.png", "sweep.pdf", "heatmap.pdf", "sweep.svg",
+               "heatmap.svg", SERIES_FILE)
+
+
+def _case_entries(out: Path) -> list:
+    """The entries of ``out/cases`` a sweep wrote (case folders snoworm wrote, ``.npz`` series);
+    raises ScenarioError naming the first other entry (nothing is removed then)."""
+    cases = out / "cases"
+    if not os.path.lexists(cases):
+        return []
+    if cases.is_symlink() or not cases.is_dir():
+        raise ScenarioError(f"{cases} is not a folder snoworm wrote (a symbolic link or a file); nothing was "
+                            "touched. Move it away or give a new --out directory.")
+    found = []
+    for e in sorted(os.listdir(cases)):
+        p = cases / e
+        if STAGE in e or ".snoworm-old-" in e:     # a killed writer's staging folder: cleaned when rewritten
+            continue
+        if p.is_symlink():
+            ok = False
+        elif p.is_dir():
+            ok = folder_state(p) in ("snoworm", "empty")
+        else:
+            ok = p.is_file() and e.endswith(".npz")
+        if not ok:
+            raise ScenarioError(f"{p} was not written by this sweep (a symbolic link, or a file or folder without "
+                                f"snoworm's {MANIFEST}); nothing was touched. Move it away or give a new --out "
+                                "directory.")
+        found.append(p)
+    return found
+
+
 def _clear(out: Path):
-    """Remove an earlier snoworm folder's files (its manifest's, a sweep's files and case folders)."""
-    man = read_manifest(out) or {}
-    names = set(man.get("files", [])) | {"summary.csv", "sweep.json", "sweep.png", "heatmap.png", MANIFEST}
-    for rel in names:
-        p = out / rel
-        if isinstance(rel, str) and ".." not in Path(rel).parts and p.is_file():
+    """Remove an earlier snoworm folder's files: its manifest's (checked, see :mod:`snoworm.infra.manifest`),
+    a sweep's own files and case folders; an entry snoworm did not write stops it before anything
+    is removed (ScenarioError)."""
+    cases = _case_entries(out)
+    remove_listed(out)
+    for name in SWEEP_FILES + (MANIFEST,):
+        p = out / name
+        if p.is_symlink() or p.is_file():
             p.unlink()
-    shutil.rmtree(out / "cases", ignore_errors=True)
+    for p in cases:
+        if p.is_dir():
+            shutil.rmtree(p)
+        else:
+            p.unlink()
+    try:
+        os.rmdir(out / "cases")
+    except OSError:           # missing, or a killed writer's staging folder is left in it
+        pass
+
+
+def check_resumable(out: Path):
+    """Refuse (ScenarioError) a sweep folder whose files or case folders snoworm would write
+    through: a symlink, FIFO or device at ``summary.csv``, ``sweep.json`` or the manifest, or a
+    symlink at ``cases/`` or a case folder."""
+    for name in ("summary.csv", "sweep.json", MANIFEST):
+        p = out / name
+        if os.path.lexists(p) and (p.is_symlink() or not p.is_file()):
+            raise ScenarioError(f"{p} is not a regular file (a symbolic link, a folder, a FIFO or a device); "
+                                "snoworm will not read or write through it. Give a new --out directory.")
+    _case_entries(out)
+
+
+def _other_sweep(out, dpath, old, new) -> str:
+    """Why ``out``'s sweep (definition ``old``) cannot be resumed by this one (``new``)."""
+    old = old if isinstance(old, dict) else {}
+    if all(old.get(k) == new[k] for k in new if k not in ("inputs", "snoworm_version")):
+        changed = changed_inputs(old.get("inputs"), new.get("inputs"))
+        why = (f"{quote(changed[0], 200)} changed since it ran" + (f" (and {len(changed) - 1} more file(s))"
+                                                                     if len(changed) > 1 else "")
+               if changed else f"it was run by snoworm {quote(old.get('snoworm_version'), 40)}, this is "
+                               f"{new.get('snoworm_version')}")
+        return (f"{out} holds this sweep run from other inputs: {why}, so its rows would mix old and new results. "
+                "Pass --restart (restart=True in Python) to run it afresh (its rows are removed), or give a new "
+                "--out directory.")
+    what = [k for k in new if old.get(k) != new[k]]
+    return (f"{out} holds another sweep (its {', '.join(what) or 'definition'} differs from this one, see {dpath}). "
+            "Re-run the original command to resume it, give a new --out directory, or pass --overwrite to replace it.")
 
 
 def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: bool = False) -> dict:
@@ -193,25 +302,25 @@ def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: 
     """
     out.mkdir(parents=True, exist_ok=True)
     spath, dpath = out / "summary.csv", out / "sweep.json"
+    check_resumable(out)
     if not dpath.exists() and folder_state(out) == "snoworm":
         _clear(out)
     if dpath.exists() and overwrite:
         try:
-            same = json.loads(dpath.read_text(encoding="utf-8")).get("definition") == definition
-        except (OSError, ValueError, AttributeError):
+            same = json.loads(read_small_file(dpath, MAX_SWEEP_JSON)).get("definition") == definition
+        except (OSError, ValueError, AttributeError, RecursionError):
             same = False
         if not same:
             _clear(out)
     if dpath.exists():
         try:
-            old = json.loads(dpath.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
+            old = json.loads(read_small_file(dpath, MAX_SWEEP_JSON))
+            if not isinstance(old, dict):
+                raise ValueError("not a JSON object")
+        except (OSError, ValueError, RecursionError) as exc:
             raise ScenarioError(f"{dpath}: unreadable ({exc}). Use another --out or delete the directory.") from None
         if old.get("definition") != definition:
-            what = [k for k in definition if old.get("definition", {}).get(k) != definition[k]]
-            raise ScenarioError(f"{out} holds another sweep (its {', '.join(what) or 'definition'} differs from "
-                                f"this one, see {dpath}). Re-run the original command to resume it, give a "
-                                "new --out directory, or pass --overwrite to replace it.")
+            raise ScenarioError(_other_sweep(out, dpath, old.get("definition"), definition))
     elif spath.exists():
         raise ScenarioError(f"{spath} exists but {dpath} does not, so the sweep it belongs to is unknown. "
                             "Give a new --out directory (or delete the old one).")

@@ -1,0 +1,212 @@
+"""Output-folder manifests, read defensively: snoworm never touches a path outside ``--out``.
+
+A snoworm output folder holds :data:`MANIFEST`, a JSON file listing (as relative POSIX paths)
+the files snoworm wrote there.  A folder received from someone else (a shared results folder,
+an archive, a cloned repository) may hold a manifest crafted to name other files, so every
+manifest is checked before any of its entries is acted on:
+
+* the manifest is a regular file (not a symlink, a FIFO or a device: opened with
+  ``O_NONBLOCK | O_NOFOLLOW`` and checked with ``fstat`` before a byte is read), at most
+  :data:`MAX_MANIFEST_BYTES` long, holding a JSON object whose ``files`` is a list of strings;
+* every entry is a relative path in normal form (no ``..``, ``.``, empty part, backslash or NUL,
+  at most :data:`MAX_ENTRY_CHARS` characters);
+* an entry acted on resolves inside the folder without passing through a symlink (each part is
+  checked with ``lstat``), and is a regular file or a symlink (removing a symlink removes the link,
+  never its target).
+
+A manifest failing any check is a :class:`ManifestProblem` (its message names the manifest and
+the problem); the folder is then foreign (:func:`snoworm.infra.folders.folder_state`): nothing in it is
+removed on the manifest's word.
+"""
+from __future__ import annotations
+
+import json
+import os
+import stat
+from pathlib import Path, PurePosixPath
+
+__all__ = ["MANIFEST", "LOCK", "STAGE", "MAX_MANIFEST_BYTES", "MAX_ENTRY_CHARS", "ManifestProblem",
+           "read_small_file", "load_manifest", "entry_problem", "lexists_inside", "listed_files",
+           "folder_files", "short"]
+
+#: Name of the manifest a snoworm output folder holds.
+MANIFEST = ".snoworm-manifest.json"
+#: Name of the lock file of a folder in use (:func:`snoworm.infra.folders.folder_lock`).
+LOCK = ".snoworm-lock"
+#: Part of the name of a staging folder (never listed, never a reason to call a folder foreign).
+STAGE = ".snoworm-tmp-"
+#: Largest manifest read (bytes): a sweep of 100 000 saved cases lists about 600 000 files (~40 MB).
+MAX_MANIFEST_BYTES = 64 * 2**20
+#: Longest entry accepted (characters): PATH_MAX on Linux.
+MAX_ENTRY_CHARS = 4096
+
+
+class ManifestProblem(ValueError):
+    """A manifest (or a path it names) that snoworm will not act on; the message says why."""
+
+
+def short(value, limit: int = 100) -> str:
+    """``repr`` of a user's value cut to about ``limit`` characters (messages stay short)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def read_small_file(path, limit: int) -> bytes:
+    """The bytes of ``path``, a regular file of at most ``limit`` bytes.
+
+    Opened with ``O_NONBLOCK | O_NOFOLLOW`` and checked with ``fstat`` before reading, so a FIFO,
+    a device (``/dev/zero``), a symlink or an oversized file is refused at once, unread.
+
+    Raises
+    ------
+    FileNotFoundError
+        ``path`` does not exist.
+    ManifestProblem
+        ``path`` is not a regular file, or is larger than ``limit``; the message names it.
+    """
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(path, flags)
+    except FileNotFoundError:
+        raise
+    except OSError as exc:
+        kind = "a symbolic link" if os.path.islink(path) else f"unreadable ({exc.strerror or exc})"
+        raise ManifestProblem(f"{path} is {kind}, not a regular file") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise ManifestProblem(f"{path} is not a regular file (a FIFO, a device or a folder)")
+        if st.st_size > limit:
+            raise ManifestProblem(f"{path} is {st.st_size} bytes, more than the {limit} a snoworm file of "
+                                  "its kind holds")
+        chunks, size = [], 0
+        while size <= limit:
+            chunk = os.read(fd, min(1 << 20, limit + 1 - size))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+        if size > limit:
+            raise ManifestProblem(f"{path} grew beyond {limit} bytes while being read")
+        return b"".join(chunks)
+    finally:
+        os.close(fd)
+
+
+def entry_problem(entry) -> str | None:
+    """Why ``entry`` is not an acceptable manifest entry (None if it is): a relative POSIX path
+    in normal form, inside the folder."""
+    if not isinstance(entry, str):
+        return f"entry {short(entry)} is not a text path"
+    if not entry or len(entry) > MAX_ENTRY_CHARS:
+        return f"entry {short(entry)} is empty or longer than {MAX_ENTRY_CHARS} characters"
+    if "\x00" in entry or "\\" in entry:
+        return f"entry {short(entry)} holds a NUL or a backslash"
+    p = PurePosixPath(entry)
+    if p.is_absolute() or entry.startswith("/"):
+        return f"entry {short(entry)} is an absolute path"
+    parts = entry.split("/")
+    if any(part in ("", ".", "..") for part in parts):
+        return f"entry {short(entry)} is not a plain relative path inside the folder (no '..', '.' or '//')"
+    if parts[0] in (MANIFEST, LOCK) or STAGE in parts[0]:
+        return f"entry {short(entry)} names snoworm's own bookkeeping file"
+    return None
+
+
+def load_manifest(folder) -> dict | None:
+    """The manifest of ``folder``, checked (see the module docstring), or None if it has none.
+
+    Raises
+    ------
+    ManifestProblem
+        The manifest exists but is not a small regular file of the expected shape, or an entry
+        is not a plain relative path.
+    """
+    path = Path(folder) / MANIFEST
+    try:
+        data = read_small_file(path, MAX_MANIFEST_BYTES)
+    except FileNotFoundError:
+        return None
+    try:
+        doc = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError):
+        raise ManifestProblem(f"{path} is not valid JSON") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("files"), list):
+        raise ManifestProblem(f"{path} is not a JSON object with a 'files' list")
+    for entry in doc["files"]:
+        why = entry_problem(entry)
+        if why is not None:
+            raise ManifestProblem(f"{path}: {why}")
+    return doc
+
+
+def lexists_inside(root, entry: str) -> os.stat_result | None:
+    """``lstat`` of ``root/entry`` reached without passing through a symlink (None if missing).
+
+    ``entry`` is a checked manifest entry (:func:`entry_problem`).
+
+    Raises
+    ------
+    ManifestProblem
+        A folder on the way is a symlink or not a folder.
+    """
+    cur = str(root)
+    parts = entry.split("/")
+    for i, part in enumerate(parts):
+        cur = os.path.join(cur, part)
+        try:
+            st = os.lstat(cur)
+        except FileNotFoundError:
+            return None
+        except OSError as exc:
+            raise ManifestProblem(f"{cur}: {exc.strerror or exc}") from None
+        if i < len(parts) - 1:
+            if stat.S_ISLNK(st.st_mode):
+                raise ManifestProblem(f"{cur} is a symbolic link: the entry {short(entry)} would lead outside "
+                                      "the folder")
+            if not stat.S_ISDIR(st.st_mode):
+                return None
+    return st
+
+
+def listed_files(folder, manifest: dict) -> list:
+    """The paths ``folder/entry`` of the manifest's entries that exist, each checked to be a
+    regular file or a symlink reached without passing through a symlink.
+
+    Raises
+    ------
+    ManifestProblem
+        An entry passes through a symlink, or names a folder, a FIFO or a device.
+    """
+    out = []
+    for entry in manifest["files"]:
+        st = lexists_inside(folder, entry)
+        if st is None:
+            continue
+        if not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
+            raise ManifestProblem(f"{Path(folder) / entry} is listed in {MANIFEST} but is not a file")
+        out.append(Path(folder) / entry)
+    return out
+
+
+def folder_files(folder) -> list:
+    """Relative paths (POSIX) of every entry under ``folder`` that is not a folder (files, symlinks
+    - to folders too -, FIFOs...) but the manifest, the lock and staging folders; symlinks are not
+    followed."""
+    folder = Path(folder)
+    out = []
+    for root, dirs, names in os.walk(folder):
+        keep = []
+        for d in dirs:
+            if STAGE in d:
+                continue
+            if os.path.islink(os.path.join(root, d)):
+                names.append(d)          # a symlink to a folder: an entry, never walked
+            else:
+                keep.append(d)
+        dirs[:] = keep
+        for n in names:
+            rel = (Path(root) / n).relative_to(folder).as_posix()
+            if rel not in (MANIFEST, LOCK):
+                out.append(rel)
+    return sorted(out)

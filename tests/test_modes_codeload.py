@@ -1,0 +1,234 @@
+"""Reading never runs code; running code is a choice the user can see (issue 24, critical).
+
+Every controller here leaves a marker file when its module is imported or its class constructed,
+so each test can assert that reading a scenario, a result or a sweep ran nothing.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import textwrap
+
+import pytest
+import yaml
+from click.testing import CliRunner
+
+from snoworm import load_result, load_scenario, load_sweep, run_sweep, simulate
+from snoworm.cli import main
+from snoworm.modes.codeload import allow_code, check_reference, find_module_source, trust_problem
+from snoworm.config.schema import ScenarioError
+from tests.conftest import SCENARIOS
+
+EVIL = """
+    import pathlib
+    pathlib.Path({marker!r}).write_text("imported")
+
+    class Ctl:
+        def __init__(self, params, scenario):
+            pathlib.Path({marker!r} + ".init").write_text("constructed")
+        def __call__(self, obs):
+            return {{"wheel_speed_mps": [0.2] * len(obs.x_m)}}
+"""
+
+
+def cli(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def _scenario(folder, controller, name="s.yaml"):
+    raw = yaml.safe_load((SCENARIOS / "tow6_uniform.yaml").read_text())
+    raw["mode"] = {"type": "controller", "controller": controller, "period_s": 0.1, "params": {}}
+    raw["simulation"]["duration_s"] = 1.0
+    folder.mkdir(parents=True, exist_ok=True)
+    p = folder / name
+    p.write_text(yaml.safe_dump(raw))
+    return p
+
+
+def _controller(path, marker):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(textwrap.dedent(EVIL.format(marker=str(marker))))
+    return path
+
+
+@pytest.fixture
+def marker(tmp_path):
+    return tmp_path / "MARKER"
+
+
+def _ran(marker):
+    return marker.exists() or marker.with_name(marker.name + ".init").exists()
+
+
+def test_reading_a_scenario_never_imports_its_controller(tmp_path, marker):
+    _controller(tmp_path / "proj" / "ctl.py", marker)
+    p = _scenario(tmp_path / "proj", "ctl.py:Ctl")
+    load_scenario(p)
+    r = cli("validate", p)
+    assert r.exit_code == 0, r.output
+    r = cli("validate", SCENARIOS / "tow6_uniform.yaml", "--set", f"mode={{type: controller, controller: "
+            f"'{tmp_path / 'proj' / 'ctl.py'}:Ctl', period_s: 0.1}}", "--allow-code", tmp_path / "proj")
+    assert r.exit_code == 0, r.output
+    r = cli("mobility-map", p, "--xt", "0.7:0.9:2", "--tow", "0", "--out", tmp_path / "mm", "--no-plot")
+    assert r.exit_code == 2                                 # a controller does not roll at one speed
+    assert not _ran(marker)
+
+
+def test_a_sweeps_planning_never_imports_and_the_run_does(tmp_path, marker):
+    _controller(tmp_path / "proj" / "ctl.py", marker)
+    p = _scenario(tmp_path / "proj", "ctl.py:Ctl")
+    r = cli("sweep", p, "--set", "terrain.xt=0.7,0.9,1e9", "--set", "simulation.duration_s=-1", "--out", tmp_path / "s")
+    assert r.exit_code == 2 and "every case of the sweep is invalid" in r.output
+    assert not _ran(marker)
+    table = run_sweep(p, ["terrain.xt=0.8"], out_dir=tmp_path / "ok", progress=False, plot=False)
+    assert table.rows[0]["status"] == "ok" and _ran(marker)
+    marker.unlink()
+    marker.with_name(marker.name + ".init").unlink()
+    load_sweep(tmp_path / "ok")
+    assert not _ran(marker)
+
+
+def test_load_result_never_runs_code_whatever_its_scenario_yaml_says(tmp_path, marker):
+    _controller(tmp_path / "proj" / "ctl.py", marker)
+    res = simulate(load_scenario(_scenario(tmp_path / "proj", "ctl.py:Ctl")))
+    res.write(tmp_path / "run", plot=False)
+    os.unlink(marker)
+    os.unlink(marker.with_name(marker.name + ".init"))
+    # a received folder: its scenario.yaml names a file inside it
+    _controller(tmp_path / "run" / "evil.py", marker)
+    sy = tmp_path / "run" / "scenario.yaml"
+    sy.write_text(sy.read_text().replace(str(tmp_path / "proj" / "ctl.py"), str(tmp_path / "run" / "evil.py")))
+    back = load_result(tmp_path / "run")
+    assert back.scenario.mode.controller.startswith(str(tmp_path / "run" / "evil.py"))
+    assert not _ran(marker)
+    with pytest.raises(ScenarioError, match="load_result"):             # nor later, unless allowed
+        simulate(back.scenario)
+    assert not _ran(marker)
+    simulate(back.scenario, allow_code=[tmp_path / "run"])
+    assert _ran(marker)
+
+
+def test_a_controller_outside_the_scenario_folder_needs_allow_code(tmp_path, marker):
+    _controller(tmp_path / "elsewhere" / "ctl.py", marker)
+    p = _scenario(tmp_path / "proj", "../elsewhere/ctl.py:Ctl")
+    for cmd in (["validate", p], ["run", p, "--out", tmp_path / "o", "--no-plot"],
+                ["sweep", p, "--set", "terrain.xt=0.8", "--out", tmp_path / "s", "--no-plot"]):
+        r = cli(*cmd)
+        assert r.exit_code == 2, r.output
+        assert "outside the scenario's folder" in r.output and "--allow-code" in r.output
+    assert not _ran(marker) and not (tmp_path / "o").exists() and not (tmp_path / "s" / "summary.csv").exists()
+    with pytest.raises(ScenarioError, match="allow"):
+        simulate(load_scenario(p))
+    r = cli("run", p, "--out", tmp_path / "o", "--no-plot", "--allow-code", tmp_path / "elsewhere")
+    assert r.exit_code == 0, r.output
+    assert "running controller code" in r.output                        # the notice (stderr) names the file
+    assert str(tmp_path / "elsewhere" / "ctl.py") in r.output
+    assert _ran(marker)
+
+
+def test_a_symlink_cannot_escape_the_scenario_folder(tmp_path, marker):
+    _controller(tmp_path / "elsewhere" / "ctl.py", marker)
+    (tmp_path / "proj").mkdir()
+    os.symlink(tmp_path / "elsewhere", tmp_path / "proj" / "link")
+    p = _scenario(tmp_path / "proj", "link/ctl.py:Ctl")
+    r = cli("run", p, "--out", tmp_path / "o", "--no-plot")
+    assert r.exit_code == 2 and "outside the scenario's folder" in r.output, r.output
+    assert not _ran(marker)
+
+
+@pytest.mark.parametrize("ref, words", [
+    ("this:C", ["standard library"]),
+    ("builtins:print", ["standard library"]),
+    ("os.path:join", ["standard library"]),
+    ("tests.controller_helpers:schedule", ["no class 'schedule'", "Uniform"]),
+    ("tests.test_modes_codeload:ScenarioError", ["no class 'ScenarioError'"]),      # an import, not a definition
+    ("ctl:Ctl", ["not found"]),
+    ("a" * 5000 + ".py:C", ["longer than"]),
+    ("ctl\x00.py:Ctl", ["NUL"]),
+    ("ctl.txt/x:Ctl", ["does not end in .py"]),
+    ("loop.py:Ctl", ["cannot be used"]),
+    ("dir.py:Ctl", ["not a regular file"]),
+    ("broken.py:Ctl", ["does not parse"]),
+    ("fn.py:Ctl", ["no class 'Ctl'"]),
+])
+def test_bad_references_are_exit_2_naming_the_field_and_run_nothing(tmp_path, capsys, ref, words):
+    (tmp_path / "proj").mkdir()
+    os.symlink("loop.py", tmp_path / "proj" / "loop.py")
+    (tmp_path / "proj" / "dir.py").mkdir()
+    (tmp_path / "proj" / "broken.py").write_text("class Ctl(:\n")
+    (tmp_path / "proj" / "fn.py").write_text("def Ctl(params, scenario):\n    return print\n")
+    p = _scenario(tmp_path / "proj", ref)
+    r = cli("validate", p)
+    assert r.exit_code == 2, r.output
+    assert "mode.controller" in r.output and "internal error" not in r.output
+    for w in words:
+        assert w in r.output
+    assert "Beautiful is better than ugly" not in r.output + capsys.readouterr().out     # `this` never imported
+
+
+def test_a_module_reference_is_found_without_importing_its_packages(tmp_path, marker, monkeypatch):
+    pkg = tmp_path / "mypkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text(f"import pathlib\npathlib.Path({str(marker)!r}).write_text('parent')\n")
+    (pkg / "sub" / "__init__.py").write_text("")
+    _controller(pkg / "sub" / "ctl.py", marker)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert find_module_source("mypkg.sub.ctl", "x") == (pkg / "sub" / "ctl.py").resolve()
+    check_reference("mypkg.sub.ctl:Ctl")
+    load_scenario(_scenario(tmp_path / "proj", "mypkg.sub.ctl:Ctl"))
+    assert not _ran(marker) and "mypkg" not in sys.modules
+    monkeypatch.delitem(sys.modules, "mypkg", raising=False)
+
+
+def test_trust_problem_and_allow_code_nest(tmp_path):
+    f = tmp_path / "a" / "c.py"
+    assert trust_problem(f"{f}:C", tmp_path) is None
+    assert "outside" in trust_problem(f"{f}:C", tmp_path / "b")
+    with allow_code([tmp_path / "a"]):
+        assert trust_problem(f"{f}:C", tmp_path / "b") is None
+        assert trust_problem(f"{f}:C", None) is None
+    assert "load_result" in trust_problem(f"{f}:C", None)
+    assert trust_problem("tests.controller_helpers:Uniform", None) is None    # an installed module: no file rule
+
+
+def test_shipped_example_controllers_still_validate_and_run_from_their_folder(tmp_path):
+    ex = SCENARIOS.parent / "examples" / "controllers" / "tow6_uniform_controller.yaml"
+    r = cli("run", ex, "--out", tmp_path / "o", "--no-plot", "--set", "simulation.duration_s=1")
+    assert r.exit_code == 0, r.output
+    assert "running controller code" in r.output
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())["controller_calls"] > 0
+
+
+HUGE = """
+    import os
+
+    class Ctl:
+        def __init__(self, params, scenario):
+            if params.get("chdir"):
+                os.chdir(params["chdir"])
+        def __call__(self, obs):
+            if obs.t_s > 0.15 and not self.__dict__.get("quiet"):
+                raise RuntimeError("x" * 1_000_000)
+            return {"wheel_speed_mps": [0.5] * len(obs.x_m)}
+"""
+
+
+def test_a_controller_raising_a_1_mb_message_prints_a_short_one(tmp_path):
+    (tmp_path / "proj").mkdir()
+    (tmp_path / "proj" / "ctl.py").write_text(textwrap.dedent(HUGE))
+    p = _scenario(tmp_path / "proj", "ctl.py:Ctl")
+    r = cli("run", p, "--out", tmp_path / "o", "--no-plot")
+    assert r.exit_code == 1 and "controller raised at t = 0.2 s" in r.output, r.output[:500]
+    assert len(r.output) < 5000 and "characters cut" in r.output
+
+
+def test_a_controllers_chdir_does_not_move_a_relative_out(tmp_path, monkeypatch):
+    (tmp_path / "proj").mkdir()
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "proj" / "ctl.py").write_text(textwrap.dedent(HUGE.replace("obs.t_s > 0.15", "obs.t_s > 1e9")))
+    p = _scenario(tmp_path / "proj", "ctl.py:Ctl")
+    monkeypatch.chdir(tmp_path)
+    r = cli("run", p, "--out", "rel_out", "--no-plot", "--set", f"mode.params.chdir={tmp_path / 'elsewhere'}")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "rel_out" / "summary.json").exists() and not (tmp_path / "elsewhere" / "rel_out").exists()
