@@ -14,9 +14,10 @@
 # jupytext (`jupytext --to notebook docs/tutorial.py`; each `# %%` line starts a cell).  It needs
 # the data extra: `pip install 'snoworm[data]'` (pandas, xarray).
 #
-# Nothing here changes the matplotlib backend: snoworm draws on `matplotlib.figure.Figure`
-# objects (yours or its own) and never imports pyplot.  In a notebook, a cell ending with a
-# figure shows it inline.
+# Nothing here changes the matplotlib backend.  A figure drawn without your own `ax`/`fig` comes
+# from pyplot's figure manager, so it shows inline in a notebook (and with `plt.show()` in a
+# script); one drawn on your axes is yours.  `size="column"` (3.5 in) or `"page"` (7.16 in)
+# draws it at print size, every text at least 7 pt.
 
 # %%
 import tempfile
@@ -40,15 +41,17 @@ sc = base.with_({"tow.force_N": 150.0, "simulation.duration_s": 4.0})
 print(sc.name, "-", sc.vehicle.segments, "segments, tow", sc.tow.force_N, "N, X_t", sc.terrain.xt)
 
 # %% [markdown]
-# ## 2. Run it and get tidy tables
-# `to_pandas()` returns one long table per kind: `segments` (a row per time and segment) and
-# `links` (a row per time and link), one column per quantity with its unit in the name.
+# ## 2. Run it and get a table
+# `to_pandas()` returns one DataFrame: a row per output time, columns `(kind, quantity, index)`
+# (`df["segment", "v_mps"]` is time x segment).  The tidy tables of the CSV files are a call
+# away: `segments_frame()` (a row per time and segment) and `links_frame()`.
 
 # %%
 res = snoworm.simulate(sc)
-print(f"mean speed {res.summary()['mean_speed_mps']:.3f} m/s")
-frames = res.to_pandas()
-seg, links = frames["segments"], frames["links"]
+print(repr(res))
+df_run = res.to_pandas()
+print(df_run["segment", "v_mps"].tail(3).round(3))
+seg = res.segments_frame()
 late = seg[seg["t_s"] >= seg["t_s"].max() - 1.0]
 print(late.groupby("segment")[["v_mps", "slip", "net_force_N"]].mean().round(3))
 print("units:", {k: seg.attrs["units"][k] for k in ("v_mps", "net_force_N", "slip")})
@@ -63,8 +66,22 @@ print(ds["force_N"].attrs["units"], ds["force_N"].sel(link=0).isel(time=-1).item
 print(ds.attrs["scenario_yaml"].splitlines()[0], "| snoworm", ds.attrs["version_snoworm"])
 
 # %% [markdown]
-# ## 3. Plot on your own axes
-# Every plotting function (and `Result.plot`) takes `ax=` or `fig=` and returns the Figure.
+# ## 3. Plot
+# `res.plot(kind)` draws one figure (forces, speeds, positions, slip, motor, energy, ...) and
+# returns it; a cell ending with it shows it inline.
+
+# %%
+res.plot("forces", size="column")
+
+# %% [markdown]
+# Several runs on one figure: `plotting.compare`.
+
+# %%
+stronger = snoworm.simulate(sc.with_({"tow.force_N": 300.0}))
+plotting.compare([res, stronger], "speeds", labels=["tow 150 N", "tow 300 N"], size="column")
+
+# %% [markdown]
+# Every plotting function (and `Result.plot`) also takes your own `ax=` or `fig=`.
 
 # %%
 fig = Figure(figsize=(10, 4), layout="constrained")
@@ -96,6 +113,12 @@ plotting.plot_sweep_heatmap([f"{x:g}" for x in grid.columns], [f"{f:g}" for f in
 fig2
 
 # %% [markdown]
+# The table draws its own standard figure too (a heat map for two keys on a grid).
+
+# %%
+table.plot(size="column")
+
+# %% [markdown]
 # ## 5. Load the sweep back
 # `load_sweep` reads a sweep's folder (also one written by `snoworm sweep`); with
 # `series="netcdf"` every case's time series is in one file, dims: swept keys x time x segment.
@@ -109,4 +132,5 @@ print(v_end.round(3).to_pandas())
 assert int(series["ok"].sum()) == len(df)          # every case's series is there
 
 # %% [markdown]
-# To keep a figure: `plotting.save(fig2, "heatmap.pdf")` (png at 200 dpi, pdf or svg).
+# To keep a figure: `plotting.save(fig2, "heatmap.pdf")` (png at 200 dpi, pdf with TrueType
+# fonts, or svg with its text kept as text).

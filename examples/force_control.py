@@ -14,7 +14,7 @@ out = Path(sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="snowor
 sc = snoworm.load_scenario(files("snoworm") / "scenarios" / "pi3_equal.yaml").with_({"simulation.duration_s": 6.0})
 res = snoworm.simulate(sc)
 
-links = res.to_pandas()["links"]
+links = res.links_frame()
 late = links[links["t_s"] >= res.t[-1] - 1.0].groupby("link")["force_N"].mean()
 print(f"{sc.name}: link forces over the last second [N]:", ", ".join(f"{f:.1f}" for f in late))
 paths = [plotting.save(res.plot("force_diagram"), out / "force_diagram.png"),

@@ -21,6 +21,15 @@ def shipped_result(name):
     return simulate(load_scenario(SCENARIOS / f"{name}.yaml"))
 
 
+@pytest.fixture(autouse=True)
+def _close_pyplot_figures():
+    """Figures drawn without ax/fig are pyplot's (as in a notebook): release them after each test."""
+    yield
+    import sys
+    if "matplotlib.pyplot" in sys.modules:
+        sys.modules["matplotlib.pyplot"].close("all")
+
+
 @pytest.fixture
 def scenario_path():
     """Path of a shipped scenario by name."""

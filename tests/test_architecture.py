@@ -26,9 +26,12 @@ DOC = ROOT / "docs" / "architecture.md"
 DOC_TABLE_HEADING = "## The layers, highest first"
 
 #: Dependencies that may be imported inside a function: optional extras, and the heavy imports
-#: that runs not needing them should not pay for at start-up.
+#: that runs not needing them should not pay for at start-up.  ``matplotlib`` covers
+#: ``matplotlib.pyplot``, imported only when a figure is drawn without the user's ax/fig (so it
+#: shows in a notebook or with plt.show(); files are drawn headless and never import it).
+#: ``IPython``: only inside ``NotebookFigure._ipython_display_``, which only IPython calls.
 LAZY_OK = {"dask", "distributed", "pandas", "xarray", "gymnasium", "tqdm", "matplotlib", "threadpoolctl",
-           "multiprocessing", "threading", "concurrent", "snoworm.plotting"}
+           "multiprocessing", "threading", "concurrent", "snoworm.plotting", "IPython"}
 
 
 def _module_name(path: Path) -> str:

@@ -1,11 +1,14 @@
 """The API reference (docs/api.py, ``make docs``) and the tutorial (docs/tutorial.py) build and run.
 
-Both run in a fresh interpreter, as a user would.  The tutorial runs with a non-default
-matplotlib backend set first, which must survive it, and without pyplot ever being imported.
+Both run in a fresh interpreter, as a user would.  The tutorial runs as a script with a
+non-default matplotlib backend set first, which must survive it, and as a notebook in a fresh
+kernel, where its figures must show inline.
 """
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -32,9 +35,54 @@ def test_tutorial_runs_and_keeps_the_backend(tmp_path):
         "matplotlib.use('svg')\n"
         f"g = runpy.run_path({str(ROOT / 'docs' / 'tutorial.py')!r}, run_name='__main__')\n"
         "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
-        "assert 'matplotlib.pyplot' not in sys.modules\n"
         "print('figures', type(g['fig']).__name__, type(g['fig2']).__name__, len(g['df']))\n")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "figures Figure Figure 6" in r.stdout
+    assert list(tmp_path.iterdir()) == []     # it wrote nothing in the working directory
+
+
+def _percent_to_notebook(path):
+    """The percent-format script as a notebook (jupytext's rules for ``# %%`` and
+    ``# %% [markdown]`` cells), without needing jupytext."""
+    import nbformat
+    cells, kind, lines = [], None, []
+
+    def flush():
+        text = "\n".join(lines).strip("\n")
+        if kind == "markdown":
+            cells.append(nbformat.v4.new_markdown_cell("\n".join(ln[2:] if ln.startswith("# ") else ln.lstrip("#")
+                                                                for ln in text.splitlines())))
+        elif kind == "code" and text:
+            cells.append(nbformat.v4.new_code_cell(text))
+
+    for line in Path(path).read_text(encoding="utf-8").splitlines():
+        if line.startswith("# %%"):
+            flush()
+            kind, lines = ("markdown" if "[markdown]" in line else "code"), []
+        elif kind is not None:
+            lines.append(line)
+    flush()
+    return nbformat.v4.new_notebook(cells=cells)
+
+
+def test_tutorial_as_a_notebook_shows_its_figures(tmp_path, monkeypatch):
+    """Executed headless in a fresh kernel (nbclient, ipykernel), as a user would open it: the
+    cells ending with a figure show it inline (an image/png output, once), and nothing else
+    fails.  No `%matplotlib inline` anywhere: the kernel's default backend does it."""
+    pytest.importorskip("nbclient")
+    from nbclient import NotebookClient
+    monkeypatch.delenv("MPLBACKEND", raising=False)      # the kernel picks its own inline backend
+    nb = _percent_to_notebook(ROOT / "docs" / "tutorial.py")
+    assert "%matplotlib" not in "".join(c.source for c in nb.cells)
+    NotebookClient(nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}).execute()
+    plot_cells = [c for c in nb.cells if c.cell_type == "code" and c.source.splitlines()[-1].split("#")[0].strip()
+                  in ("fig", "fig2") or c.source.splitlines()[-1].startswith(("res.plot(", "plotting.compare(",
+                                                                               "table.plot("))]
+    assert len(plot_cells) >= 5
+    for c in plot_cells:
+        images = [o for o in c.outputs if "image/png" in o.get("data", {})]
+        assert len(images) == 1, (c.source.splitlines()[-1], [o.get("output_type") for o in c.outputs])
+    errors = [o for c in nb.cells for o in c.get("outputs", ()) if o.get("output_type") == "error"]
+    assert not errors
     assert list(tmp_path.iterdir()) == []     # it wrote nothing in the working directory

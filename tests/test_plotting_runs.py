@@ -34,7 +34,7 @@ def test_inchworm_speeds_one_panel_per_moving_group(inch):
     for a in panels:     # the two traces of a pair overlap: they differ in colour, line style and marker
         l1, l2 = a.get_lines()[:2]
         assert l1.get_color() != l2.get_color() and l1.get_marker() != l2.get_marker()
-    chart = [a for a in fig.axes if a.get_ylabel() == "segment"]
+    chart = [a for a in fig.axes if a.get_ylabel().startswith("segment")]
     assert len(chart) == 1 and len(chart[0].get_yticklabels()) == 6     # set-points as a chart, a row each
 
 
@@ -48,8 +48,13 @@ def test_uniform_speeds_one_panel(uniform):
     assert len(fig.axes[-1].get_lines()) == 6
 
 
-def test_legends_outside_the_data(uniform):
-    fig = runs.plot_forces(uniform)
+@pytest.fixture(scope="module")
+def three():
+    return simulate(load_scenario(SCENARIOS / "pi3_equal.yaml", ["simulation.duration_s=2"]))
+
+
+def test_legends_outside_the_data(three):
+    fig = runs.plot_forces(three)
     fig.draw_without_rendering()
     for a in fig.axes:
         leg = a.get_legend()
@@ -57,12 +62,46 @@ def test_legends_outside_the_data(uniform):
         assert leg.get_window_extent().x0 >= a.get_window_extent().x1 - 1e-6
 
 
+def test_many_links_get_small_multiples_and_shaded_phases(inch):
+    """Six segments of an inchworm gait: a panel per link and per segment (shared axes), and the
+    gait phases as shaded spans (not a line per phase change)."""
+    fig = runs.plot_forces(inch)
+    visible = [a for a in fig.axes if a.get_visible()]
+    assert len(visible) == 5 + 6
+    texts = sorted(t.get_text() for a in visible for t in a.texts)
+    assert texts == sorted([f"link {j} ({j}-{j + 1})" for j in range(5)] + ["leader 0"]
+                           + [f"follower {k}" for k in range(1, 6)])
+    assert all(len(a.get_lines()) <= 2 for a in visible)      # the series and the zero line
+    spans = runs.gait_spans(inch)
+    assert len(spans) >= 3 and {k for *_, k, _ in spans} == {0, 1, 2}
+    assert all(t1 > t0 for t0, t1, *_ in spans)
+    pos = runs.plot_positions(inch)
+    assert not [ln for ln in pos.axes[0].get_lines() if ln.get_label().startswith("_child")
+                and np.ptp(ln.get_xdata()) == 0]                 # no vertical line per phase
+
+
+def test_tow_far_off_scale_is_a_note_not_a_line(three):
+    F = three.links["force_N"]
+    for tow, line in ((1e5, False), (float(F.max()), True)):
+        a = Figure().subplots()
+        a.plot(three.t, F)
+        runs._tow_line(a, tow, F)
+        assert bool([ln for ln in a.get_lines() if ln.get_label() == "tow"]) is line
+        assert any("off scale" in t.get_text() for t in a.texts) is not line
+        assert a.get_ylim()[1] < F.max() + 0.5 * np.ptp(F) + 1     # the link traces keep the scale
+
+
+def test_supervisor_gets_one_speed_panel_per_moving_group():
+    sup = simulate(load_scenario(SCENARIOS / "traverse_patch.yaml", ["simulation.duration_s=2"]))
+    assert runs.moving_groups(sup) == [(0, 3), (1, 4), (2, 5)]
+
+
 def test_positions_side_panel_only_when_terrain_varies(uniform):
     assert len(runs.plot_positions(uniform).axes) == 1
     patch = load_scenario(SCENARIOS / "tow6_uniform.yaml", [
         "simulation.duration_s=1", ("terrain.patches", [{"start_m": -4.0, "end_m": -2.0, "xt": 0.5, "ramp_m": 0.5}])])
     fig = runs.plot_positions(simulate(patch))
-    assert len(fig.axes) == 2 and fig.axes[0].get_xlabel() == "terrain coefficient X_t"
+    assert len(fig.axes) == 2 and fig.axes[0].get_xlabel() == "X_t"
 
 
 def test_draws_on_the_users_axes(uniform):
@@ -83,7 +122,7 @@ def test_force_diagram_never_prints_minus_zero(uniform):
     fig = runs.plot_force_diagram(res)
     texts = [t.get_text() for t in fig.axes[0].texts]
     assert any("0.0 N" in t for t in texts)
-    assert not [t for t in texts if "-0.0" in t]
+    assert not [t for t in texts if "-0.0" in t or "\u22120.0" in t]
 
 
 @pytest.mark.parametrize("fmt, magic", [("svg", b"<?xml"), ("pdf", b"%PDF-")])

@@ -20,8 +20,8 @@ def test_quantity_label_words_and_units(key, label):
     assert "." not in quantity_label(key).split("[")[0]      # no dotted keys left
 
 
-@pytest.mark.parametrize("value, text", [(-0.04, "0.0 N"), (-0.0, "0.0 N"), (0.049, "0.0 N"), (-1.26, "-1.3 N"),
-                                         (2, "+2.0 N"), (-165.33, "-165.3 N")])
+@pytest.mark.parametrize("value, text", [(-0.04, "0.0 N"), (-0.0, "0.0 N"), (0.049, "0.0 N"), (-1.26, "\u22121.3 N"),
+                                         (2, "+2.0 N"), (-165.33, "\u2212165.3 N")])
 def test_force_text_never_prints_minus_zero(value, text):
     assert force_text(value) == text
 
@@ -62,3 +62,74 @@ def test_new_figure_uses_the_given_axes_or_figure():
     assert fig2 is user and got2.shape == (1, 3) and len(user.axes) == 5
     fig3, _ = new_figure()
     assert isinstance(fig3, Figure) and fig3 is not user
+
+
+# ---------------------------------------------------------------------------- print sizes and fonts
+import re  # noqa: E402
+
+import matplotlib  # noqa: E402
+
+from snoworm import load_scenario, simulate  # noqa: E402
+from snoworm.plotting import FIGURE_SIZES, PLOT_KINDS, figure_style, headless, parse_size, plot_result  # noqa: E402
+from tests.conftest import SCENARIOS  # noqa: E402
+from tests.figure_checks import problems  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def runs():
+    return {n: simulate(load_scenario(SCENARIOS / f"{n}.yaml", ["simulation.duration_s=4"]))
+            for n in ("inchworm6", "pi3_equal", "tow6_uniform")}
+
+
+@pytest.mark.parametrize("size", ["column", "page"])
+def test_every_run_figure_is_readable_at_print_size(runs, size):
+    """Width, text >= 7 pt, no label overlapping another, everything inside the figure."""
+    with headless():
+        for name, res in runs.items():
+            for kind, draw in PLOT_KINDS.items():
+                fig = draw(res, size=size)
+                assert problems(fig, FIGURE_SIZES[size]) == [], (name, kind)
+
+
+def test_sizes_parse_and_bad_ones_say_the_rule():
+    assert parse_size("column") == 3.5 and parse_size("PAGE") == 7.16 and parse_size(None) is None
+    assert parse_size("3.5x2.25") == (3.5, 2.25) and parse_size((4, 3)) == (4.0, 3.0)
+    for bad in ("colum", "3.5", "0.2x3", "3x100"):
+        with pytest.raises(ValueError, match="figure size"):
+            parse_size(bad)
+
+
+def test_style_never_changes_the_users_rcparams(runs):
+    before = dict(matplotlib.rcParams)
+    with headless():
+        fig = runs["pi3_equal"].plot("forces", size="column")
+    assert dict(matplotlib.rcParams) == before
+    assert fig.get_size_inches()[0] == 3.5
+    with figure_style("column"):
+        assert matplotlib.rcParams["pdf.fonttype"] == 42 and matplotlib.rcParams["svg.fonttype"] == "none"
+    assert dict(matplotlib.rcParams) == before
+
+
+def test_pdf_embeds_truetype_and_svg_keeps_text(runs, tmp_path):
+    """Column-width PDFs: 3.5 in (252 pt) wide, fonts TrueType (FontFile2), no Type 3; SVGs hold <text>."""
+    res = runs["inchworm6"]
+    pdfs = plot_result(res, tmp_path / "pdf", "pdf", size="column")
+    for p in pdfs:
+        data = p.read_bytes()
+        assert b"/Subtype /Type3" not in data, p.name
+        # fonttype 42: TrueType outlines (FontFile2), as a simple TrueType or a CID font over TrueType
+        assert b"/FontFile2" in data and (b"/Subtype /TrueType" in data or b"/Subtype /CIDFontType2" in data), p.name
+        box = re.search(rb"/MediaBox \[\s*0 0 ([0-9.]+) ([0-9.]+)\s*\]", data)
+        assert box and float(box.group(1)) == pytest.approx(252.0, abs=0.01), p.name
+    svgs = plot_result(res, tmp_path / "svg", "svg", size="3.5x3")
+    for p in svgs:
+        text = p.read_text(encoding="utf-8")
+        assert "<text" in text, p.name
+        assert 'width="252pt"' in text, p.name
+
+
+def test_save_embeds_truetype_for_figures_drawn_elsewhere(tmp_path):
+    fig = Figure(figsize=(3.5, 2))
+    fig.subplots().set_title("−resistance")
+    data = save(fig, tmp_path / "own.pdf").read_bytes()
+    assert b"/Subtype /Type3" not in data and b"/FontFile2" in data

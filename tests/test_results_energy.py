@@ -39,3 +39,17 @@ def test_energy_balance_inching(scenario_path):
     assert abs(b["residual_J"]) < 5e-3 * b["throughput_J"]
     e = energy_metrics(res)
     assert e["joint_electrical_total_J"] == pytest.approx(sum(e["joint_mechanical_J"]) / 0.7, rel=1e-12)
+
+
+def test_energy_along_ends_at_the_metrics_totals(scenario_path):
+    """The cumulative energy (trapezoids summed step by step) ends at energy_metrics' totals (the
+    same trapezoids summed by numpy: equal to rounding, 1e-9 relative), never decreases, starts at 0."""
+    import numpy as np
+    from snoworm.results.energy import energy_along
+    res = simulate(load_scenario(scenario_path("inchworm2"), ["simulation.duration_s=4"]))
+    e, m = energy_along(res), energy_metrics(res)
+    assert e["total_electrical_J"][0] == 0.0 and np.all(np.diff(e["total_electrical_J"]) >= 0)
+    assert e["motor_electrical_J"][-1] == pytest.approx(m["motor_electrical_total_J"], rel=1e-9)
+    assert e["joint_electrical_J"][-1] == pytest.approx(m["joint_electrical_total_J"], rel=1e-9)
+    assert m["joint_electrical_total_J"] > 0                     # inching: the joints do work
+    assert e["distance_m"][-1] == pytest.approx(m["distance_m"], rel=1e-12)

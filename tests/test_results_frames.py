@@ -18,6 +18,14 @@ def res():
     return simulate(load_scenario(SCENARIOS / "tow6_uniform.yaml", ["simulation.duration_s=2"]))
 
 
+def test_repr_is_short_and_says_what_ran(res):
+    text = repr(res)
+    assert len(text) <= 500
+    for part in ("tow6_uniform", "6 segments", "mode uniform", "2 s", "distance", "solver"):
+        assert part in text, part
+    assert f"{res.summary()['distance_m']:.3f} m" in text
+
+
 def test_units_read_from_the_descriptions():
     u = units_of(SEGMENT_COLUMNS)
     assert u["v_mps"] == "m/s" and u["traction_N"] == "N" and u["motor_torque_Nm"] == "N m"
@@ -25,9 +33,23 @@ def test_units_read_from_the_descriptions():
     assert units_of(LINK_COLUMNS)["force_N"] == "N"
 
 
-def test_to_pandas_tidy_tables(res):
-    frames = res.to_pandas()
-    seg, lk = frames["segments"], frames["links"]
+def test_to_pandas_is_one_frame_with_a_column_multiindex(res):
+    df = res.to_pandas()
+    assert isinstance(df, pd.DataFrame)
+    assert df.index.name == "t_s" and len(df) == res.t.size
+    np.testing.assert_array_equal(df.index.to_numpy(), res.t)
+    assert df.columns.names == ["kind", "quantity", "index"]
+    assert df.shape[1] == 6 * len(SEGMENT_COLUMNS) + 5 * len(LINK_COLUMNS)
+    np.testing.assert_array_equal(df["segment", "v_mps"].to_numpy(), res.segments["v_mps"])
+    np.testing.assert_array_equal(df["link", "force_N"].to_numpy(), res.links["force_N"])
+    seg2 = df.xs(2, axis=1, level="index")["segment"]
+    np.testing.assert_array_equal(seg2["slip"].to_numpy(), res.segments["slip"][:, 2])
+    assert df.attrs["units"]["segment"]["v_mps"] == "m/s" and df.attrs["units"]["link"]["force_N"] == "N"
+    assert len(df.head()) == 5
+
+
+def test_tidy_tables_a_call_away(res):
+    seg, lk = res.segments_frame(), res.links_frame()
     n_t = res.t.size
     assert list(seg.columns) == ["t_s", "segment", *SEGMENT_COLUMNS]
     assert list(lk.columns) == ["t_s", "link", *LINK_COLUMNS]
@@ -44,7 +66,7 @@ def test_to_pandas_tidy_tables(res):
 def test_to_pandas_matches_the_csv(res):
     """The CSV is the same table, at its printed precision (times 4 decimals, values 6 significant digits)."""
     csv = pd.read_csv(io.StringIO(res.segments_csv()))
-    df = res.to_pandas()["segments"]
+    df = res.segments_frame()
     assert list(csv.columns) == list(df.columns)
     np.testing.assert_allclose(csv["t_s"], df["t_s"], rtol=0, atol=5e-5)
     np.testing.assert_allclose(csv.iloc[:, 1:].to_numpy(float), df.iloc[:, 1:].to_numpy(float), rtol=5e-6, atol=0)

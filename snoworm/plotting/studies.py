@@ -8,12 +8,14 @@ from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from .style import COLOURS, LINESTYLES, MARKERS, legend_outside, new_figure, quantity_label
+from .style import (COLOURS, LINESTYLES, MARKERS, figure_function, legend_outside, new_figure, quantity_label,
+                    small_pt, target_width, wrap_title)
 
 __all__ = ["plot_table2", "plot_terrain_curves", "plot_sweep", "plot_sweep_heatmap", "plot_mobility_map",
            "plot_gradeability"]
 
 
+@figure_function
 def plot_table2(rows, *, ax=None, fig=None):
     """Measured against modelled slip and torque per field case (paper Table 2); two panels."""
     lab = [str(r["case"]) for r in rows]
@@ -32,35 +34,41 @@ def plot_table2(rows, *, ax=None, fig=None):
         a.set_xticks(x, [f"{c}\nX_t={r['xt']:g}" for c, r in zip(lab, rows)])
         a.set_xlabel("case")
         a.grid(alpha=0.3, axis="y")
-        a.legend(fontsize=8)
-    fig.suptitle("FrostyBoy field cases (paper Table 2): measured vs steady-state model", fontsize=10)
+        a.legend()
+    fig.suptitle(wrap_title("FrostyBoy field cases (paper Table 2): measured vs steady-state model", fig.get_figwidth(),
+                            "figure.titlesize"))
     return fig
 
 
-def plot_terrain_curves(curves, *, ax=None, fig=None):
-    """Tractive, resistive and net force per wheel against slip at each X_t (paper Figure 3)."""
+@figure_function
+def plot_terrain_curves(curves, title=None, *, ax=None, fig=None):
+    """Tractive, resistive and net force per wheel against slip at each X_t (paper Figure 3).
+
+    ``title``: the figure's title (default: the normal load and direction)."""
     fig, axes = new_figure(ax, fig, 1, 1, figsize=(9, 5))
     a = axes[0, 0]
     for m, x in enumerate(curves.xt):
         col = COLOURS[m % len(COLOURS)]
         s = 100 * curves.slip
         a.plot(s, curves.traction_N[m], color=col, ls="--", lw=1, label=f"traction, X_t={x:g}")
-        a.plot(s, -curves.resistance_N[m], color=col, ls=":", lw=1, label=f"-resistance, X_t={x:g}")
+        a.plot(s, -curves.resistance_N[m], color=col, ls=":", lw=1, label=f"\u2212resistance, X_t={x:g}")
         a.plot(s, curves.net_N[m], color=col, lw=2, label=f"net, X_t={x:g}")
         zc = curves.zero_crossing_slip[m]
         if np.isfinite(zc):
             a.plot([100 * zc], [0.0], "o", color=col, ms=7, mfc="none")
             a.annotate(f"{100 * zc:.2f} %", (100 * zc, 0.0), textcoords="offset points", xytext=(6, -14),
-                       color=col, fontsize=8)
+                       color=col, fontsize=small_pt())
     a.axhline(0.0, color="0.4", lw=0.8)
     a.set_xlabel("slip [%]")
     a.set_ylabel("longitudinal force per wheel [N]")
-    a.set_title(f"Terrain forces per wheel (F_n = {curves.normal_load_N:.1f} N), forward motion", fontsize=10)
+    a.set_title(wrap_title(title or f"Terrain forces per wheel (F_n = {curves.normal_load_N:.1f} N), forward motion",
+                           fig.get_figwidth()))
     a.grid(alpha=0.3)
     legend_outside(a, ncol=1 if len(curves.xt) < 4 else 2)
     return fig
 
 
+@figure_function
 def plot_sweep(x, metrics, xlabel, immobilised=None, ok=None, tick_labels=None, *, ax=None, fig=None):
     """Metrics of a one-axis sweep against the swept value (``sweep.png``), one panel per metric.
 
@@ -99,21 +107,23 @@ def plot_sweep(x, metrics, xlabel, immobilised=None, ok=None, tick_labels=None, 
             m = np.array([bool(v) for v in immobilised])
             if m.any():
                 a.plot(x[m], y[m], "x", color=COLOURS[3], ms=8, mew=2, label="immobilised")
-                a.legend(fontsize=8, loc="best")
+                a.legend(loc="best")
         if ok is not None:
             for xv, good in zip(x, ok):
                 if not good:
                     a.axvline(xv, color="0.6", ls=":", lw=1)
-        a.set_ylabel(quantity_label(name), fontsize=9)
+        a.set_ylabel(quantity_label(name))
         a.grid(alpha=0.3)
     axs[-1, 0].set_xlabel(quantity_label(xlabel))
     if tick_labels is not None:
         axs[-1, 0].set_xticks(x, tick_labels)
-    axs[0, 0].set_title(f"sweep over the {quantity_label(xlabel)}"
-                        + (" (dotted lines: failed cases)" if ok is not None and not all(ok) else ""), fontsize=10)
+    axs[0, 0].set_title(wrap_title(f"sweep over the {quantity_label(xlabel)}"
+                                   + (" (dotted lines: failed cases)" if ok is not None and not all(ok) else ""),
+                                   fig.get_figwidth()))
     return fig
 
 
+@figure_function
 def plot_sweep_heatmap(x_labels, y_labels, values, xlabel, ylabel, label, immobilised=None, failed=None, *,
                        ax=None, fig=None):
     """Heat map of one metric over a two-axis sweep (``heatmap.png``).
@@ -150,12 +160,12 @@ def plot_sweep_heatmap(x_labels, y_labels, values, xlabel, ylabel, label, immobi
                 col = "white" if v[j, k] < mid else "black"
             else:
                 continue
-            a.text(k, j, txt, ha="center", va="center", fontsize=7, color=col)
+            a.text(k, j, txt, ha="center", va="center", fontsize=small_pt(), color=col)
     a.set_xticks(range(nx), x_labels, rotation=45 if nx > 8 else 0)
     a.set_yticks(range(ny), y_labels)
     a.set_xlabel(quantity_label(xlabel))
     a.set_ylabel(quantity_label(ylabel))
-    a.set_title(f"{label} over {quantity_label(xlabel)} and {quantity_label(ylabel)}", fontsize=9)
+    a.set_title(wrap_title(f"{label} over {quantity_label(xlabel)} and {quantity_label(ylabel)}", fig.get_figwidth()))
     return fig
 
 
@@ -168,6 +178,7 @@ def _cell_edges(v):
     return np.concatenate([[v[0]], (v[:-1] + v[1:]) / 2, [v[-1]]])
 
 
+@figure_function
 def plot_mobility_map(mmap, *, ax=None, fig=None):
     """Mobility map: regions (rolling, inching only, immobile) over X_t and tow, and energy per metre.
 
@@ -187,8 +198,9 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     for r in mmap["rows"]:
         Z[list(tows).index(r["tow_N"]), list(xts).index(r["xt"])] = code[r["region"]]
     colours = ["#d9d9d9", COLOURS[1], COLOURS[5]]
-    fig, axes = new_figure(ax, fig, 1, 2, figsize=(13, 4.8))
-    a1, a2 = axes[0]
+    narrow = ax is None and target_width() < 5.0          # a column: the two panels one above the other
+    fig, axes = new_figure(ax, fig, *((2, 1) if narrow else (1, 2)), figsize=(3.5, 5.6) if narrow else (13, 4.8))
+    a1, a2 = axes.flat
     xe, ye = _cell_edges(xts), _cell_edges(tows)
     a1.pcolormesh(xe, ye, Z, cmap=ListedColormap(colours[:len(REGIONS)]), vmin=-0.5, vmax=len(REGIONS) - 0.5,
                   edgecolors="white", lw=0.5)
@@ -210,7 +222,7 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     a1.set_ylabel("tow force [N]")
     if tows.size == 1:
         a1.set_yticks([tows[0]])
-    a1.set_title(f"{mmap['scenario']}: which modes move the vehicle", fontsize=10)
+    a1.set_title(wrap_title(f"{mmap['scenario']}: which modes move the vehicle", fig.get_figwidth() / (2 - narrow)))
     for j, f in enumerate(mmap["tows"]):
         rs = sorted((r for r in mmap["rows"] if r["tow_N"] == f), key=lambda r: r["xt"])
         xr = [r["xt"] for r in rs if r["rolling"]]
@@ -228,7 +240,8 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     a2.grid(alpha=0.3, which="both")
     if a2.get_legend_handles_labels()[0]:
         legend_outside(a2)
-    a2.set_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)", fontsize=10)
+    a2.set_title(wrap_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)",
+                            fig.get_figwidth() / (2 - narrow)))
     return fig
 
 
@@ -259,20 +272,22 @@ def _plot_grade_map(mmap, *, ax=None, fig=None):
         a.set_ylim(ye[0], ye[-1])
         a.set_xlabel("terrain coefficient X_t")
         a.set_ylabel("grade [deg]")
-        a.set_title(f"{mmap['scenario']}, tow {f:g} N", fontsize=10)
+        a.set_title(f"{mmap['scenario']}, tow {f:g} N")
     handles = [Patch(color=c, label=lab) for c, lab in zip(_REGION_COLOURS, REGIONS)]
     handles += axes[0][-1].get_legend_handles_labels()[0]
     legend_outside(axes[0][-1], handles=handles)
     return fig
 
 
+@figure_function
 def plot_gradeability(mmap, *, ax=None, fig=None):
     """Gradeability: the steepest grade climbed against X_t, one curve per gait (rolling: its steady
     limit; each inchworm gait: the steepest grid grade it climbed), and the electrical energy per
     metre climbed at that grade (``mmap["gradeability"]``, :func:`snoworm.gradeability.gradeability`).
     A colour per gait, a line style per tow.  ``ax``: two axes.  Returns the Figure."""
-    fig, axes = new_figure(ax, fig, 1, 2, figsize=(13, 4.8))
-    a1, a2 = axes[0]
+    narrow = ax is None and target_width() < 5.0          # a column: the two panels one above the other
+    fig, axes = new_figure(ax, fig, *((2, 1) if narrow else (1, 2)), figsize=(3.5, 5.6) if narrow else (13, 4.8))
+    a1, a2 = axes.flat
     for j, f in enumerate(mmap["tows"]):
         g = mmap["gradeability"][f]
         ls = LINESTYLES[j % len(LINESTYLES)]
@@ -291,10 +306,11 @@ def plot_gradeability(mmap, *, ax=None, fig=None):
     a1.set_ylim(min(grades) - 1, max(grades) + 1)
     a1.set_xlabel("terrain coefficient X_t")
     a1.set_ylabel("steepest grade climbed [deg]")
-    a1.set_title(f"{mmap['scenario']}: gradeability (grid {min(grades):g} to {max(grades):g} deg)", fontsize=10)
+    a1.set_title(wrap_title(f"{mmap['scenario']}: gradeability (grid {min(grades):g} to {max(grades):g} deg)",
+                            fig.get_figwidth() / (2 - narrow)))
     a2.set_xlabel("terrain coefficient X_t")
     a2.set_ylabel("electrical energy per metre climbed [J/m]")
-    a2.set_title("at the steepest grid grade climbed", fontsize=10)
+    a2.set_title(wrap_title("at the steepest grid grade climbed", fig.get_figwidth() / (2 - narrow)))
     if a2.get_lines():
         a2.set_yscale("log")
     for a in (a1, a2):

@@ -1,22 +1,41 @@
 """The figures' style and plumbing: colour-blind-safe colours, line styles and markers, axis
-labels in words with units, figures without pyplot, atomic saving.
+labels in words with units, print sizes, figures for notebooks and for files, atomic saving.
 
-The library never touches the matplotlib backend or pyplot's global state: figures are
-:class:`matplotlib.figure.Figure` objects created directly (or the user's own, through ``ax=``
-or ``fig=``) and saved through a canvas chosen by the file format.
+The library never selects the matplotlib backend nor changes the user's ``rcParams``:
+
+* A figure drawn on the user's axes (``ax=``) or figure (``fig=``) is the user's.
+* A figure drawn without either is created through pyplot's figure manager
+  (``pyplot.figure``, as python-control does), so it shows inline in Jupyter and with
+  ``plt.show()`` in a script, with whatever backend the user has (pyplot's own choice).
+* Figures drawn only to be written to files (:func:`headless`, used by :func:`write_figure`,
+  the CLI, sweeps and the paper report) are bare :class:`matplotlib.figure.Figure` objects:
+  pyplot is not imported, no window opens, nothing is left for pyplot to release.
+
+Every plotting function draws inside snoworm's own style (:func:`figure_style`, a
+:func:`matplotlib.rc_context`): font sizes for print, TrueType fonts in PDF (``pdf.fonttype``
+42, no Type 3 fonts) and text kept as ``<text>`` in SVG (``svg.fonttype`` ``none``); :func:`save`
+applies the same font settings while writing.
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
+import functools
+import io
 import re
+import textwrap
 from pathlib import Path
 
+import matplotlib
 import numpy as np
+from matplotlib._pylab_helpers import Gcf
 from matplotlib.figure import Figure
 
 from ..infra.folders import atomic_path
 
-__all__ = ["COLOURS", "LINESTYLES", "MARKERS", "PLOT_FORMATS", "DPI", "series_style", "new_figure", "save",
-           "quantity_label", "force_text", "legend_outside"]
+__all__ = ["COLOURS", "LINESTYLES", "MARKERS", "PLOT_FORMATS", "DPI", "FIGURE_SIZES", "series_style", "new_figure",
+           "save", "quantity_label", "force_text", "legend_outside", "figure_style", "headless", "figure_function",
+           "parse_size", "write_figure", "NotebookFigure", "blank_figure", "small_pt", "wrap_title", "target_width"]
 
 #: Okabe & Ito (2008) colour-blind-safe palette (yellow last: it is faint on white).
 COLOURS = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#000000", "#F0E442")
@@ -28,6 +47,143 @@ MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*")
 PLOT_FORMATS = ("png", "pdf", "svg")
 #: Resolution of raster (PNG) figures [dots per inch].
 DPI = 200
+#: Named print widths [in]: a journal's single column and full page width (IEEE: 3.5 and 7.16 in).
+FIGURE_SIZES = {"column": 3.5, "page": 7.16}
+#: Font settings applied while drawing and saving (TrueType in PDF/PS, text as text in SVG).
+FONT_RC = {"pdf.fonttype": 42, "ps.fonttype": 42, "svg.fonttype": "none"}
+#: Font sizes [pt] at print size: (text, small text) for column-width and wider figures; the
+#: smallest text of every figure is ``small`` (>= 7 pt, the usual journal minimum).
+_FONT_PT = {"column": (8.0, 7.0), "wide": (9.0, 8.0)}
+
+_HEADLESS = contextvars.ContextVar("snoworm_headless", default=False)
+_SIZE = contextvars.ContextVar("snoworm_size", default=None)
+
+
+def parse_size(size):
+    """``None``, ``"column"``, ``"page"``, ``"WxH"`` (inches, e.g. ``"3.5x2.6"``) or a (W, H) pair
+    -> ``None``, a width [in] or a (width, height) pair [in].
+
+    Raises ``ValueError`` naming the rule for anything else.
+    """
+    if size is None:
+        return None
+    if isinstance(size, str):
+        key = size.strip().lower()
+        if key in FIGURE_SIZES:
+            return FIGURE_SIZES[key]
+        m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*[x×]\s*([0-9]*\.?[0-9]+)\s*", key)
+        if not m:
+            raise ValueError(f"figure size {size!r}: expected column, page or WxH in inches (e.g. 3.5x2.5)")
+        size = (float(m.group(1)), float(m.group(2)))
+    w, h = (float(v) for v in size)
+    if not (1.0 <= w <= 40.0 and 1.0 <= h <= 40.0):
+        raise ValueError(f"figure size {w:g}x{h:g} in: width and height must lie in 1..40 inches")
+    return (w, h)
+
+
+def _width(size) -> float:
+    s = parse_size(size)
+    if s is None:
+        return FIGURE_SIZES["page"]
+    return s if isinstance(s, float) else s[0]
+
+
+def target_width() -> float:
+    """The width [in] of a new figure at the current ``size=`` (page width by default)."""
+    return _width(_SIZE.get())
+
+
+def style_rc(size=None) -> dict:
+    """The rcParams of snoworm's figures at ``size`` (see :func:`parse_size`)."""
+    big, small = _FONT_PT["column" if _width(size) < 5.0 else "wide"]
+    return {**FONT_RC, "font.size": big, "axes.titlesize": big, "axes.labelsize": big, "figure.titlesize": big + 1,
+            "xtick.labelsize": small, "ytick.labelsize": small, "legend.fontsize": small,
+            "legend.title_fontsize": small, "lines.linewidth": 1.2 if big < 9 else 1.4, "lines.markersize": 3.5,
+            "axes.linewidth": 0.6, "grid.linewidth": 0.5, "xtick.major.width": 0.6, "ytick.major.width": 0.6,
+            "figure.constrained_layout.h_pad": 0.03, "figure.constrained_layout.w_pad": 0.03,
+            "legend.borderaxespad": 0.3, "legend.handlelength": 1.8, "legend.columnspacing": 1.0}
+
+
+def figure_style(size=None):
+    """snoworm's style as a context manager (:func:`matplotlib.rc_context`; the user's rcParams
+    come back on exit): print font sizes for ``size``, TrueType in PDF, text as text in SVG.
+    Use it around your own ``fig.savefig(...)`` to embed the fonts the same way :func:`save` does."""
+    return matplotlib.rc_context(style_rc(size))
+
+
+@contextlib.contextmanager
+def headless():
+    """Figures created inside are bare :class:`~matplotlib.figure.Figure` objects (for files):
+    pyplot is not imported and no window can open."""
+    token = _HEADLESS.set(True)
+    try:
+        yield
+    finally:
+        _HEADLESS.reset(token)
+
+
+def figure_function(fn):
+    """Decorator of the plotting functions: a ``size=`` keyword (see :func:`parse_size`) and
+    drawing inside :func:`figure_style` at that size."""
+    @functools.wraps(fn)
+    def wrapper(*args, size=None, **kwargs):
+        parse_size(size)                      # a bad size fails before any drawing
+        token = _SIZE.set(size)
+        try:
+            with figure_style(size):
+                return fn(*args, **kwargs)
+        finally:
+            _SIZE.reset(token)
+    return wrapper
+
+
+def figure_size(natural, rows=1, row_in=None):
+    """The size [in] of a new figure: the current ``size=`` (:func:`figure_function`) or, for a
+    width alone, the figure's ``natural`` (width, height) scaled to that width with room for
+    ``rows`` panels of readable height (``row_in`` inches each; print-size fonts do not shrink
+    with the figure)."""
+    s = parse_size(_SIZE.get())
+    if isinstance(s, tuple):
+        return s
+    w = FIGURE_SIZES["page"] if s is None else s
+    nat_w, nat_h = natural
+    per_row = row_in or (1.3 if w < 5.0 else 1.5)
+    h = max(nat_h * w / nat_w, per_row * rows + 0.8, 0.7 * w if rows == 1 else 0.0)
+    return (w, float(min(h, 9.5)))
+
+
+class NotebookFigure(Figure):
+    """The Figure class of snoworm's own figures: a :class:`matplotlib.figure.Figure` that
+    IPython/Jupyter shows exactly once.
+
+    A cell ending with a figure is shown by IPython's display hook, and pyplot's inline backend
+    shows every figure it manages again after the cell; IPython calls this class's
+    ``_ipython_display_`` for both, which shows the figure as a PNG and releases it from pyplot
+    (as the inline backend does after showing it).  A figure an interactive backend shows itself
+    (Qt, Tk, ipympl widgets, ...) is left to it.
+    """
+
+    def _shown_by_its_manager(self) -> bool:
+        c = self.canvas
+        return c.manager is not None and (getattr(c, "required_interactive_framework", None) is not None
+                                          or any(k in type(c).__module__ for k in ("ipympl", "nbagg", "webagg")))
+
+    def _ipython_display_(self):
+        if self._shown_by_its_manager():
+            return
+        from IPython.display import display  # lazy: only IPython calls this method, so it is there
+        buf = io.BytesIO()
+        self.savefig(buf, format="png", bbox_inches="tight", facecolor="white")
+        display({"image/png": buf.getvalue(), "text/plain": repr(self)}, raw=True)
+        if self.canvas.manager is not None:
+            Gcf.destroy_fig(self)     # shown: the inline backend would show it again after the cell
+
+
+def _create(figsize):
+    if _HEADLESS.get():
+        return NotebookFigure(figsize=figsize, layout="constrained")
+    import matplotlib.pyplot as plt  # lazy: only figures for notebooks and scripts need pyplot's figure manager
+    return plt.figure(figsize=figsize, layout="constrained", FigureClass=NotebookFigure)
 
 
 def series_style(k: int, n_points: int = 0) -> dict:
@@ -46,8 +202,8 @@ def new_figure(ax=None, fig=None, nrows=1, ncols=1, figsize=(8, 5), **subplot_kw
     """(figure, 2-D array of axes) to draw on.
 
     ``ax``: the user's axes (one, or a sequence of ``nrows * ncols``); ``fig``: the user's figure,
-    in which the axes are created; neither: a new :class:`~matplotlib.figure.Figure` (constrained
-    layout, no pyplot).
+    in which the axes are created; neither: a new figure of :func:`figure_size` (``figsize`` is
+    the natural size), through pyplot's figure manager unless :func:`headless` (constrained layout).
     """
     if ax is not None:
         axes = np.atleast_1d(np.asarray(ax, dtype=object)).reshape(-1)
@@ -56,16 +212,22 @@ def new_figure(ax=None, fig=None, nrows=1, ncols=1, figsize=(8, 5), **subplot_kw
                              "or pass fig= instead")
         return axes[0].get_figure(), axes.reshape(nrows, ncols)
     if fig is None:
-        fig = Figure(figsize=figsize, layout="constrained")
+        fig = _create(figure_size(figsize, nrows))
     axes = fig.subplots(nrows, ncols, squeeze=False, **subplot_kw)
     return fig, axes
+
+
+def blank_figure(figsize, rows=1, row_in=None):
+    """A new empty figure of :func:`figure_size` (natural size ``figsize``, ``rows`` panels), for
+    layouts :func:`new_figure` does not make; pyplot-managed unless :func:`headless`."""
+    return _create(figure_size(figsize, rows, row_in))
 
 
 def save(fig, path, fmt: str | None = None, dpi: int = DPI) -> Path:
     """Save ``fig`` atomically to ``path`` (format from ``fmt`` or the suffix; PNG at ``dpi``).
 
-    Returns the path written.  The figure stays usable (nothing is closed: there is no pyplot
-    state to release).
+    Fonts are embedded as TrueType in PDF and kept as text in SVG (:data:`FONT_RC`).  Returns the
+    path written.  The figure stays usable (nothing is closed).
     """
     path = Path(path)
     fmt = (fmt or path.suffix.lstrip(".") or "png").lower()
@@ -76,8 +238,17 @@ def save(fig, path, fmt: str | None = None, dpi: int = DPI) -> Path:
     with atomic_path(path) as tmp:
         # svg: no hash salt, so the same figure gives the same file
         meta = {"Date": None} if fmt in ("pdf", "svg") else None
-        fig.savefig(tmp, dpi=dpi, format=fmt, metadata=meta)
+        with matplotlib.rc_context(FONT_RC):
+            fig.savefig(tmp, dpi=dpi, format=fmt, metadata=meta)
     return path
+
+
+def write_figure(path, draw, *args, fmt=None, size=None, **kwargs):
+    """Draw ``draw(*args, size=size, **kwargs)`` as a headless figure (:func:`headless`) and
+    :func:`save` it to ``path``; returns the path written."""
+    with headless():
+        fig = draw(*args, size=size, **kwargs)
+    return save(fig, path, fmt)
 
 
 #: Words and units of the scenario keys and quantities the figures show.
@@ -112,13 +283,41 @@ def quantity_label(key: str) -> str:
 
 
 def force_text(force_N: float, digits: int = 1) -> str:
-    """A signed force as text, ``"+12.3 N"``; a value that rounds to zero is ``"0.0 N"`` (never ``"-0.0 N"``)."""
+    """A signed force as text, ``"+12.3 N"`` or ``"\u221212.3 N"`` (a real minus sign, U+2212); a
+    value that rounds to zero is ``"0.0 N"`` (never ``"\u22120.0 N"``)."""
     v = round(float(force_N), digits)
     if v == 0:
         return f"{0.0:.{digits}f} N"
-    return f"{v:+.{digits}f} N"
+    return f"{v:+.{digits}f} N".replace("-", "\u2212")
 
 
 def legend_outside(ax, **kw):
-    """A legend to the right of ``ax``, outside the data (constrained layout makes room for it)."""
-    return ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=8, **kw)
+    """A legend outside the data: to the right of ``ax`` on a wide figure, above it in columns on
+    a narrow one (below 5 in, where a side legend would take half the width); constrained layout
+    makes room for it."""
+    fig = ax.get_figure()
+    if fig.get_figwidth() >= 5.0:
+        return ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, **kw)
+    handles, labels = kw.pop("handles", None), kw.pop("labels", None)
+    if handles is None:
+        handles, labels = ax.get_legend_handles_labels()
+    elif labels is None:
+        labels = [h.get_label() for h in handles]
+    n = len(handles)
+    ncol = kw.pop("ncol", None) or (n if n <= 3 else (3 if n % 3 == 0 or n > 8 else 2))
+    return ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02, 1.0, 0.1), mode="expand",
+                     borderaxespad=0.0, ncol=min(ncol, max(n, 1)), frameon=False, **kw)
+
+
+def small_pt() -> float:
+    """The size [pt] of small text (annotations, ticks, legends) in the current style (>= 7 pt)."""
+    return float(matplotlib.rcParams["xtick.labelsize"]) if isinstance(
+        matplotlib.rcParams["xtick.labelsize"], (int, float)) else 7.0
+
+
+def wrap_title(text: str, width_in: float, size_key: str = "axes.titlesize") -> str:
+    """``text`` broken into lines that fit ``width_in`` inches in the font size of the rcParam
+    ``size_key`` (about 0.6 em per character: an upper bound for the default sans-serif font)."""
+    pt = matplotlib.rcParams[size_key]
+    pt = float(pt) if isinstance(pt, (int, float)) else float(matplotlib.rcParams["font.size"])
+    return textwrap.fill(text, width=max(16, int(0.95 * width_in * 72 / (0.6 * pt))))

@@ -28,13 +28,44 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["energy_metrics", "energy_balance"]
+__all__ = ["energy_metrics", "energy_balance", "energy_along"]
 
 
 def _trapz(y, t):
     if len(t) < 2:
         return np.zeros(np.shape(y)[1:])
     return np.trapezoid(y, t, axis=0)
+
+
+def _cumtrapz(y, t):
+    """Cumulative trapezoid integral of ``y`` (n_t, ...) over ``t`` along axis 0, starting at 0."""
+    y = np.asarray(y, float)
+    out = np.zeros_like(y)
+    if len(t) >= 2:
+        dt = np.diff(t).reshape((-1,) + (1,) * (y.ndim - 1))
+        out[1:] = np.cumsum(0.5 * (y[1:] + y[:-1]) * dt, axis=0)
+    return out
+
+
+def energy_along(result) -> dict:
+    """The run's electrical energy as it accumulates, on the output times (same definitions as
+    :func:`energy_metrics`, whose totals are the last values).
+
+    Returns
+    -------
+    dict
+        ``t_s`` (n_t,), ``distance_m`` (n_t,: mean advance of the segments since the start),
+        ``motor_electrical_J`` and ``joint_electrical_J`` (n_t,: summed over segments/links),
+        ``total_electrical_J`` (n_t,).
+    """
+    t = np.asarray(result.t, float)
+    motor = _cumtrapz(result.segments["motor_electrical_power_W"].sum(1), t)
+    Pj = result.links["joint_power_W"]
+    joint = (_cumtrapz(np.maximum(Pj, 0.0).sum(1), t) / result.scenario.vehicle.links.joint_efficiency
+             if Pj.shape[1] else np.zeros_like(t))
+    x = result.segments["x_m"]
+    return {"t_s": t, "distance_m": (x - x[:1]).mean(1) if t.size else t, "motor_electrical_J": motor,
+            "joint_electrical_J": joint, "total_electrical_J": motor + joint}
 
 
 def energy_metrics(result) -> dict:

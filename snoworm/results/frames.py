@@ -5,9 +5,11 @@ these functions is called.  The functions take any object with a :class:`~snowor
 ``t``, ``segments``, ``links``, ``columns`` and ``scenario``; :class:`Result` exposes them as
 ``Result.to_pandas`` and ``Result.to_xarray``.
 
-Tables are *tidy* (long): one row per time and segment (or link), the columns ``t_s``,
-``segment`` (or ``link``) and one column per quantity, named with its unit suffix (the columns
-of ``segments.csv`` and ``links.csv``; ``slip`` and ``xt`` are dimensionless).
+:func:`to_pandas` gives ONE DataFrame: a row per output time, a column MultiIndex ``(kind,
+quantity, index)`` (kind ``segment`` or ``link``).  :func:`frames` gives the two *tidy* (long)
+tables of the CSV files: one row per time and segment (or link), the columns ``t_s``,
+``segment`` (or ``link``) and one column per quantity, named with its unit suffix (``slip``
+and ``xt`` are dimensionless).
 """
 from __future__ import annotations
 
@@ -19,7 +21,8 @@ import numpy as np
 from .._version import __version__
 from ..config.scenario import dump_scenario
 
-__all__ = ["versions", "to_pandas", "to_xarray", "units_of", "require_pandas", "require_xarray"]
+__all__ = ["versions", "to_pandas", "frames", "to_xarray", "units_of", "require_pandas", "require_xarray",
+           "short_repr"]
 
 _EXTRA = "pip install 'snoworm[data]'"
 
@@ -77,7 +80,53 @@ def _long(t, series: dict, index_name: str) -> dict:
     return cols
 
 
-def to_pandas(result) -> dict:
+def short_repr(result) -> str:
+    """A few lines about a result (<= 500 characters): scenario, duration, segments, mode,
+    distance, solver status."""
+    t = np.asarray(result.t, float)
+    dur = float(t[-1] - t[0]) if t.size > 1 else 0.0
+    x = result.segments["x_m"]
+    dist = float(np.mean(x[-1] - x[0])) if len(x) else 0.0
+    st = result.stats or {}
+    solver = ", ".join(f"{k} {st[k]}" for k in ("nfev", "njev", "intervals") if k in st)
+    status = st.get("status", "ok")
+    name = str(result.scenario.name)[:60]
+    mode = str(getattr(result.scenario.mode, "type", "?"))[:40]
+    return (f"<snoworm Result {name!r}: {result.segments['x_m'].shape[1]} segments, mode {mode}, {dur:g} s "
+            f"({t.size} samples), distance {dist:.3f} m; solver {status}{': ' + solver if solver else ''}; "
+            f"{len(result.events)} events.  Detail: .summary(), .segments, .links, .stats, .scenario>")
+
+
+def to_pandas(result):
+    """The run as one DataFrame: index ``t_s`` (output times), columns a MultiIndex
+    ``(kind, quantity, index)``: every per-segment quantity (kind ``segment``, index 0 = leader)
+    and every per-link quantity (kind ``link``, link ``j`` joins segments ``j`` and ``j+1``).
+    Units in ``DataFrame.attrs["units"]`` (quantity -> unit, per kind); the scenario name in
+    ``attrs["scenario"]``.
+    """
+    pd = require_pandas()
+    seg_cols, link_cols = _columns(result)
+    blocks, codes = [], ([], [], [])
+    kinds, quantities = ["segment", "link"], []
+    for kind, series in (("segment", result.segments), ("link", result.links)):
+        for q, v in series.items():
+            v = np.asarray(v, float)
+            blocks.append(v)
+            quantities.append(q)
+            for j in range(v.shape[1]):     # levels in the documented order: codes sorted, fast lookups
+                for level, code in zip(codes, (kinds.index(kind), len(quantities) - 1, j)):
+                    level.append(code)
+    data = np.concatenate(blocks, axis=1) if blocks else np.zeros((len(result.t), 0))
+    width = max((b.shape[1] for b in blocks), default=0)
+    cols = pd.MultiIndex(levels=[kinds, quantities, list(range(width))], codes=list(codes),
+                         names=["kind", "quantity", "index"])
+    df = pd.DataFrame(data, index=pd.Index(np.asarray(result.t, float), name="t_s"), columns=cols)
+    df.attrs["units"] = {"segment": units_of(seg_cols), "link": units_of(link_cols)}
+    df.attrs["scenario"] = result.scenario.name
+    return df
+
+
+def frames(result) -> dict:
     """``{"segments": DataFrame, "links": DataFrame}``: the run's tidy tables.
 
     ``segments`` has the columns ``t_s, segment`` and those of ``segments.csv``; ``links`` the

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import frames
 from .._version import __version__
-from .energy import energy_metrics
+from .energy import energy_along, energy_metrics
 from ..infra.folders import atomic_write_text, output_folder, relocate
 from ..infra.manifest import ManifestProblem, read_small_file
 from ..model.quantities import output_series
@@ -130,6 +130,11 @@ class Result:
                 "joint_work_J": e["joint_mechanical_J"], "joint_electrical_J": e["joint_electrical_J"],
                 "total_J": e["total_electrical_J"]}
 
+    def energy_along(self) -> dict:
+        """Electrical energy as it accumulates over the run (:func:`snoworm.results.energy.energy_along`):
+        ``t_s``, ``distance_m``, ``motor_electrical_J``, ``joint_electrical_J``, ``total_electrical_J``."""
+        return energy_along(self)
+
     def summary(self) -> dict:
         """The metrics written to ``summary.json``."""
         x = self.segments["x_m"]
@@ -165,13 +170,29 @@ class Result:
         """``{"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS}``: quantity -> description [unit]."""
         return {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS}
 
-    def to_pandas(self) -> dict:
-        """``{"segments": DataFrame, "links": DataFrame}``: tidy tables (``t_s``, ``segment`` or
-        ``link``, one column per quantity with its unit suffix), as in the CSV files.
+    def __repr__(self):
+        """A few lines (``Result.summary()``, ``.segments``, ``.scenario`` hold the detail)."""
+        return frames.short_repr(self)
 
+    def to_pandas(self):
+        """The run as ONE :class:`pandas.DataFrame`: a row per output time (index ``t_s``), and a
+        column MultiIndex ``(kind, quantity, index)``: ``("segment", "v_mps", 0)``, ...,
+        ``("link", "force_N", 0)``, ...  ``df["segment", "v_mps"]`` is a time x segment table,
+        ``df.xs(2, axis=1, level="index")`` everything about segment 2 (and link 2).
+
+        The tidy (long) tables of the CSV files are a call away: :meth:`segments_frame` and
+        :meth:`links_frame`.
         Needs pandas (``pip install 'snoworm[data]'``); see :func:`snoworm.results.frames.to_pandas`.
         """
         return frames.to_pandas(self)
+
+    def segments_frame(self):
+        """The ``segments.csv`` table as a DataFrame (``t_s``, ``segment``, one column per quantity)."""
+        return frames.frames(self)["segments"]
+
+    def links_frame(self):
+        """The ``links.csv`` table as a DataFrame (``t_s``, ``link``, one column per quantity)."""
+        return frames.frames(self)["links"]
 
     def to_xarray(self):
         """The run as an :class:`xarray.Dataset`: dims ``time x segment`` and ``time x link``, units
@@ -181,17 +202,20 @@ class Result:
         """
         return frames.to_xarray(self)
 
-    def plot(self, kind: str = "speeds", ax=None, fig=None, **kwargs):
+    def plot(self, kind: str = "speeds", ax=None, fig=None, size=None, **kwargs):
         """Draw one of the run's figures and return the :class:`~matplotlib.figure.Figure`.
 
-        ``kind``: ``forces``, ``speeds``, ``positions``, ``force_diagram`` or ``groups`` (see
-        :mod:`snoworm.plotting`).  ``ax``: your own axes (as many as the figure has panels), or
-        ``fig``: a figure to draw in; neither: a new figure.  The matplotlib backend is not changed.
+        ``kind``: ``forces``, ``speeds``, ``positions``, ``force_diagram``, ``groups``, ``slip``,
+        ``motor`` or ``energy`` (see :mod:`snoworm.plotting`).  ``ax``: your own axes (as many as
+        the figure has panels), or ``fig``: a figure to draw in; neither: a new figure from
+        pyplot's figure manager (shown inline in Jupyter, by ``plt.show()`` in a script).
+        ``size``: ``"column"`` (3.5 in), ``"page"`` (7.16 in, default) or ``"WxH"`` inches.  The
+        matplotlib backend is never selected or changed.
         """
         from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
         if kind not in plotting.PLOT_KINDS:
             raise ValueError(f"unknown plot kind {kind!r}; kinds: {', '.join(plotting.PLOT_KINDS)}")
-        return plotting.PLOT_KINDS[kind](self, ax=ax, fig=fig, **kwargs)
+        return plotting.PLOT_KINDS[kind](self, ax=ax, fig=fig, size=size, **kwargs)
 
     # ------------------------------------------------------------------ tables
     def segments_csv(self) -> str:
@@ -208,9 +232,11 @@ class Result:
                                + [self.links[c].reshape(-1) for c in LINK_COLUMNS])
         return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
 
-    def write(self, out_dir, plot: bool = True, plot_format: str = "png", overwrite: bool = False) -> list:
+    def write(self, out_dir, plot: bool = True, plot_format: str = "png", overwrite: bool = False,
+              figure_size=None) -> list:
         """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots,
-        ``plot_format`` files: png at 200 dpi, pdf or svg).
+        ``plot_format`` files: png at 200 dpi, pdf or svg, at print ``figure_size``: column,
+        page or WxH).
 
         All or nothing (:func:`snoworm.infra.folders.output_folder`): the files are written into a
         temporary sibling folder that replaces ``out_dir`` at the end, with a manifest; an earlier
@@ -231,7 +257,7 @@ class Result:
             ]
             if plot:
                 from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
-                paths += plotting.plot_result(self, stage, plot_format)
+                paths += plotting.plot_result(self, stage, plot_format, size=figure_size)
         return relocate(paths, stage, out_dir)
 
 

@@ -148,9 +148,9 @@ def format_table2(rows) -> str:
 
 
 def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostyboy", model_file=None,
-                    plot: bool = True, plot_format: str = "png", overwrite: bool = False):
+                    plot: bool = True, plot_format: str = "png", overwrite: bool = False, figure_size=None):
     """Compare the model with field data and write ``table2.csv`` (and ``table2.png``, or the
-    ``plot_format``: png, pdf, svg).
+    ``plot_format``: png, pdf, svg; at print ``figure_size``: column, page or WxH).
 
     Everything is computed and validated before anything is written; each file is written
     atomically.
@@ -170,7 +170,8 @@ def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostybo
         paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows)]
         if plot:
             from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-            paths.append(plotting.save(plotting.plot_table2(rows), out / "table2.png", plot_format))
+            paths.append(plotting.write_figure(out / "table2.png", plotting.plot_table2, rows, fmt=plot_format,
+                                               size=figure_size))
     return rows, text, relocate(paths, out, out_dir)
 
 
@@ -272,9 +273,10 @@ def format_zero_crossings(c: TerrainCurves) -> str:
 
 
 def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", model_file=None, plot: bool = True,
-                       n_points: int = 1001, plot_format: str = "png", overwrite: bool = False):
+                       n_points: int = 1001, plot_format: str = "png", overwrite: bool = False,
+                       figure_size=None):
     """Compute Figure 3's curves and write ``terrain_curves.csv`` (and ``terrain_curves.png``, or
-    the ``plot_format``: png, pdf, svg).
+    the ``plot_format``: png, pdf, svg; at print ``figure_size``: column, page or WxH).
 
     Returns
     -------
@@ -286,5 +288,6 @@ def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", mode
         paths = [write_csv(out / "terrain_curves.csv", CURVE_COLUMNS, _curve_rows(c))]
         if plot:
             from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-            paths.append(plotting.save(plotting.plot_terrain_curves(c), out / "terrain_curves.png", plot_format))
+            paths.append(plotting.write_figure(out / "terrain_curves.png", plotting.plot_terrain_curves, c,
+                                               fmt=plot_format, size=figure_size))
     return c, format_zero_crossings(c), relocate(paths, out, out_dir)

@@ -414,9 +414,10 @@ def map_csv(result: dict) -> str:
 
 def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, rolling_speed_mps=None,
                      inching=True, inch_duration_s=8.0, jobs=1, every_cell=False, plot=True, plot_format="png", overwrite=False,
-                     progress=None, grade_spec="0", gaits=None):
+                     progress=None, grade_spec="0", gaits=None, figure_size=None):
     """Load a scenario, compute its map, write ``mobility_map.csv`` (and the plot, a ``plot_format`` file:
-    png, pdf or svg; with several grades also ``gradeability``); return (map, text, paths).
+    png, pdf or svg, at print ``figure_size``: column, page or WxH; with several grades also
+    ``gradeability``); return (map, text, paths).
 
     The output folder is checked before the map is computed and written all or nothing
     (:func:`snoworm.infra.folders.output_folder`).
@@ -434,9 +435,11 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
         paths = [write_csv(out / "mobility_map.csv", columns, res["rows"], MAP_FORMAT)]
         if plot:
             from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-            paths.append(plotting.save(plotting.plot_mobility_map(res), out / "mobility_map.png", plot_format))
+            paths.append(plotting.write_figure(out / "mobility_map.png", plotting.plot_mobility_map, res, fmt=plot_format,
+                                               size=figure_size))
             if len(res["grades"]) > 1:
-                paths.append(plotting.save(plotting.plot_gradeability(res), out / "gradeability.png", plot_format))
+                paths.append(plotting.write_figure(out / "gradeability.png", plotting.plot_gradeability, res,
+                                                   fmt=plot_format, size=figure_size))
     paths = relocate(paths, out, out_dir)
     if len(res["grades"]) > 1:
         return res, grade_text(sc.name, res, inching, every_cell), paths

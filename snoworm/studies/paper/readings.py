@@ -39,7 +39,9 @@ def _reading_d1(ctx: Context, s: Section):
         "X_t = 0.5 net force >= 0 from a slip within 2 points of 74 %, case 5 slip within 0.5 points of 16.7 %",
         abs(first_up - 74.0) <= 2.0 and abs(100 * case5 - 16.7) <= 0.5, source="model"))
     if ctx.out_dir is not None:
-        s.figures.append(plotting.save(plotting.plot_terrain_curves(c1), ctx.figure("fig3_d1_terrain_curves.png")))
+        s.figures.append(plotting.write_figure(
+            ctx.figure("fig3_d1_terrain_curves.png"), plotting.plot_terrain_curves, c1,
+            title=f"Terrain forces per wheel with peak exponent d = 1, not the default (F_n = {c1.normal_load_N:.1f} N)"))
 
 
 def _reading_traction(ctx: Context, s: Section):

@@ -16,8 +16,6 @@ from contextlib import ExitStack
 from dataclasses import dataclass, field as dc_field
 from pathlib import Path
 
-import numpy as np
-
 from ..._version import __version__
 from ...results.frames import require_xarray
 from ...results.result import LINK_COLUMNS, SEGMENT_COLUMNS
@@ -27,8 +25,9 @@ from ...modes.controller import trust_problem_of
 from ...infra.folders import OutputError, check_output_folder, folder_lock, os_error_message, write_manifest
 from ...infra.progress import Progress
 from ...config.schema import ScenarioError
-from ...infra.csvwriter import FULL, canonical_json, format_cell
+from ...infra.csvwriter import canonical_json
 from .cases import build_cases
+from .figures import write_plot
 from .executors import BatchExecutor, DaskExecutor, ProcessExecutor, SerialExecutor, SweepExecutionError
 from .metrics import METRIC_COLUMNS, case_metrics, one_line, run_case
 from .series import SERIES_FORMATS, case_series_path, combine_series
@@ -91,7 +90,7 @@ def _definition(raw, axes, zip_, base_dir=None):
 def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
               save_cases: bool = False, progress=None, plot: bool = True, executor=None,
               batch: int = 0, series: str = "folders", plot_format: str = "png",
-              overwrite: bool = False, allow_code=(), restart: bool = False) -> SweepTable:
+              overwrite: bool = False, allow_code=(), restart: bool = False, figure_size=None) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
     Parameters
@@ -124,6 +123,9 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         Write ``sweep.png`` (one varying axis, or zipped axes) or ``heatmap.png`` (two).
     plot_format : {"png", "pdf", "svg"}
         File format of the plot.
+    figure_size : str or (float, float), optional
+        Print size of the plot: ``"column"``, ``"page"`` (default) or ``"WxH"`` inches
+        (:func:`snoworm.plotting.style.parse_size`).
     executor : object, optional
         Anything with ``map_unordered(fn, tasks)`` and ``close()``; overrides jobs/scheduler.
     batch : int
@@ -158,7 +160,7 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         executor = _make_executor(scheduler, batch, jobs)
     try:
         return _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases and series,
-                          overwrite or restart, plot_format)
+                          overwrite or restart, (plot_format, figure_size))
     except OSError as exc:            # writing sweep.json, the manifest or the plot
         raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
 
@@ -187,8 +189,9 @@ def _check_series(series: str) -> bool:
     return False
 
 
-def _in_folder(plan, out, executor, own, progress, plot, zip_, keep_series, overwrite, plot_format) -> SweepTable:
-    """Run the sweep with ``out`` (or None) locked and prepared; ``keep_series``: False or the series format."""
+def _in_folder(plan, out, executor, own, progress, plot, zip_, keep_series, overwrite, plot_opts) -> SweepTable:
+    """Run the sweep with ``out`` (or None) locked and prepared; ``keep_series``: False or the series format;
+    ``plot_opts``: (file format, figure size)."""
     with ExitStack() as stack:
         done = {}
         if out is not None:
@@ -202,7 +205,7 @@ def _in_folder(plan, out, executor, own, progress, plot, zip_, keep_series, over
                 if own:
                     executor.close()
                 raise
-        table = _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_format)
+        table = _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_opts)
         if out is not None:
             write_manifest(out, status="complete")
         return table
@@ -215,7 +218,7 @@ def _mkdir(out: Path):
         raise OutputError(f"cannot write results: {os_error_message(exc, out)}") from None
 
 
-def _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_format) -> SweepTable:
+def _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_opts) -> SweepTable:
     bar = _Progress(len(plan.cases), len(done), sys.stderr, progress is None or bool(progress))
     rows = dict(done)
     todo = [c for c in plan.cases if c.index not in done]
@@ -225,7 +228,7 @@ def _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot
         combine_series(out, plan.axes, plan.cases, zip_, {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS},
                        {"scenario": plan.source, "sweep_definition": json.dumps(plan.definition)})
     if out is not None and plot:
-        _plot(table, plan.axes, zip_, out, plot_format)
+        write_plot(table, out, *plot_opts)
     return table
 
 
@@ -401,40 +404,3 @@ def _run_cases(plan: _Plan, todo, executor, rec: _Recorder, out, keep_series):
         n = len(rec.rows)
         where = f"; the {n} finished cases are in {out / 'summary.csv'}, re-run to resume" if out is not None else ""
         raise SweepExecutionError(f"the sweep's executor failed ({type(exc).__name__}: {one_line(exc)}){where}.") from exc
-
-
-def _plot_positions(values):
-    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
-        return [float(v) for v in values], None
-    return list(range(len(values))), [format_cell(v, FULL) for v in values]
-
-
-def _plot(table, axes, zip_, out, plot_format="png"):
-    from ... import plotting   # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
-    varying = [a for a in axes if len(a.values) > 1]
-    ok = [r["status"] == "ok" for r in table.rows]
-    if zip_ or len(varying) == 1:
-        ax = varying[0] if varying else axes[0]
-        x, labels = _plot_positions(table.column(ax.key))
-        metrics = {m: table.column(m) for m in ("mean_speed_mps", "mean_slip", "max_link_force_N", "energy_per_m_J")}
-        fig = plotting.plot_sweep(x, metrics, ax.key, immobilised=table.column("immobilised"), ok=ok,
-                                  tick_labels=labels)
-        plotting.save(fig, out / f"sweep.{plot_format}", plot_format)
-    elif len(varying) == 2:
-        ax_x, ax_y = varying
-        xi = {canonical_json(v): j for j, v in enumerate(ax_x.values)}
-        yi = {canonical_json(v): j for j, v in enumerate(ax_y.values)}
-        grid = np.full((len(ax_y.values), len(ax_x.values)), np.nan)
-        imm = np.zeros(grid.shape, bool)
-        fail = np.zeros(grid.shape, bool)
-        for r in table.rows:
-            j, k = yi[canonical_json(r[ax_y.key])], xi[canonical_json(r[ax_x.key])]
-            if r["status"] == "ok":
-                grid[j, k] = r["mean_speed_mps"]
-                imm[j, k] = bool(r["immobilised"])
-            else:
-                fail[j, k] = True
-        fig = plotting.plot_sweep_heatmap([format_cell(v, FULL) for v in ax_x.values],
-                                          [format_cell(v, FULL) for v in ax_y.values], grid, ax_x.key, ax_y.key,
-                                          "mean speed [m/s]", immobilised=imm, failed=fail)
-        plotting.save(fig, out / f"heatmap.{plot_format}", plot_format)

@@ -23,6 +23,7 @@ from ...infra.folders import MANIFEST, atomic_write_text, folder_state, remove_l
 from ...infra.manifest import STAGE, ManifestProblem, read_small_file
 from ...config.schema import ScenarioError, quote
 from ...infra.csvwriter import FULL, csv_line, csv_text, write_csv
+from .figures import plot_table
 from .inputs import changed_inputs
 from .metrics import METRIC_COLUMNS
 from .series import SERIES_FILE, load_series
@@ -112,6 +113,13 @@ class SweepTable:
             raise FileNotFoundError(f"no {SERIES_FILE} in {self.out_dir}: run the sweep with --save-cases "
                                     "--series netcdf (series='netcdf') to keep every case's series in one file")
         return load_series(path)
+
+    def plot(self, metric=None, *, size=None, ax=None, fig=None):
+        """The sweep's standard figure (:func:`snoworm.studies.sweep.figures.plot_table`): ``metric``
+        (default: speed, slip, link force, energy) against the swept value of a one-key sweep or a
+        zip, or a heat map of ``metric`` (default mean speed) over a two-key grid.  ``size``:
+        ``"column"``, ``"page"`` or ``"WxH"``; ``ax``/``fig``: yours.  Returns the Figure."""
+        return plot_table(self, metric, size=size, ax=ax, fig=fig)
 
     def failures(self) -> list:
         """Rows whose status is not ``ok``."""
