@@ -15,7 +15,7 @@ import click
 from ._version import __version__
 from .cli_common import (EXIT_SOLVER, CommandGroup, allow_code_option, code_check, configure_logging, echo_claims,
                          echo_run, echo_sweep, fail, handle_errors, model_file_option, out_option, overwrite_option,
-                         param_set_option, plot_format_option, progress_bar, set_option, sweep_interrupted)
+                         param_set_option, plot_format_option, figure_size_option, progress_bar, set_option, sweep_interrupted)
 
 
 @click.group(cls=CommandGroup, context_settings={"help_option_names": ["-h", "--help"]})
@@ -36,10 +36,11 @@ def main(verbose=False):
 @set_option
 @click.option("--no-plot", is_flag=True, help="Skip the plots.")
 @plot_format_option
+@figure_size_option
 @overwrite_option
 @allow_code_option
 @handle_errors
-def run(scenario, out_dir, sets, no_plot, plot_format, overwrite, allow_code):
+def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, allow_code):
     """Run SCENARIO (a YAML file or a shipped scenario's name) and write its results to --out.
 
     All or nothing: the files go to a temporary folder beside --out that replaces it at the
@@ -57,7 +58,7 @@ def run(scenario, out_dir, sets, no_plot, plot_format, overwrite, allow_code):
     from .modes.codeload import allow_code as allowed  # lazy: start-up
     with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar, allowed(allow_code):
         res = simulate(sc, progress=bar.set)
-    paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite)
+    paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite, figure_size=figure_size)
     echo_run(sc.name, res, paths, out_dir)
 
 
@@ -88,9 +89,10 @@ def validate(scenario, sets, allow_code):
 @model_file_option
 @click.option("--no-plot", is_flag=True, help="Skip table2.png.")
 @plot_format_option
+@figure_size_option
 @overwrite_option
 @handle_errors
-def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plot_format, overwrite):
+def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plot_format, figure_size, overwrite):
     """Compare the steady-state model with field data (paper Table 2).
 
     Runs the steady-state model on every case at its measured wheel speed R_w*omega, drawbar
@@ -99,7 +101,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
     """
     from .studies.groundtruth import run_groundtruth  # lazy: start-up
     _, text, paths = run_groundtruth(out_dir, data_path, parameter_set_name, model_file, plot=not no_plot,
-                                     plot_format=plot_format, overwrite=overwrite)
+                                     plot_format=plot_format, overwrite=overwrite, figure_size=figure_size)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -114,9 +116,11 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
               help="Number of slip values on [0, 1].")
 @click.option("--no-plot", is_flag=True, help="Skip terrain_curves.png.")
 @plot_format_option
+@figure_size_option
 @overwrite_option
 @handle_errors
-def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_plot, plot_format, overwrite):
+def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_plot, plot_format, figure_size,
+                   overwrite):
     """Tractive, resistive and net force per wheel against slip (paper Figure 3).
 
     Normal load per wheel is the static one (a quarter of the segment weight); the resistance is
@@ -125,7 +129,8 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
     """
     from .studies.groundtruth import run_terrain_curves  # lazy: start-up
     _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name, model_file, plot=not no_plot,
-                                        n_points=n_points, plot_format=plot_format, overwrite=overwrite)
+                                        n_points=n_points, plot_format=plot_format, overwrite=overwrite,
+                                        figure_size=figure_size)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -185,6 +190,7 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
                    "pip install 'snoworm[data]').")
 @click.option("--no-plot", is_flag=True, help="Skip sweep.png / heatmap.png.")
 @plot_format_option
+@figure_size_option
 @click.option("--batch", default=0, show_default=True, type=click.IntRange(min=0), metavar="B",
               help="Integrate up to B cases of the same structure (uniform or force-control mode) as one stacked system "
                    "(several times the cases/s; 100-500 is a good B); other cases run one by one.")
@@ -220,7 +226,8 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
     resume).
     """
     from .studies.sweep import SweepExecutionError, run_sweep  # lazy: start-up
-    # options: jobs, scheduler, zip_, save_cases, series, plot_format, batch, overwrite, allow_code, restart
+    # options: jobs, scheduler, zip_, save_cases, series, plot_format, figure_size, batch, overwrite, allow_code,
+    # restart
     try:
         table = run_sweep(scenario, sets, out_dir=out_dir, plot=not no_plot, **options)
     except SweepExecutionError as exc:
@@ -257,6 +264,7 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
                    "per metre there); by default only cells that do not roll are simulated (same regions).")
 @click.option("--no-plot", is_flag=True, help="Skip mobility_map.png.")
 @plot_format_option
+@figure_size_option
 @overwrite_option
 @handle_errors
 def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot, **options):
@@ -271,7 +279,8 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot
     also --out/gradeability.png).  Progress of the inching runs goes to stderr.
     """
     from .studies.mobility import run_mobility_map  # lazy: start-up
-    # options: grade_spec, gaits, rolling_speed_mps, inch_duration_s, jobs, every_cell, plot_format, overwrite
+    # options: grade_spec, gaits, rolling_speed_mps, inch_duration_s, jobs, every_cell, plot_format, figure_size,
+    # overwrite
     # (run_mobility_map's names)
     with progress_bar(1, "mobility map", "inching runs") as bar:
         _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, inching=not no_inching,

@@ -20,7 +20,7 @@ import click
 
 __all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "out_option",
            "allow_code_option", "code_check",
-           "overwrite_option", "set_option", "plot_format_option", "param_set_option", "model_file_option",
+           "overwrite_option", "set_option", "plot_format_option", "figure_size_option", "param_set_option", "model_file_option",
            "progress_bar", "StderrHandler", "configure_logging", "echo_run", "echo_sweep", "sweep_interrupted",
            "echo_claims"]
 
@@ -138,7 +138,24 @@ set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
                           help="Override a scenario value by its dotted key, e.g. --set terrain.xt=0.5 "
                                "(repeatable; VALUE is parsed as YAML).")
 plot_format_option = click.option("--plot-format", type=click.Choice(["png", "pdf", "svg"]), default="png",
-                                  show_default=True, help="File format of the plots (PNG at 200 dpi).")
+                                  show_default=True, help="File format of the plots (PNG at 200 dpi; PDF with "
+                                                          "TrueType fonts; SVG with text kept as text).")
+
+
+def _check_size(ctx, param, value):
+    """``--figure-size`` must be column, page or WxH (checked by :func:`snoworm.plotting.style.parse_size`)."""
+    if value is not None:
+        from .plotting.style import parse_size  # lazy: matplotlib, only when a size is given
+        try:
+            parse_size(value)
+        except ValueError as exc:
+            raise click.BadParameter(f"{exc}.") from None
+    return value
+
+
+figure_size_option = click.option("--figure-size", metavar="column|page|WxH", default=None, callback=_check_size,
+                                  help="Print size of the figures: column (3.5 in wide), page (7.16 in, the "
+                                       "default) or WxH inches, e.g. 3.5x2.5; text is at least 7 pt at that size.")
 
 
 allow_code_option = click.option(

@@ -131,3 +131,26 @@ def test_plot_format_and_sweep_series(tmp_path):
                                                                 "sweep.svg"]
     r = run("run", SCENARIOS / "pi3_equal.yaml", "--out", tmp_path / "x", "--plot-format", "jpg")
     assert r.exit_code == 2 and "'jpg' is not one of 'png', 'pdf', 'svg'" in r.output
+
+
+def test_figure_size_column_pdfs_for_journals(tmp_path):
+    """--figure-size column --plot-format pdf: every PDF 3.5 in (252 pt) wide, TrueType fonts,
+    no Type 3 font; the sweep's SVG keeps its text as <text>; a bad size is exit 2, one line."""
+    import re
+    r = run("run", SCENARIOS / "inchworm6.yaml", "--out", tmp_path / "r", "--set", "simulation.duration_s=3",
+            "--plot-format", "pdf", "--figure-size", "column")
+    assert r.exit_code == 0, r.output
+    pdfs = sorted((tmp_path / "r").glob("*.pdf"))
+    assert [p.name for p in pdfs] == ["forces.pdf", "positions.pdf", "speeds.pdf"]
+    for p in pdfs:
+        data = p.read_bytes()
+        width = float(re.search(rb"/MediaBox \[\s*0 0 ([0-9.]+) ", data).group(1))
+        assert width == pytest.approx(3.5 * 72, abs=0.01) and b"/Subtype /Type3" not in data and b"/FontFile2" in data
+    r = run("sweep", SCENARIOS / "tow6_uniform.yaml", "--set", "tow.force_N=0,100", "--set", "simulation.duration_s=1",
+            "--out", tmp_path / "s", "--plot-format", "svg", "--figure-size", "3.5x4")
+    assert r.exit_code == 0, r.output
+    svg = (tmp_path / "s" / "sweep.svg").read_text(encoding="utf-8")
+    assert "<text" in svg and 'width="252pt"' in svg and 'height="288pt"' in svg
+    r = run("run", SCENARIOS / "pi3_equal.yaml", "--out", tmp_path / "x", "--figure-size", "half")
+    assert r.exit_code == 2 and "--figure-size" in r.output and "column, page or WxH" in r.output
+    assert "Traceback" not in r.output and not (tmp_path / "x").exists()
