@@ -29,8 +29,9 @@ DOC_TABLE_HEADING = "## The layers, highest first"
 #: that runs not needing them should not pay for at start-up.  ``matplotlib`` covers
 #: ``matplotlib.pyplot``, imported only when a figure is drawn without the user's ax/fig (so it
 #: shows in a notebook or with plt.show(); files are drawn headless and never import it).
+#: ``h5netcdf``: the netCDF4 engine of sweeps' series (optional extra ``data``).
 #: ``IPython``: only inside ``NotebookFigure._ipython_display_``, which only IPython calls.
-LAZY_OK = {"dask", "distributed", "pandas", "xarray", "gymnasium", "tqdm", "matplotlib", "threadpoolctl",
+LAZY_OK = {"dask", "distributed", "pandas", "xarray", "h5netcdf", "gymnasium", "tqdm", "matplotlib", "threadpoolctl",
            "multiprocessing", "threading", "concurrent", "snoworm.plotting", "IPython"}
 
 

@@ -65,6 +65,22 @@ def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None,
     return dataclasses.field(**kw)
 
 
+#: Unit suffixes of the project's names (``force_N``, ``speed_mps``) -> the unit they stand for.
+UNIT_SUFFIXES = {"N": "N", "Nm": "N m", "mps": "m/s", "m": "m", "s": "s", "kg": "kg", "W": "W", "J": "J",
+                 "Ns_per_m": "N s/m", "N_per_m": "N/m", "rad": "rad", "deg": "deg", "Hz": "Hz", "J_per_m": "J/m",
+                 "radps": "rad/s", "kgm2": "kg m2", "mps2": "m/s2", "Nms_per_rad": "N m s/rad",
+                 "Nm_per_rad": "N m/rad"}
+
+
+def split_unit(name: str):
+    """``(stem, unit)`` of a name ending in a unit suffix (``"force_N"`` -> ``("force", "N")``);
+    ``(name, None)`` without one."""
+    for suffix in sorted(UNIT_SUFFIXES, key=len, reverse=True):
+        if name.endswith("_" + suffix) and len(name) > len(suffix) + 1:
+            return name[: -len(suffix) - 1], UNIT_SUFFIXES[suffix]
+    return name, None
+
+
 def suggest(word: str, options) -> str:
     """A ' Did you mean ...?' suffix for a misspelt key, or ''."""
     if len(str(word)) > 100:        # no key or choice is that long (and difflib would take its time)

@@ -31,6 +31,7 @@ import numpy as np
 from matplotlib._pylab_helpers import Gcf
 from matplotlib.figure import Figure
 
+from ..config.schema import split_unit
 from ..infra.folders import atomic_path
 
 __all__ = ["COLOURS", "LINESTYLES", "MARKERS", "PLOT_FORMATS", "DPI", "FIGURE_SIZES", "series_style", "new_figure",
@@ -260,8 +261,6 @@ _LABELS = {
     "max_link_force_N": "max |link force| [N]", "energy_per_m_J": "energy per metre [J/m]",
     "late_speed_mps": "late speed [m/s]", "distance_m": "distance [m]",
 }
-_UNITS = {"N": "N", "Nm": "N m", "mps": "m/s", "m": "m", "s": "s", "kg": "kg", "W": "W", "J": "J",
-          "Ns_per_m": "N s/m", "N_per_m": "N/m", "rad": "rad", "deg": "deg", "Hz": "Hz"}
 
 
 def quantity_label(key: str) -> str:
@@ -273,11 +272,7 @@ def quantity_label(key: str) -> str:
     if key in _LABELS:
         return _LABELS[key]
     *sections, name = str(key).split(".")
-    unit = None
-    for suffix in sorted(_UNITS, key=len, reverse=True):
-        if name.endswith("_" + suffix):
-            name, unit = name[: -len(suffix) - 1], _UNITS[suffix]
-            break
+    name, unit = split_unit(name)
     words = " ".join(re.sub(r"[_\-]+", " ", p) for p in [*sections[-1:], name] if p)
     return f"{words} [{unit}]" if unit else words
 

@@ -22,7 +22,7 @@ from .._version import __version__
 from ..config.scenario import dump_scenario
 
 __all__ = ["versions", "to_pandas", "frames", "to_xarray", "units_of", "require_pandas", "require_xarray",
-           "short_repr"]
+           "short_repr", "long_name_of"]
 
 _EXTRA = "pip install 'snoworm[data]'"
 
@@ -52,6 +52,12 @@ def units_of(columns: dict) -> dict:
         m = re.search(r"\[([^\]]+)\]\s*$", doc)
         out[name] = m.group(1) if m else "1"
     return out
+
+
+def long_name_of(doc: str) -> str:
+    """A column description without its trailing ``[unit]`` (the unit goes in the ``units``
+    attribute; xarray's labels then read ``ground speed [m/s]``, not ``... [m/s] [m/s]``)."""
+    return re.sub(r"\s*\[[^\]]+\]\s*$", "", doc)
 
 
 def _columns(result):
@@ -163,11 +169,12 @@ def to_xarray(result):
         units = units_of(cols)
         for k, v in series.items():
             data[k if k not in data else f"link_{k}"] = xr.Variable(
-                dims, np.asarray(v, float), {"units": units[k], "long_name": cols[k]})
+                dims, np.asarray(v, float), {"units": units[k], "long_name": long_name_of(cols[k])})
     n = result.segments["x_m"].shape[1]
     coords = {"time": ("time", np.asarray(result.t, float), {"units": "s", "long_name": "output time"}),
-              "segment": ("segment", np.arange(n), {"long_name": "segment index, 0 = leader"}),
-              "link": ("link", np.arange(max(n - 1, 0)), {"long_name": "link index, link j joins segments j and j+1"})}
+              "segment": ("segment", np.arange(n), {"units": "1", "long_name": "segment index, 0 = leader"}),
+              "link": ("link", np.arange(max(n - 1, 0)),
+                       {"units": "1", "long_name": "link index, link j joins segments j and j+1"})}
     attrs = {"scenario": result.scenario.name, "scenario_yaml": dump_scenario(result.scenario),
              **{f"version_{k}": v for k, v in versions().items()}}
     return xr.Dataset(data, coords=coords, attrs=attrs)

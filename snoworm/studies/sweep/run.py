@@ -181,9 +181,10 @@ def _check_series(series: str) -> bool:
         raise ScenarioError(f"series: expected one of {', '.join(SERIES_FORMATS)}, got {series!r}.")
     if series == "netcdf":
         try:
-            require_xarray()       # before any case runs
+            require_xarray()
+            import h5netcdf  # noqa: F401  # lazy: optional dependency (snoworm[data]), checked before any case runs
         except ImportError:
-            raise ScenarioError("--series netcdf needs xarray: pip install 'snoworm[data]' "
+            raise ScenarioError("--series netcdf needs xarray and h5netcdf: pip install 'snoworm[data]' "
                                 "(or keep the default --series folders).") from None
         return True
     return False

@@ -6,33 +6,90 @@ xarray in the workers) and, once the cases have run, :func:`combine_series` gath
 ``series.nc`` and removes the ``.npz`` files.  A resumed sweep keeps the series of the cases
 already in ``series.nc``.
 
-Layout of ``series.nc`` (netCDF3, written with xarray's ``engine="scipy"``)
-----------------------------------------------------------------------------
-Dimensions: one per swept key (named by the key, e.g. ``terrain.xt``, coordinates its values;
-with ``zip`` a single ``case`` dimension with each key as a coordinate along it), then ``time``
-(the output sample; its coordinate is the output time [s] when every case has the same times),
-``segment`` and ``link``.  Variables: ``t_s`` (swept x time), every column
-of ``segments.csv`` (swept x time x segment) and of ``links.csv`` (swept x time x link), with
-``units`` and ``long_name`` attrs; ``ok`` (1 where the case has a series) and ``case_index``.
+Layout of ``series.nc`` (netCDF4/HDF5, written with h5netcdf, zlib-compressed)
+------------------------------------------------------------------------------
+Dimensions: one per swept key, named by the key as an identifier (``terrain.xt`` ->
+``terrain_xt``, so ``ds.sel(terrain_xt=0.8)`` works; the dotted key is the coordinate's ``key``
+attribute), its coordinate the swept values; with ``zip`` a single ``case`` dimension with each
+key as a coordinate along it.  Then ``time`` (the output sample; its coordinate is the output
+time [s] when every case has the same times), ``segment`` and ``link``.  Variables: ``t_s``
+(swept x time), every column of ``segments.csv`` (swept x time x segment) and of ``links.csv``
+(swept x time x link); ``ok`` (1 where the case has a series), ``case_index``, ``n_time``,
+``n_segments``.  Every variable and coordinate carries CF ``units`` (``"1"`` for dimensionless
+ones) and a ``long_name`` without the unit (so xarray's labels read ``ground speed [m/s]``).
 Cases with fewer samples or segments, and failed cases, are padded with NaN.  Attrs: the base
-scenario, the sweep definition (JSON) and the package versions.
+scenario, the sweep definition (JSON) and the package versions.  :func:`load_series` also reads
+the netCDF3 files of earlier versions.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
+import re
+import typing
 from pathlib import Path
 
 import numpy as np
 
-from ...results.frames import require_xarray, units_of, versions
+from ...config.scenario import Scenario
+from ...config.schema import split_unit
 from ...infra.folders import OutputError, atomic_path
+from ...results.frames import long_name_of, require_xarray, units_of, versions
 
-__all__ = ["SERIES_FORMATS", "SERIES_FILE", "save_series", "case_series_path", "combine_series", "load_series"]
+__all__ = ["SERIES_FORMATS", "SERIES_FILE", "save_series", "case_series_path", "combine_series", "load_series",
+           "dim_names", "key_attrs", "COMPRESSION"]
 
 #: Where a sweep keeps its cases' time series: a folder per case, or one netCDF file.
 SERIES_FORMATS = ("folders", "netcdf")
 #: Name of the combined file in the sweep's output directory.
 SERIES_FILE = "series.nc"
+
+
+#: Encoding of every variable of ``series.nc`` (zlib, level 4: about as small as level 9, faster).
+COMPRESSION = {"zlib": True, "complevel": 4}
+
+
+def dim_names(keys) -> dict:
+    """Dotted key -> a dimension name that is a Python identifier (``terrain.xt`` -> ``terrain_xt``),
+    distinct from one another and from ``time``, ``segment``, ``link``, ``case``."""
+    taken, out = {"time", "segment", "link", "case"}, {}
+    for key in keys:
+        name = re.sub(r"\W", "_", str(key))
+        name = name if name and not name[0].isdigit() else "k_" + name
+        base, n = name, 2
+        while name in taken:
+            name, n = f"{base}_{n}", n + 1
+        taken.add(name)
+        out[key] = name
+    return out
+
+
+def _field_meta(key):
+    """(unit, doc) declared for a scenario key (``schema.field``), or ("", "") if not found."""
+    cls, md = Scenario, {}
+    try:
+        for part in key.split("."):
+            md = {f.name: f for f in dataclasses.fields(cls)}[part].metadata
+            cls = typing.get_type_hints(cls).get(part)
+    except (KeyError, TypeError, NameError):
+        return "", ""
+    return md.get("unit", ""), md.get("doc", "")
+
+
+def key_attrs(key) -> dict:
+    """CF attributes of a swept key's coordinate: ``units`` (the field's declared unit, else its
+    name's unit suffix, else ``"1"``), ``long_name`` (the field's description, else the key in
+    words) and ``key`` (the dotted key)."""
+    unit, doc = _field_meta(key)
+    stem, suffix_unit = split_unit(key.rsplit(".", 1)[-1])
+    words = " ".join(re.sub(r"[_\-]+", " ", p) for p in [*key.split(".")[:-1][-1:], stem] if p)
+    return {"units": unit or suffix_unit or "1", "long_name": doc or words, "key": key}
+
+
+def _engine(path) -> str:
+    """``scipy`` for a netCDF3 file (``CDF`` magic, earlier versions), ``h5netcdf`` otherwise."""
+    with open(path, "rb") as fh:
+        return "scipy" if fh.read(3) == b"CDF" else "h5netcdf"
 
 
 def case_series_path(out: Path, case_id: str, series: str) -> str:
@@ -62,7 +119,7 @@ def _from_old(path: Path, n_cases: int) -> dict:
     """Case index -> arrays of the cases already in an earlier ``series.nc`` (padding trimmed)."""
     xr = require_xarray()
     out = {}
-    with xr.open_dataset(path, engine="scipy") as ds:
+    with xr.open_dataset(path, engine=_engine(path)) as ds:
         ds = ds.load()
     flat = lambda v: np.asarray(ds[v].values).reshape((n_cases,) + ds[v].shape[ds["ok"].ndim:])
     ok, nt, ns = flat("ok"), flat("n_time"), flat("n_segments")
@@ -124,35 +181,38 @@ def combine_series(out, axes, cases, zip_, columns, attrs) -> Path:
     n = len(cases)
     per_case = _gather(out, cases)
     t, data, nt, ns = _stack(per_case, n, columns)
+    names = dim_names([a.key for a in axes])
     if zip_:
         shape, dims = (n,), ("case",)
-        coords = {a.key: ("case", _coord(a.values)) for a in axes}
+        coords = {names[a.key]: ("case", _coord(a.values), key_attrs(a.key)) for a in axes}
     else:
-        shape, dims = tuple(len(a.values) for a in axes), tuple(a.key for a in axes)
-        coords = {a.key: (a.key, _coord(a.values)) for a in axes}
+        shape, dims = tuple(len(a.values) for a in axes), tuple(names[a.key] for a in axes)
+        coords = {names[a.key]: (names[a.key], _coord(a.values), key_attrs(a.key)) for a in axes}
     units = {**units_of(columns["segments"]), **units_of(columns["links"])}
     ok = np.zeros(n, np.int8)
     ok[list(per_case)] = 1
+    one = {"units": "1"}
     variables = {
         "t_s": (dims + ("time",), t.reshape(shape + t.shape[1:]), {"units": "s", "long_name": "output time"}),
-        "ok": (dims, ok.reshape(shape), {"long_name": "1 where the case has a time series"}),
-        "case_index": (dims, np.arange(n, dtype=np.int32).reshape(shape), {"long_name": "case id as an integer"}),
-        "n_time": (dims, nt.reshape(shape), {"long_name": "output samples of the case (the rest is NaN padding)"}),
-        "n_segments": (dims, ns.reshape(shape), {"long_name": "segments of the case (the rest is NaN padding)"}),
+        "ok": (dims, ok.reshape(shape), {**one, "long_name": "1 where the case has a time series"}),
+        "case_index": (dims, np.arange(n, dtype=np.int32).reshape(shape), {**one, "long_name": "case id as an integer"}),
+        "n_time": (dims, nt.reshape(shape), {**one, "long_name": "output samples of the case (the rest is NaN padding)"}),
+        "n_segments": (dims, ns.reshape(shape), {**one, "long_name": "segments of the case (the rest is NaN padding)"}),
     }
     for name, (arr, dim, col, kind) in data.items():
-        doc = columns[kind][col]
         variables[name] = (dims + ("time", dim), arr.reshape(shape + arr.shape[1:]),
-                           {"units": units[col], "long_name": doc, "column": col})
+                           {"units": units[col], "long_name": long_name_of(columns[kind][col]), "column": col})
     rows = [t[i, :nt[i]] for i in per_case]
     if rows and all(r.shape == rows[0].shape and np.array_equal(r, rows[0]) for r in rows) and rows[0].size == t.shape[1]:
         coords["time"] = ("time", rows[0], {"units": "s", "long_name": "output time (the same for every case)"})
     S = data["x_m"][0].shape[2]
-    coords.update(segment=("segment", np.arange(S, dtype=np.int32)), link=("link", np.arange(S - 1, dtype=np.int32)))
+    coords.update(segment=("segment", np.arange(S, dtype=np.int32), {**one, "long_name": "segment index, 0 = leader"}),
+                  link=("link", np.arange(S - 1, dtype=np.int32),
+                        {**one, "long_name": "link index, link j joins segments j and j+1"}))
     ds = xr.Dataset(variables, coords=coords, attrs={**attrs, **{f"version_{k}": v for k, v in versions().items()}})
     path = out / SERIES_FILE
     with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp, engine="scipy")
+        ds.to_netcdf(tmp, engine="h5netcdf", encoding={v: dict(COMPRESSION) for v in ds.data_vars})
     for c in cases:
         (out / "cases" / f"{c.case_id}.npz").unlink(missing_ok=True)
     try:
@@ -163,7 +223,8 @@ def combine_series(out, axes, cases, zip_, columns, attrs) -> Path:
 
 
 def load_series(path):
-    """The ``series.nc`` of a sweep as an :class:`xarray.Dataset` (loaded into memory, file closed)."""
+    """The ``series.nc`` of a sweep as an :class:`xarray.Dataset` (loaded into memory, file closed;
+    netCDF4 via h5netcdf, or the netCDF3 of earlier versions)."""
     xr = require_xarray()
-    with xr.open_dataset(path, engine="scipy") as ds:
+    with xr.open_dataset(path, engine=_engine(path)) as ds:
         return ds.load()
