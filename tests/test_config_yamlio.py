@@ -2,6 +2,7 @@
 import codecs
 import os
 import time
+from pathlib import Path
 
 import pytest
 import yaml
@@ -336,3 +337,33 @@ def test_read_yaml_errors_name_the_file(tmp_path):
     with pytest.raises(ScenarioError) as info:
         read_yaml(path)
     assert str(info.value).startswith(f"{path}, line 2, column 1: duplicate key 'a'")
+
+
+def test_controller_paths_from_cwd(tmp_path, monkeypatch):
+    from snoworm.yamlio import controller_paths_from_cwd
+    monkeypatch.chdir(tmp_path)
+    ov = controller_paths_from_cwd([("mode.controller", "ctl.py:C"), ("mode.controller", "pkg.mod:C"),
+                                    ("mode", {"type": "controller", "controller": "sub/c.py:D"}),
+                                    ("tow.force_N", "x.py:C")])
+    assert ov == [("mode.controller", f"{tmp_path / 'ctl.py'}:C"), ("mode.controller", "pkg.mod:C"),
+                  ("mode", {"type": "controller", "controller": f"{tmp_path / 'sub' / 'c.py'}:D"}),
+                  ("tow.force_N", "x.py:C")]
+
+
+def test_set_controller_on_a_shipped_scenario_is_taken_from_the_working_directory(tmp_path, monkeypatch):
+    """`snoworm run tow6_uniform --set mode=...controller: ctl.py:Go` finds ./ctl.py (not one in the
+    installed package); a scenario file of the user's keeps its own folder as the base."""
+    from snoworm import load_scenario
+    (tmp_path / "ctl.py").write_text("class Go:\n    def __init__(self, params, scenario):\n        self.n = "
+                                     "scenario.vehicle.segments\n    def __call__(self, obs):\n        return "
+                                     "{'wheel_speed_mps': [1.0] * self.n}\n")
+    monkeypatch.chdir(tmp_path)
+    sc = load_scenario("tow6_uniform", ["mode={type: controller, controller: 'ctl.py:Go', period_s: 0.1}"])
+    assert sc.mode.controller == f"{tmp_path / 'ctl.py'}:Go"
+    own = tmp_path / "mine"
+    own.mkdir()
+    (own / "ctl.py").write_text((tmp_path / "ctl.py").read_text())
+    from snoworm.scenario import scenario_path
+    (own / "s.yaml").write_text(Path(scenario_path("tow6_uniform")).read_text())
+    sc = load_scenario(own / "s.yaml", ["mode={type: controller, controller: 'ctl.py:Go', period_s: 0.1}"])
+    assert sc.mode.controller == f"{own / 'ctl.py'}:Go"           # the user's file: its own folder

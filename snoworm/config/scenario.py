@@ -327,14 +327,16 @@ def load_scenario(path, overrides=()) -> Scenario:
         YAML scenario file, or the name of a shipped scenario (``"inchworm6"``, see
         :func:`shipped_scenarios`); an existing path wins over a name.
     overrides : iterable of (str, object) or of "key=value" strings
-        Dotted-key overrides applied before validation (the CLI's ``--set``).
+        Dotted-key overrides applied before validation (the CLI's ``--set``; on a shipped
+        scenario a relative controller file in them is taken from the working directory).
     """
     raw, path = read_scenario_yaml(path)
     ov = [parse_set_option(o) if isinstance(o, str) else o for o in overrides]
     if ov:
         if not isinstance(raw, dict):
             raise ScenarioError(f"{path}: a scenario must be a YAML mapping.")
-        raw = apply_overrides(raw, ov)
+        shipped = Path(path).resolve().parent == _shipped_dir().resolve()   # --set paths are the user's, not ours
+        raw = apply_overrides(raw, yamlio.controller_paths_from_cwd(ov) if shipped else ov)
     return scenario_from_dict(raw, str(path), base_dir=Path(path).parent)
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import codecs
 import os
+from pathlib import Path
 
 import yaml
 from yaml.events import MappingStartEvent, SequenceStartEvent
@@ -14,7 +15,8 @@ from yaml.nodes import ScalarNode, SequenceNode
 
 from .schema import ScenarioError, quote
 
-__all__ = ["MAX_BYTES", "MAX_DEPTH", "MAX_INT_CHARS", "MAX_NODES", "load_yaml_text", "quote", "read_yaml"]
+__all__ = ["MAX_BYTES", "MAX_DEPTH", "MAX_INT_CHARS", "MAX_NODES", "load_yaml_text", "quote", "read_yaml",
+           "controller_paths_from_cwd"]
 
 MAX_NODES = 100_000  #: node budget after expanding aliases (scenario ~100, 30 000-point profile 90 000)
 MAX_DEPTH = 50  #: deepest nesting of mappings and sequences, through aliases too (scenarios use 4)
@@ -220,3 +222,24 @@ def read_yaml(path):
     if not found:
         raise ScenarioError(f"{name}: the file is empty (no YAML content, only blanks or comments).")
     return value
+
+
+def _cwd_spec(value):
+    target, sep, name = value.rpartition(":")
+    if sep and (target.endswith(".py") or "/" in target or "\\" in target) and not Path(target).is_absolute():
+        return f"{Path.cwd() / target}:{name}"
+    return value
+
+
+def controller_paths_from_cwd(overrides) -> list:
+    """``(key, value)`` overrides with a relative controller file (``mode.controller=ctl.py:Cls``,
+    or ``controller`` inside a ``mode`` mapping) made absolute from the working directory: a path
+    typed on a command line means the user's folder, not the folder of a shipped scenario file."""
+    out = []
+    for key, value in overrides:
+        if key == "mode.controller" and isinstance(value, str):
+            value = _cwd_spec(value)
+        elif key == "mode" and isinstance(value, dict) and isinstance(value.get("controller"), str):
+            value = {**value, "controller": _cwd_spec(value["controller"])}
+        out.append((key, value))
+    return out
