@@ -161,7 +161,7 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
     """
     from .studies.calibrate import run_calibration  # lazy: start-up
-    with progress_bar(1, "calibrate", "model evaluations (budget)") as bar:
+    with progress_bar(1, "calibrate", "model evaluations") as bar:
         _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
                                          torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, overwrite=overwrite,
                                          progress=bar.set)

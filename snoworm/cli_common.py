@@ -101,10 +101,15 @@ class CommandGroup(click.Group):
 
 
 def _check_out(ctx, param, value):
-    """``--out`` must name a directory: an empty path would write into the current folder."""
+    """``--out`` must name a directory (an empty path would write into the current folder); one line
+    on stderr when it holds earlier results."""
     if value is not None and not str(value).strip():
         raise click.BadParameter("must name a directory, got an empty path (it would write into the current "
                                  "folder). Give e.g. --out results/.")
+    from .infra.folders import earlier_output_note  # lazy: start-up
+    note = earlier_output_note(value, resumes=ctx.command.name == "sweep") if value is not None else None
+    if note:                               # re-running into the same --out: say so, in one line
+        click.echo(note, err=True)
     return value
 
 

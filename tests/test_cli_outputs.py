@@ -270,3 +270,19 @@ def test_disk_full_while_appending_sweep_rows_is_exit_2_naming_the_file(tmp_path
     assert "No space left on device" in r.output and str(out / "summary.csv") in r.output
     assert "re-run the same command to resume" in r.output and "internal error" not in r.output
     assert not (out / folders.LOCK).exists()
+
+
+def test_rerunning_into_the_same_out_says_so_in_one_line(tmp_path):
+    out = tmp_path / "o"
+    r = run("run", "pi2_zero", "--out", out, "--no-plot", *SHORT)
+    assert r.exit_code == 0, r.output and "note:" not in r.output
+    r = run("run", "pi2_zero", "--out", out, "--no-plot", *SHORT)
+    assert r.exit_code == 0, r.output
+    notes = [ln for ln in r.output.splitlines() if ln.startswith("note:")]
+    assert len(notes) == 1 and "holds earlier results (snoworm run pi2_zero" in notes[0] and "replaced" in notes[0]
+    s = tmp_path / "s"
+    args = ("sweep", "pi2_zero", "--set", "tow.force_N=0,10", *SHORT, "--out", s, "--no-plot")
+    assert run(*args).exit_code == 0
+    r = run(*args)
+    notes = [ln for ln in r.output.splitlines() if ln.startswith("note:")]
+    assert r.exit_code == 0 and len(notes) == 1 and "resumed" in notes[0]

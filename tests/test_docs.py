@@ -85,4 +85,7 @@ def test_tutorial_as_a_notebook_shows_its_figures(tmp_path, monkeypatch):
         assert len(images) == 1, (c.source.splitlines()[-1], [o.get("output_type") for o in c.outputs])
     errors = [o for c in nb.cells for o in c.get("outputs", ()) if o.get("output_type") == "error"]
     assert not errors
+    sweep = next(c for c in nb.cells if "run_sweep(" in c.source)        # a bar in the notebook, not log lines
+    bar = "".join(o.get("text", "") for o in sweep.outputs if o.get("name") == "stderr")
+    assert "sweep:" in bar and "6/6 cases" in bar and "100%" in bar
     assert list(tmp_path.iterdir()) == []     # it wrote nothing in the working directory

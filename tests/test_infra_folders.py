@@ -241,3 +241,14 @@ def test_an_unwritable_parent_stages_inside_the_output_folder(tmp_path, monkeypa
     _write(out, ["a.csv"])
     _write(out, ["b.csv"])
     assert sorted(os.listdir(out)) == sorted(["b.csv", MANIFEST]) and os.listdir(out.parent) == ["mine"]
+
+
+def test_earlier_output_note(tmp_path):
+    from snoworm.infra.folders import earlier_output_note, write_manifest
+    assert earlier_output_note(tmp_path / "none") is None
+    (tmp_path / "a.csv").write_text("x\n")
+    assert earlier_output_note(tmp_path) is None                     # not snoworm's: no manifest
+    write_manifest(tmp_path, command="snoworm run x --out d")
+    note = earlier_output_note(tmp_path)
+    assert note.startswith(f"note: {tmp_path} holds earlier results (snoworm run x --out d, ") and "\n" not in note
+    assert "resumed" in earlier_output_note(tmp_path, resumes=True)

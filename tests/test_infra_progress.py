@@ -48,7 +48,7 @@ def test_nothing_is_printed_when_off_or_when_nothing_was_done():
 
 
 def test_plain_bar_on_a_terminal_without_tqdm(monkeypatch):
-    monkeypatch.setattr(P, "_tqdm", lambda: None)
+    monkeypatch.setattr(P, "_tqdm", lambda notebook=False: None)
     s = TTY()
     with P.Progress(4, "map", "runs", stream=s) as bar:
         assert bar.mode == "bar"
@@ -86,3 +86,49 @@ def test_default_stream_is_stderr(capsys):
         bar.update()
     assert "z: 100 %" in capsys.readouterr().err
     assert sys.stderr is not None
+
+
+def test_counts_are_rounded_to_what_the_total_needs():
+    s = io.StringIO()
+    bar = P.Progress(100.0, "run", "s simulated", stream=s)
+    bar.set(14.970594137667268)
+    bar.close()
+    assert "(15/100 s simulated)" in s.getvalue() and "14.97" not in s.getvalue()
+    assert P._decimals(2000) == 0 and P._decimals(4.0) == 0 and P._decimals(2.5) == 2 and P._decimals(0.05) == 3
+
+
+def test_tqdm_bar_shows_rounded_counts():
+    pytest.importorskip("tqdm")
+    s = TTY()
+    with P.Progress(100.0, "run", "s simulated", stream=s) as bar:
+        bar.set(14.970594137667268)
+    out = s.getvalue()
+    assert "15/100 s simulated" in out and "14.970594" not in out
+
+
+def test_a_log_gets_a_line_every_few_seconds_while_work_advances(monkeypatch):
+    clock = [0.0]
+    monkeypatch.setattr(P.time, "perf_counter", lambda: clock[0])
+    s = io.StringIO()
+    bar = P.Progress(2000.0, "long", "s simulated", stream=s)
+    for k in range(1, 40):                  # 1 s simulated per 1 s of wall time: under 10 % for 200 s
+        clock[0] = float(k)
+        bar.set(float(k))
+    lines = s.getvalue().splitlines()
+    assert len(lines) == 39 // int(P.LINE_EVERY_S)           # one line per LINE_EVERY_S seconds of wall time
+    assert lines[0].startswith("long:   0 % (5/2000 s simulated)")
+    clock[0] = 100.0
+    bar.set(39.0)                                            # advanced since the last line (35 s): a line
+    assert len(s.getvalue().splitlines()) == len(lines) + 1
+    clock[0] = 200.0
+    bar.set(39.0)                                            # nothing new: no line
+    assert len(s.getvalue().splitlines()) == len(lines) + 1
+
+
+def test_progress_never_goes_back_for_the_same_total():
+    bar = P.Progress(10.0, "x", stream=io.StringIO())
+    bar.set(5.0)
+    bar.set(4.9)
+    assert bar.value == 5.0
+    bar.set(3.0, total=3.0)                                  # a new total (a fit that ended early)
+    assert bar.value == 3.0 and bar.total == 3.0

@@ -65,3 +65,20 @@ def test_solve_interval_is_under_the_work_limit_too(scenario_path):
     with pytest.raises(SolverError, match="work limit"):
         solve_interval(case.model, ctl, 100.0, 101.0, y0, [], sc.simulation, output_grid(100.0, 101.0, 0.05, True),
                        stats, "step", {})
+
+
+def test_progress_within_a_long_interval(monkeypatch):
+    """A uniform run is one long interval after its start: progress still hears of the simulated
+    time reached while it is integrated (here at every check, PROGRESS_EVERY_S = 0), increasing,
+    and ends at the duration."""
+    from snoworm import load_scenario, simulate
+    from snoworm.simulation import guard
+    from tests.conftest import SCENARIOS
+    monkeypatch.setattr(guard, "PROGRESS_EVERY_S", 0.0)
+    calls = []
+    res = simulate(load_scenario(SCENARIOS / "tow6_uniform.yaml", ["simulation.duration_s=20"]),
+                   progress=lambda t, T: calls.append((t, T)))
+    within = [t for t, _ in calls if 0.0 < t < 20.0]
+    assert res.stats["intervals"] <= 3 and len(within) >= 5
+    assert all(T == 20.0 for _, T in calls) and calls[-1][0] == 20.0
+    assert all(b >= a for a, b in zip(within, within[1:]))

@@ -128,9 +128,11 @@ def test_cli_calibrate_bad_input(tmp_path, text, fit, needle):
 def test_progress_counts_model_evaluations_within_the_budget(data, frostyboy):
     seen = []
     res = cal.calibrate(data, ["tau0", "tau1"], *frostyboy, progress=lambda n, budget: seen.append((n, budget)))
-    assert [n for n, _ in seen] == list(range(1, len(seen) + 1))
-    assert {b for _, b in seen} == {600}                       # 200 * (2 parameters + 1)
-    assert len(seen) >= res.nfev
+    during, end = seen[:-1], seen[-1]
+    assert [n for n, _ in during] == list(range(1, len(during) + 1))
+    assert {b for _, b in during} == {600}                     # 200 * (2 parameters + 1)
+    assert len(during) >= res.nfev
+    assert end == (len(during), len(during)) and len(during) < 600   # ended early: 100 % of the work done
 
 
 def test_cli_calibrate_refuses_a_foreign_folder_before_fitting(tmp_path, monkeypatch):

@@ -166,6 +166,22 @@ def folder_state(path) -> str:
     return folder_report(path)[0]
 
 
+def earlier_output_note(path, resumes: bool = False) -> str | None:
+    """One line saying that ``path`` already holds snoworm output (its command and time, from a
+    manifest that passes :func:`snoworm.infra.manifest.load_manifest`'s checks) and what happens
+    to it, or None when it holds none.  ``resumes``: the command continues an earlier run there
+    (a sweep) instead of replacing it."""
+    man = read_manifest(path) if Path(path).is_dir() else None
+    if man is None:
+        return None
+    command = " ".join(str(man.get("command") or "an earlier snoworm command").split())
+    command = command if len(command) <= 120 else command[:117] + "..."
+    what = f"{command}, {str(man.get('written_utc', 'time unknown'))[:40]}"
+    if resumes:
+        return f"note: {path} holds earlier results ({what}); its finished cases are kept (resumed) unless --restart."
+    return f"note: {path} holds earlier results ({what}); they are replaced when this command finishes."
+
+
 def _refusal(path, why=None) -> str:
     return (f"{path} is not empty and was not written by snoworm ({why or f'it has no {MANIFEST} listing its files'}). "
             "Give an empty or new --out folder, or pass --overwrite (overwrite=True in Python) to write into "

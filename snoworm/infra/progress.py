@@ -1,8 +1,11 @@
-"""Progress of long commands: a bar on a terminal, one line per ~10 % in a log file.
+"""Progress of long commands: a bar on a terminal, a widget in a notebook, lines in a log file.
 
 :class:`Progress` draws with ``tqdm`` when it is installed (``pip install 'snoworm[progress]'``)
-and with a plain one-line bar otherwise; when the stream is not a terminal (a batch job's log)
-it prints one line each time another ~10 % is done, so logs show how far a job got.
+and with a plain one-line bar otherwise; in a Jupyter kernel it uses ``tqdm.auto`` (a widget
+where ipywidgets is installed); when the stream is not a terminal (a batch job's log) it prints
+one line each time another ~10 % is done, and at least every :data:`LINE_EVERY_S` seconds of
+wall time while work advances, so logs show how far a job got.  Counts are rounded to the
+precision their total needs (``15/100 s simulated``, not ``14.970594137667268/100``).
 
 The library's functions take a ``progress`` callable ``progress(done, total)`` (e.g.
 :func:`snoworm.simulation.driver.simulate` in simulated seconds); :meth:`Progress.set` is one.
@@ -11,11 +14,16 @@ Solver fallbacks and retries are logged to ``logging.getLogger("snoworm")`` (:da
 """
 from __future__ import annotations
 
+import importlib.util
 import logging
+import math
 import sys
 import time
 
-__all__ = ["Progress", "logger", "hms"]
+__all__ = ["Progress", "logger", "hms", "LINE_EVERY_S"]
+
+#: In a log (lines mode), a line at least this often [s of wall time] while the work advances.
+LINE_EVERY_S = 5.0
 
 #: The package's logger: solver fallbacks and retries (INFO), runs falling back to one by one (INFO).
 logger = logging.getLogger("snoworm")
@@ -39,12 +47,30 @@ def _isatty(stream) -> bool:
         return False
 
 
-def _tqdm():
+def _tqdm(notebook=False):
     try:
-        from tqdm import tqdm  # lazy: optional extra `progress`; the plain bar stands in without it
+        if notebook and importlib.util.find_spec("ipywidgets") is not None:
+            from tqdm.auto import tqdm  # lazy: optional extra `progress`; a widget in a notebook
+        else:
+            from tqdm import tqdm  # lazy: optional extra `progress`; the plain bar stands in without it
     except ImportError:
         return None
     return tqdm
+
+
+def _in_notebook(stream) -> bool:
+    """True when ``stream`` is the stderr of a Jupyter kernel (IPython already imported there)."""
+    ip = getattr(sys.modules.get("IPython"), "get_ipython", None)
+    shell = ip() if callable(ip) else None
+    return stream is sys.stderr and type(shell).__name__ == "ZMQInteractiveShell"
+
+
+def _decimals(total: float) -> int:
+    """Decimals of the counts: none for a whole total (cases, runs, a 2000 s run: ``15/2000``),
+    else enough for about three significant digits of the total (``0.75/2.5``)."""
+    if float(total).is_integer() or total <= 0:
+        return 0
+    return int(min(3, max(0, 2 - math.floor(math.log10(total)))))
 
 
 class Progress:
@@ -61,7 +87,7 @@ class Progress:
     stream : file, optional
         Where to draw (default: ``sys.stderr``).
     mode : {"auto", "bar", "lines", "off"}
-        ``auto``: a bar on a terminal, lines otherwise.
+        ``auto``: a bar on a terminal or in a notebook, lines otherwise.
     use_tqdm : bool
         Draw the bar with tqdm when it is installed.
     """
@@ -69,17 +95,22 @@ class Progress:
     def __init__(self, total, desc, unit="", stream=None, mode="auto", use_tqdm=True):
         self.total, self.desc, self.unit = float(total), desc, unit
         self.stream = sys.stderr if stream is None else stream
+        notebook = _in_notebook(self.stream)
         if mode == "auto":
-            mode = "bar" if _isatty(self.stream) else "lines"
+            mode = "bar" if _isatty(self.stream) or notebook else "lines"
         if mode not in ("bar", "lines", "off"):
             raise ValueError(f"mode must be auto, bar, lines or off, got {mode!r}")
         self.mode = mode
         self.value, self.info = 0.0, ""
         self.t0 = time.perf_counter()
         self._last, self._decile, self._closed, self._printed = 0.0, 0, False, 0.0
-        tq = _tqdm() if (mode == "bar" and use_tqdm) else None
+        self._line_t = self.t0
+        tq = _tqdm(notebook) if (mode == "bar" and use_tqdm) else None
+        d = _decimals(self.total)
+        fmt = ("{desc}: {percentage:3.0f}%|{bar}| " + f"{{n:.{d}f}}/{{total:.{d}f}}" + (f" {unit}" if unit else "")
+               + " [{elapsed}<{remaining}{postfix}]")
         self._bar = tq(total=_num(self.total), desc=desc, unit=f" {unit}" if unit else "it", file=self.stream,
-                       leave=True, dynamic_ncols=True) if tq is not None else None
+                       leave=True, dynamic_ncols=True, bar_format=fmt) if tq is not None else None
 
     # ---------------------------------------------------------------- updates
     def update(self, n=1, info=None):
@@ -87,11 +118,14 @@ class Progress:
         self.set(self.value + n, info=info)
 
     def set(self, value, total=None, info=None):
-        """``value`` units done in all (``total`` may change it)."""
+        """``value`` units done in all (``total`` may change it; with the same total, progress
+        never goes back)."""
         if total is not None and float(total) != self.total:
             self.total = float(total)
             if self._bar is not None:
                 self._bar.total = _num(self.total)
+        elif float(value) < self.value:
+            value = self.value
         self.value = min(float(value), self.total) if self.total > 0 else float(value)
         if info is not None:
             self.info = info
@@ -131,9 +165,8 @@ class Progress:
         return self.value / self.total if self.total > 0 else 1.0
 
     def _count(self):
-        ints = float(self.total).is_integer() and float(self.value).is_integer()
-        fmt = (lambda v: f"{v:.0f}") if ints else (lambda v: f"{v:.4g}")
-        return f"{fmt(self.value)}/{fmt(self.total)}" + (f" {self.unit}" if self.unit else "")
+        d = _decimals(self.total)
+        return f"{self.value:.{d}f}/{self.total:.{d}f}" + (f" {self.unit}" if self.unit else "")
 
     def _draw(self):
         if self.mode == "off" or self._closed:
@@ -146,6 +179,8 @@ class Progress:
             self._plain()
         elif int(10 * self._frac() + 1e-9) > self._decile:
             self._decile = int(10 * self._frac() + 1e-9)
+            self._line()
+        elif self.value > self._printed and time.perf_counter() - self._line_t >= LINE_EVERY_S:
             self._line()
 
     def _plain(self, force=False):
@@ -163,7 +198,7 @@ class Progress:
                     f"{hms(el)} elapsed{eta}   ")
 
     def _line(self):
-        self._printed = self.value
+        self._printed, self._line_t = self.value, time.perf_counter()
         info = f", {self.info}" if self.info else ""
         self._write(f"{self.desc}: {100 * self._frac():3.0f} % ({self._count()}{info}), "
                     f"{hms(time.perf_counter() - self.t0)} elapsed\n")

@@ -279,7 +279,8 @@ def _integrate(model, modes, sim, name, progress=None):
 def _guarded_integrate(model, modes, sim, name, progress=None):
     """:func:`_integrate` under :func:`~snoworm.simulation.guard.guarded`, its results checked by
     :func:`~snoworm.simulation.guard.check_sane`."""
-    pieces, phases, stats = guarded(lambda m: _integrate(m, modes, sim, name, progress), model, sim, name)
+    pieces, phases, stats = guarded(lambda m: _integrate(m, modes, sim, name, progress), model, sim, name,
+                                    progress=progress)
     check_sane(model, pieces, name)
     return pieces, phases, stats
 
@@ -288,7 +289,9 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
     """Run a scenario and return its :class:`~snoworm.results.result.Result`.
 
     ``progress``: optional callable ``progress(t_s, duration_s)``, called after each integration
-    interval with the simulated time reached (e.g. a :class:`snoworm.infra.progress.Progress`).
+    interval with the simulated time reached, and within long intervals every
+    :data:`~snoworm.simulation.guard.PROGRESS_EVERY_S` of wall time (e.g. a
+    :class:`snoworm.infra.progress.Progress`).
     ``allow_code``: paths (files or folders) whose controller code may run although they lie
     outside the scenario's folder (a controller in the scenario's folder tree runs without it;
     docs/controllers.md).

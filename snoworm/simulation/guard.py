@@ -39,15 +39,21 @@ def work_rate(sim) -> float:
     return WORK_NFEV_PER_S * max(1.0, (1e-5 / tol) ** 0.25)
 
 
+#: Within a long interval, ``progress`` hears of the simulated time reached at most this often [s].
+PROGRESS_EVERY_S = 0.5
+
+
 class _Metered:
     """The model as the solver sees it: ``rhs`` counts its calls against the work limit
-    (:data:`WORK_BASE_NFEV` + :data:`WORK_NFEV_PER_S` per simulated second reached) and checks
-    ``simulation.max_wall_s``; every other attribute is the model's own."""
+    (:data:`WORK_BASE_NFEV` + :data:`WORK_NFEV_PER_S` per simulated second reached), checks
+    ``simulation.max_wall_s`` and reports the time reached to ``progress`` within long intervals
+    (every :data:`PROGRESS_EVERY_S` of wall time); every other attribute is the model's own."""
 
-    def __init__(self, model, sim, name, t0=0.0):
+    def __init__(self, model, sim, name, t0=0.0, progress=None):
         self._model, self._sim, self._name, self._t0 = model, sim, name, float(t0)
         self._n, self._t_max, self._wall0 = 0, float(t0), time.perf_counter()
         self._rate = work_rate(sim)
+        self._progress, self._shown = progress, self._wall0
 
     def __getattr__(self, attr):
         return getattr(self._model, attr)
@@ -68,6 +74,9 @@ class _Metered:
                 raise SolverError(f"simulation.max_wall_s: {wall:.1f} s of wall time spent by t = {self._t_max:.6g} s "
                                   f"of {self._name!r} (limit {self._sim.max_wall_s:g} s). Shorten the run, relax "
                                   "simulation.rtol or raise max_wall_s.")
+        if self._progress is not None and self._n % 64 == 0 and time.perf_counter() - self._shown >= PROGRESS_EVERY_S:
+            self._shown = time.perf_counter()
+            self._progress(min(self._t_max, self._sim.duration_s), self._sim.duration_s)
         return self._model.rhs(t, y, *args)
 
 
@@ -93,13 +102,14 @@ def check_sane(model, pieces, name):
                                   "the chain has run away. Check forces, gains and speeds for extreme values.")
 
 
-def guarded(fn, model, sim, name, t0=0.0):
+def guarded(fn, model, sim, name, t0=0.0, progress=None):
     """``fn(metered model)`` under the work limit from ``t0``, with numpy/scipy warnings kept quiet
-    and the solver's own breakdowns (singular matrices, ...) as :class:`SolverError`."""
+    and the solver's own breakdowns (singular matrices, ...) as :class:`SolverError`; ``progress`` hears of
+    the time reached within long intervals."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            return fn(_Metered(model, sim, name, t0))
+            return fn(_Metered(model, sim, name, t0, progress))
         except (RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
             if type(exc) not in (RuntimeError, ArithmeticError, ZeroDivisionError, OverflowError,
                                  np.linalg.LinAlgError):

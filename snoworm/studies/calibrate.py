@@ -245,8 +245,8 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
         Residual scales: torque error in units of ``torque_scale_Nm``, slip error in units of
         ``slip_scale`` (default 1 N m and 1 percentage point).
     progress : callable, optional
-        ``progress(evaluations, budget)`` after each model evaluation (the budget is the fit's
-        ``max_nfev``; a fit usually converges well before it).
+        ``progress(evaluations, budget)`` after each model evaluation (budget: ``max_nfev``), and
+        ``progress(n, n)`` when the fit ends after ``n`` (usually well within the budget).
 
     Raises
     ------
@@ -275,6 +275,8 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
     r0 = resid(x0)
     sol = least_squares(resid, x0, bounds=(lo, hi), method="trf", jac="3-point", x_scale="jac",
                         xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=budget)
+    if progress is not None:       # the fit has ended (usually well within its budget): all of its work is done
+        progress(count[0], count[0])
     return _result(data, names, seg, tp, x0, r0, sol, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale)
 
 
