@@ -30,6 +30,8 @@ def _labels(fig):
                             out.append((f"axes{i}.tick:{t.get_text()!r}", t))
         if a.get_legend() is not None and a.get_legend().get_visible():
             out.append((f"axes{i}.legend", a.get_legend()))
+            out += [(f"axes{i}.legend.text:{t.get_text()!r}", t) for t in a.get_legend().get_texts()
+                    if _visible_text(t)]
         for t in a.texts:
             if _visible_text(t):
                 out.append((f"axes{i}.text:{t.get_text()!r}", t))
@@ -60,6 +62,8 @@ def problems(fig, width_in=None, min_pt=MIN_PT):
             bad.append(f"{name} sticks out of the figure")
     for i, (n1, b1) in enumerate(boxes):
         for n2, b2 in boxes[i + 1:]:
+            if n2.startswith(n1 + ".") or n1.startswith(n2 + "."):      # a legend and its own texts
+                continue
             w = min(b1.x1, b2.x1) - max(b1.x0, b2.x0)
             h = min(b1.y1, b2.y1) - max(b1.y0, b2.y0)
             if w > 1.0 and h > 1.0:

@@ -133,3 +133,19 @@ def test_save_embeds_truetype_for_figures_drawn_elsewhere(tmp_path):
     fig.subplots().set_title("−resistance")
     data = save(fig, tmp_path / "own.pdf").read_bytes()
     assert b"/Subtype /Type3" not in data and b"/FontFile2" in data
+
+
+def test_the_readability_check_can_fail():
+    """tests/figure_checks.problems finds small text, overlapping legend entries and labels
+    outside the figure (so the readability tests above can fail)."""
+    fig = Figure(figsize=(3.5, 2.5), layout="constrained")
+    a = fig.subplots()
+    for k in range(3):
+        a.plot([0, 1], [k, k], label=f"a rather long label number {k}")
+    a.legend(loc="lower left", bbox_to_anchor=(0, 1.02, 1, 0.1), mode="expand", ncol=3)   # entries collide
+    a.set_xlabel("tiny", fontsize=5)
+    a.text(1.5, 0.5, "far outside", transform=a.transAxes)
+    found = " | ".join(problems(fig, 3.5))
+    assert "'tiny' at 5.0 pt" in found
+    assert "legend.text" in found and "overlaps" in found
+    assert "'far outside' sticks out" in found

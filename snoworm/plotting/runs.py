@@ -5,10 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from matplotlib.patches import Rectangle
+from matplotlib.patches import Patch, Rectangle
 from matplotlib.ticker import MaxNLocator
 
-from .phases import gait_spans, shade_phases
+from .phases import PHASE_COLOURS, gait_spans, shade_phases
 from .style import (blank_figure, figure_function, force_text, legend_outside, new_figure, series_style, small_pt,
                     target_width, wrap_title, write_figure)
 
@@ -178,6 +178,16 @@ def _setpoint_lines(a, result):
     legend_outside(a)
 
 
+def _legend_with_phase(a, grp, spans):
+    """The panel's legend, with a patch keying the shading of the gait phase in which ``grp`` moves."""
+    handles = a.get_legend_handles_labels()[0]
+    key = ", ".join(str(k) for k in grp)
+    phases = sorted({k for *_, k, moving in spans if moving == key})
+    if phases:
+        handles.append(Patch(color=PHASE_COLOURS[phases[0] % len(PHASE_COLOURS)], label="their phase"))
+    legend_outside(a, handles=handles)
+
+
 @figure_function
 def plot_groups(result, groups=None, *, ax=None, fig=None):
     """Ground speed of the segments that move together, one panel per group (paper Fig 5).
@@ -195,8 +205,10 @@ def plot_groups(result, groups=None, *, ax=None, fig=None):
         a.axhline(0.0, color="0.5", lw=0.6)
         a.set_ylabel("speed [m/s]")
         a.grid(alpha=0.3)
-        legend_outside(a)
-    shade_phases(list(axes[:, 0]), gait_spans(result))
+    spans = gait_spans(result)
+    shade_phases(list(axes[:, 0]), spans)
+    for a, grp in zip(axes[:, 0], groups):
+        _legend_with_phase(a, grp, spans)
     axes[-1, 0].set_xlabel("time [s]")
     title(fig, axes, f"{result.scenario.name}: ground speed of segments moving together "
                       f"(X_t = {result.segments['xt'][0].mean():.2f})", own)
@@ -225,8 +237,10 @@ def plot_speeds(result, *, ax=None, fig=None):
             a.plot(t, v[:, k], label=seg_label(k), lw=1.3, **series_style(k, t.size))
         a.set_ylabel("ground speed\n[m/s]")
         a.grid(alpha=0.3)
-        legend_outside(a)
-    shade_phases(list(axes[:n, 0]), gait_spans(result))
+    spans = gait_spans(result)
+    shade_phases(list(axes[:n, 0]), spans)
+    for a, grp in zip(axes[:n, 0], groups):
+        _legend_with_phase(a, grp, spans)
     if chart:
         _setpoint_chart(axes[n, 0], fig, result)
     else:
@@ -266,7 +280,7 @@ def plot_positions(result, *, ax=None, fig=None):
         a1.set_ylabel("position [m]")
     for k in range(x.shape[1]):
         a1.plot(t, x[:, k], label=seg_label(k), **series_style(k, t.size))
-    shade_phases([a1], gait_spans(result))
+    phase_keys = shade_phases([a1], gait_spans(result), legend_ax=a1)
     # mode switches (supervisor mode): a marked line at the switch, the leader's position there
     sw_style = {"switch_to_inching": ("#D55E00", "v", "to inching"), "switch_to_rolling": ("#009E73", "^", "to rolling")}
     for ev in result.events:
@@ -278,7 +292,11 @@ def plot_positions(result, *, ax=None, fig=None):
             a1.annotate(lab, (ev["t_s"], ev["x_m"]), textcoords="offset points", xytext=(-4 if right else 4, 6),
                         ha="right" if right else "left", fontsize=small_pt(), color=c)
     a1.set_xlabel("time [s]")
-    legend_outside(a1)
+    handles = a1.get_legend_handles_labels()[0] + phase_keys
+    if varies and own and fig.get_figwidth() < 5.0:     # narrow, with the side panel: the legend over both
+        fig.legend(handles=handles, loc="outside lower center", ncol=3, frameon=False, columnspacing=1.0)
+    else:
+        legend_outside(a1, handles=handles)
     a1.grid(alpha=0.3)
     title(fig, axes, f"{result.scenario.name}: position-time diagram"
                       + ("" if varies else f" (uniform terrain, X_t = {X[0]:g})"), own)

@@ -300,8 +300,8 @@ def legend_outside(ax, **kw):
         labels = [h.get_label() for h in handles]
     n = len(handles)
     ncol = kw.pop("ncol", None) or (n if n <= 3 else (3 if n % 3 == 0 or n > 8 else 2))
-    return ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02, 1.0, 0.1), mode="expand",
-                     borderaxespad=0.0, ncol=min(ncol, max(n, 1)), frameon=False, **kw)
+    return ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02), borderaxespad=0.0,
+                     ncol=min(ncol, max(n, 1)), frameon=False, columnspacing=1.0, handlelength=1.6, **kw)
 
 
 def small_pt() -> float:
