@@ -89,3 +89,20 @@ def test_tutorial_as_a_notebook_shows_its_figures(tmp_path, monkeypatch):
     bar = "".join(o.get("text", "") for o in sweep.outputs if o.get("name") == "stderr")
     assert "sweep:" in bar and "6/6 cases" in bar and "100%" in bar
     assert list(tmp_path.iterdir()) == []     # it wrote nothing in the working directory
+
+
+def test_readme_figure_is_made_by_the_command_it_names(tmp_path):
+    """README shows docs/figures/inchworm6_speeds_column.png as made by `snoworm run inchworm6
+    --out out/inchworm6 --figure-size column`: the command is there, and running it gives a PNG
+    of the same pixel size (3.5 in at 200 dpi: 700 px wide)."""
+    import struct
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert "`snoworm run inchworm6 --out out/inchworm6 --figure-size column`" in readme
+    assert "docs/figures/inchworm6_speeds_column.png" in readme
+    committed = (ROOT / "docs" / "figures" / "inchworm6_speeds_column.png").read_bytes()
+    r = subprocess.run([sys.executable, "-m", "snoworm", "run", "inchworm6", "--out", str(tmp_path / "inchworm6"),
+                        "--figure-size", "column"], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    made = (tmp_path / "inchworm6" / "speeds.png").read_bytes()
+    size = lambda png: struct.unpack(">II", png[16:24])
+    assert size(made) == size(committed) and size(made)[0] == 700
