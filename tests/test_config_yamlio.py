@@ -340,7 +340,7 @@ def test_read_yaml_errors_name_the_file(tmp_path):
 
 
 def test_controller_paths_from_cwd(tmp_path, monkeypatch):
-    from snoworm.yamlio import controller_paths_from_cwd
+    from snoworm.config.yamlio import controller_paths_from_cwd
     monkeypatch.chdir(tmp_path)
     ov = controller_paths_from_cwd([("mode.controller", "ctl.py:C"), ("mode.controller", "pkg.mod:C"),
                                     ("mode", {"type": "controller", "controller": "sub/c.py:D"}),
@@ -363,7 +363,7 @@ def test_set_controller_on_a_shipped_scenario_is_taken_from_the_working_director
     own = tmp_path / "mine"
     own.mkdir()
     (own / "ctl.py").write_text((tmp_path / "ctl.py").read_text())
-    from snoworm.scenario import scenario_path
+    from snoworm.config.scenario import scenario_path
     (own / "s.yaml").write_text(Path(scenario_path("tow6_uniform")).read_text())
     sc = load_scenario(own / "s.yaml", ["mode={type: controller, controller: 'ctl.py:Go', period_s: 0.1}"])
     assert sc.mode.controller == f"{own / 'ctl.py'}:Go"           # the user's file: its own folder
