@@ -56,3 +56,29 @@ def test_groundtruth_figures_in_the_chosen_format(tmp_path):
     _, _, paths2 = run_terrain_curves([1.0, 0.5], tmp_path / "tc", n_points=51, plot_format="pdf")
     assert [p.name for p in paths + paths2] == ["table2.csv", "table2.svg", "terrain_curves.csv", "terrain_curves.pdf"]
     assert b"<svg" in paths[1].read_bytes() and paths2[1].read_bytes()[:5] == b"%PDF-"
+
+
+def test_study_figures_readable_at_column_width():
+    """Mobility map, sweep, heat map, Table 2 and Figure 3 at 3.5 in: text >= 7 pt, nothing
+    overlapping (a title above a legend above the axes becomes the legend's title), all inside."""
+    from snoworm.plotting import FIGURE_SIZES, headless
+    from snoworm.studies.groundtruth import terrain_curves, vehicle_model
+    from tests.figure_checks import problems
+    v = np.array([[0.1, 0.2, 0.3], [np.nan, 0.4, 0.5]])
+    rows = [{"case": k, "xt": 0.5 + 0.1 * k, "slip_measured": 0.1, "slip_model": 0.12, "torque_measured_Nm": 20.0,
+             "torque_model_Nm": 21.0} for k in range(1, 6)]
+    with headless():
+        figs = {"mobility": studies.plot_mobility_map(_mmap(), size="column"),
+                "sweep": studies.plot_sweep([0.0, 100.0, 200.0], {"mean_speed_mps": [0.5, 0.4, None],
+                                                                   "energy_per_m_J": [1, 2, 3]}, "tow.force_N",
+                                            immobilised=[False, False, True], ok=[True, True, False], size="column"),
+                "heatmap": studies.plot_sweep_heatmap(["0.5", "0.75", "1"], ["0", "100"], v, "terrain.xt",
+                                                      "tow.force_N", "mean speed [m/s]", failed=np.isnan(v),
+                                                      size="column"),
+                "table2": studies.plot_table2(rows, size="column"),
+                "terrain curves": studies.plot_terrain_curves(terrain_curves([1.0, 0.5], *vehicle_model("frostyboy", None),
+                                                                             101), size="column")}
+    assert " ".join(figs["mobility"].axes[0].get_legend().get_title().get_text().split()).endswith(
+        "which modes move the vehicle")
+    for name, fig in figs.items():
+        assert problems(fig, FIGURE_SIZES["column"]) == [], name

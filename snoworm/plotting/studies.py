@@ -20,8 +20,9 @@ def plot_table2(rows, *, ax=None, fig=None):
     """Measured against modelled slip and torque per field case (paper Table 2); two panels."""
     lab = [str(r["case"]) for r in rows]
     x = np.arange(len(rows))
-    fig, axes = new_figure(ax, fig, 1, 2, figsize=(10, 4.2))
-    a1, a2 = axes[0]
+    narrow = ax is None and target_width() < 5.0          # a column: the two panels one above the other
+    fig, axes = new_figure(ax, fig, *((2, 1) if narrow else (1, 2)), figsize=(3.5, 5.0) if narrow else (10, 4.2))
+    a1, a2 = axes.flat
     w = 0.38
     kw_m, kw_s = dict(color=COLOURS[0]), dict(color=COLOURS[1], hatch="//", edgecolor="white")
     a1.bar(x - w / 2, [100 * r["slip_measured"] for r in rows], w, label="measured", **kw_m)
@@ -45,7 +46,7 @@ def plot_terrain_curves(curves, title=None, *, ax=None, fig=None):
     """Tractive, resistive and net force per wheel against slip at each X_t (paper Figure 3).
 
     ``title``: the figure's title (default: the normal load and direction)."""
-    fig, axes = new_figure(ax, fig, 1, 1, figsize=(9, 5))
+    fig, axes = new_figure(ax, fig, 1, 1, figsize=(9, 5) if target_width() >= 5.0 else (3.5, 3.8))
     a = axes[0, 0]
     for m, x in enumerate(curves.xt):
         col = COLOURS[m % len(COLOURS)]
@@ -64,7 +65,8 @@ def plot_terrain_curves(curves, title=None, *, ax=None, fig=None):
     a.set_title(wrap_title(title or f"Terrain forces per wheel (F_n = {curves.normal_load_N:.1f} N), forward motion",
                            fig.get_figwidth()))
     a.grid(alpha=0.3)
-    legend_outside(a, ncol=1 if len(curves.xt) < 4 else 2)
+    wide = fig.get_figwidth() >= 5.0                # wide: one column beside; narrow: a column per X_t above
+    legend_outside(a, ncol=(1 if len(curves.xt) < 4 else 2) if wide else min(len(curves.xt), 3))
     return fig
 
 

@@ -132,7 +132,9 @@ def figure_function(fn):
         token = _SIZE.set(size)
         try:
             with figure_style(size):
-                return fn(*args, **kwargs)
+                fig = fn(*args, **kwargs)
+                _titles_into_legends(fig)
+                return fig
         finally:
             _SIZE.reset(token)
     return wrapper
@@ -300,8 +302,27 @@ def legend_outside(ax, **kw):
         labels = [h.get_label() for h in handles]
     n = len(handles)
     ncol = kw.pop("ncol", None) or (n if n <= 3 else (3 if n % 3 == 0 or n > 8 else 2))
-    return ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02), borderaxespad=0.0,
-                     ncol=min(ncol, max(n, 1)), frameon=False, columnspacing=1.0, handlelength=1.6, **kw)
+    leg = ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02), borderaxespad=0.0,
+                    ncol=min(ncol, max(n, 1)), frameon=False, columnspacing=1.0, handlelength=1.6, **kw)
+    leg.set_gid(_ABOVE)       # a title of these axes becomes the legend's title (see figure_function)
+    return leg
+
+
+#: gid of a legend placed above its axes (narrow figures).
+_ABOVE = "snoworm-legend-above"
+
+
+def _titles_into_legends(fig):
+    """An axes title and a legend placed above the same axes would collide: the title becomes the
+    legend's title (left-aligned, above the entries)."""
+    for a in fig.axes:
+        leg = a.get_legend()
+        if leg is not None and leg.get_gid() == _ABOVE and a.get_title():
+            width_in = 0.8 * a.get_position().width * fig.get_figwidth()    # the legend starts at the axes' left
+            leg.set_title(wrap_title(" ".join(a.get_title().split()), width_in),
+                          prop={"size": matplotlib.rcParams["axes.titlesize"]})
+            leg._legend_box.align = "left"
+            a.set_title("")
 
 
 def small_pt() -> float:
