@@ -301,9 +301,10 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot
               help="Worker processes running the items in parallel (default: the usable cores, at most 8; "
                    "1 runs them one after the other). The claims and the report do not depend on it.")
 @plot_format_option
+@figure_size_option
 @overwrite_option
 @handle_errors
-def paper(out_dir, quick, strict, jobs, plot_format, overwrite):
+def paper(out_dir, quick, strict, jobs, plot_format, figure_size, overwrite):
     """Reproduce the paper: Figure 3, Table 2, Figures 5 to 11, in one command.
 
     Runs every scenario behind the paper's quantitative content, checks each of the paper's
@@ -317,7 +318,8 @@ def paper(out_dir, quick, strict, jobs, plot_format, overwrite):
     """
     from .studies.paper import default_jobs, run_paper  # lazy: start-up
     rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True), overwrite=overwrite,
-                    jobs=default_jobs() if jobs is None else jobs, plot_format=plot_format)
+                    jobs=default_jobs() if jobs is None else jobs, plot_format=plot_format,
+                    figure_size=figure_size)
     if echo_claims(rep, out_dir, quick) < len(rep.claims) and strict:
         sys.exit(1)
 

@@ -120,6 +120,19 @@ def test_plot_format_of_the_figures_and_how_the_report_shows_them(tmp_path, fmt,
     assert (f"[fig3_terrain_curves.pdf](fig3_terrain_curves.pdf)" in md) == (fmt == "pdf")
 
 
+def test_figure_size_of_the_report_figures(tmp_path):
+    """paper --figure-size column: the figures are 3.5 in (252 pt) wide PDFs without Type 3 fonts
+    (the fig3 item: Figure 3)."""
+    import re
+    secs = paper.evaluate(["fig3"], out_dir=tmp_path, plot_format="pdf", figure_size="column")
+    figs = [p for s in secs for p in s.figures]
+    assert figs
+    for p in figs:
+        data = p.read_bytes()
+        assert float(re.search(rb"/MediaBox \[\s*0 0 ([0-9.]+) ", data).group(1)) == pytest.approx(252.0, abs=0.01)
+        assert b"/Subtype /Type3" not in data
+
+
 def test_unknown_plot_format_is_rejected():
     from snoworm.config.schema import ScenarioError
     with pytest.raises(ScenarioError, match="plot format 'gif'"):
@@ -136,7 +149,7 @@ def _fake_report(holds):
 @pytest.mark.parametrize("holds,strict,code", [(True, True, 0), (False, False, 0), (False, True, 1)])
 def test_cli_exit_status(monkeypatch, tmp_path, holds, strict, code):
     monkeypatch.setattr(paper, "run_paper", lambda out, quick=False, progress=None, overwrite=False, jobs=1,
-                        plot_format="png": _fake_report(holds))
+                        plot_format="png", figure_size=None: _fake_report(holds))
     args = ["paper", "--out", str(tmp_path), "--quick"] + (["--strict"] if strict else [])
     res = CliRunner().invoke(main, args)
     assert res.exit_code == code, res.output

@@ -140,21 +140,26 @@ class Context:
         Directory for figures; ``None`` draws nothing.
     plot_format : {"png", "pdf", "svg"}
         File format of the figures (:func:`snoworm.plotting.save`; PNG at 200 dpi).
+    figure_size : str, optional
+        Print size of the figures: ``"column"``, ``"page"`` (default) or ``"WxH"`` inches.
     """
 
-    def __init__(self, quick=False, model=None, scenario_overrides=None, out_dir=None, plot_format="png"):
+    def __init__(self, quick=False, model=None, scenario_overrides=None, out_dir=None, plot_format="png",
+                 figure_size=None):
         self.quick = bool(quick)
         self.model = dict(model or {})
         self.scenario_overrides = {k: list(v) for k, v in (scenario_overrides or {}).items()}
         self.out_dir = Path(out_dir) if out_dir is not None else None
         self.plot_format = str(plot_format)
+        self.figure_size = figure_size
         self._runs = {}
 
     def child(self, model=None, plot=False) -> "Context":
         """A context with extra terrain-model overrides (alternative readings), sharing nothing."""
         m = dict(self.model)
         m.update(model or {})
-        return Context(self.quick, m, self.scenario_overrides, self.out_dir if plot else None, self.plot_format)
+        return Context(self.quick, m, self.scenario_overrides, self.out_dir if plot else None, self.plot_format,
+                       self.figure_size)
 
     def overrides(self, name, extra=()) -> list:
         ov = [f"terrain.model.{k}={v}" for k, v in self.model.items()]
@@ -174,7 +179,7 @@ class Context:
     def args(self) -> tuple:
         """The constructor's arguments: ``Context(*ctx.args())`` is a context with the same settings
         and an empty cache (how worker processes get theirs)."""
-        return self.quick, self.model, self.scenario_overrides, self.out_dir, self.plot_format
+        return self.quick, self.model, self.scenario_overrides, self.out_dir, self.plot_format, self.figure_size
 
     def vehicle(self):
         """``(SegmentConfig, TerrainParams)`` of FrostyBoy with the context's model overrides."""

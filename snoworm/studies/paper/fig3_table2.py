@@ -48,7 +48,7 @@ def item_fig3(ctx: Context) -> Section:
         scenarios=["terrain laws (Eqs. 2-3), no simulation"], claims=check_fig3(c))
     s.tables.append("```\n" + format_zero_crossings(c) + "\n```")
     if ctx.out_dir is not None:
-        s.figures.append(plotting.write_figure(ctx.figure("fig3_terrain_curves.png"), plotting.plot_terrain_curves, c))
+        s.figures.append(plotting.write_figure(ctx.figure("fig3_terrain_curves.png"), plotting.plot_terrain_curves, c, size=ctx.figure_size))
     return s
 
 
@@ -152,6 +152,6 @@ def item_table2(ctx: Context) -> Section:
                    "to those four cases (docs/model.md section 2, [fitted]). Case 4 (towing 28.8 N) is the only "
                    "torque not used in the fit. The slips are predictions of Eq. 2 (with d = 2).")
     if ctx.out_dir is not None:
-        s.figures.append(plotting.write_figure(ctx.figure("table2.png"), plotting.plot_table2, rows))
+        s.figures.append(plotting.write_figure(ctx.figure("table2.png"), plotting.plot_table2, rows, size=ctx.figure_size))
     return s
 

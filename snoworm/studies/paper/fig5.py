@@ -224,7 +224,7 @@ def item_fig5(ctx: Context) -> Section:
                    "and 2 & 5 overlap less closely than 1 & 4. The timing thresholds of fig5.backward_peak_early "
                    "(first quarter of the phase; in its second half below 0.95 of the peak in every phase and 0.6 in the median phase, counting phases whose sliding reaches a quarter of the run's peak) are also this report's.")
     if ctx.out_dir is not None:
-        s.figures.append(plotting.write_figure(ctx.figure("fig5_speeds.png"), plotting.plot_groups, inch, FIG5_PAIRS))
-        s.figures.append(plotting.write_figure(ctx.figure("fig5_positions.png"), plotting.plot_positions, inch))
+        s.figures.append(plotting.write_figure(ctx.figure("fig5_speeds.png"), plotting.plot_groups, inch, FIG5_PAIRS, size=ctx.figure_size))
+        s.figures.append(plotting.write_figure(ctx.figure("fig5_positions.png"), plotting.plot_positions, inch, size=ctx.figure_size))
     return s
 

@@ -56,7 +56,7 @@ def item_fig6(ctx: Context) -> Section:
         scenarios=["tow6_uniform"], claims=check_fig6(res))
     s.notes.append(f"Steady values are means over the last {STEADY_WINDOW_S:g} s of the {res.t[-1]:g} s run.")
     if ctx.out_dir is not None:
-        s.figures.append(plotting.write_figure(ctx.figure("fig6_forces.png"), plotting.plot_forces, res))
+        s.figures.append(plotting.write_figure(ctx.figure("fig6_forces.png"), plotting.plot_forces, res, size=ctx.figure_size))
     return s
 
 
@@ -98,7 +98,7 @@ def item_fig7(ctx: Context) -> Section:
         "initialization procedures'."), scenarios=["tow6_staggered", "tow6_uniform"],
         claims=check_fig7(res7, res6))
     if ctx.out_dir is not None:
-        s.figures.append(plotting.write_figure(ctx.figure("fig7_forces.png"), plotting.plot_forces, res7))
+        s.figures.append(plotting.write_figure(ctx.figure("fig7_forces.png"), plotting.plot_forces, res7, size=ctx.figure_size))
     return s
 
 
@@ -157,8 +157,8 @@ def item_fig8(ctx: Context) -> Section:
     s.notes.append("The paper's Fig 8 text calls tension negative, while its Fig 6 text calls tension positive; "
                    "snoworm uses tension positive throughout and the transient claim is read accordingly.")
     if ctx.out_dir is not None:
-        s.figures.append(plotting.write_figure(ctx.figure("fig8_forces.png"), plotting.plot_forces, res))
-        s.figures.append(plotting.write_figure(ctx.figure("fig8_speeds.png"), plotting.plot_speeds, res))
+        s.figures.append(plotting.write_figure(ctx.figure("fig8_forces.png"), plotting.plot_forces, res, size=ctx.figure_size))
+        s.figures.append(plotting.write_figure(ctx.figure("fig8_speeds.png"), plotting.plot_speeds, res, size=ctx.figure_size))
     return s
 
 
@@ -197,9 +197,9 @@ def item_fig9(ctx: Context) -> Section:
         "the middle segment works to maintain a constant 100 N tension between it and the rear-most segment.' "
         "Figure 10 shows the force distribution."), scenarios=["pi3_equal"], claims=check_fig9(res))
     if ctx.out_dir is not None:
-        s.figures.append(plotting.write_figure(ctx.figure("fig9_forces.png"), plotting.plot_forces, res))
-        s.figures.append(plotting.write_figure(ctx.figure("fig9_speeds.png"), plotting.plot_speeds, res))
-        s.figures.append(plotting.write_figure(ctx.figure("fig10_force_diagram.png"), plotting.plot_force_diagram, res))
+        s.figures.append(plotting.write_figure(ctx.figure("fig9_forces.png"), plotting.plot_forces, res, size=ctx.figure_size))
+        s.figures.append(plotting.write_figure(ctx.figure("fig9_speeds.png"), plotting.plot_speeds, res, size=ctx.figure_size))
+        s.figures.append(plotting.write_figure(ctx.figure("fig10_force_diagram.png"), plotting.plot_force_diagram, res, size=ctx.figure_size))
     return s
 
 
@@ -239,7 +239,7 @@ def item_fig11(ctx: Context) -> Section:
     s.notes.append("The paper gives no target values for Fig 11; the scenario uses T0 = +50 N, T1 = -50 N "
                    "(net connector force +100 N on the middle segment).")
     if ctx.out_dir is not None:
-        s.figures.append(plotting.write_figure(ctx.figure("fig11_forces.png"), plotting.plot_forces, res))
-        s.figures.append(plotting.write_figure(ctx.figure("fig11_speeds.png"), plotting.plot_speeds, res))
+        s.figures.append(plotting.write_figure(ctx.figure("fig11_forces.png"), plotting.plot_forces, res, size=ctx.figure_size))
+        s.figures.append(plotting.write_figure(ctx.figure("fig11_speeds.png"), plotting.plot_speeds, res, size=ctx.figure_size))
     return s
 

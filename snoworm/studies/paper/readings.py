@@ -41,7 +41,8 @@ def _reading_d1(ctx: Context, s: Section):
     if ctx.out_dir is not None:
         s.figures.append(plotting.write_figure(
             ctx.figure("fig3_d1_terrain_curves.png"), plotting.plot_terrain_curves, c1,
-            title=f"Terrain forces per wheel with peak exponent d = 1, not the default (F_n = {c1.normal_load_N:.1f} N)"))
+            title=f"Terrain forces per wheel with peak exponent d = 1, not the default (F_n = {c1.normal_load_N:.1f} N)",
+            size=ctx.figure_size))
 
 
 def _reading_traction(ctx: Context, s: Section):

@@ -137,14 +137,14 @@ def _evaluate_pooled(ctx, keys, jobs, done):
 
 
 def evaluate(items=None, quick=False, model=None, scenario_overrides=None, out_dir=None, progress=None,
-             jobs=1, plot_format="png") -> list:
+             jobs=1, plot_format="png", figure_size=None) -> list:
     """Run report items and return their :class:`Section` objects.
 
     Parameters
     ----------
     items : sequence of str, optional
         Keys of :data:`ITEMS` (default: all, in order).
-    quick, model, scenario_overrides, out_dir, plot_format
+    quick, model, scenario_overrides, out_dir, plot_format, figure_size
         See :class:`Context`.  ``out_dir=None`` draws no figures.
     progress : callable, optional
         Called with one line of text per item when it finishes (in the order they finish).
@@ -159,7 +159,7 @@ def evaluate(items=None, quick=False, model=None, scenario_overrides=None, out_d
     """
     if plot_format not in PLOT_FORMATS:
         raise ScenarioError(f"plot format {plot_format!r}: expected one of {', '.join(PLOT_FORMATS)}.")
-    ctx = Context(quick, model, scenario_overrides, out_dir, plot_format)
+    ctx = Context(quick, model, scenario_overrides, out_dir, plot_format, figure_size)
     keys = list(ITEMS) if items is None else list(items)
     unknown = [k for k in keys if k not in ITEMS]
     if unknown:
@@ -182,12 +182,13 @@ def evaluate(items=None, quick=False, model=None, scenario_overrides=None, out_d
     return out
 
 
-def run_paper(out_dir, quick=False, progress=None, overwrite=False, jobs=1, plot_format="png") -> PaperReport:
+def run_paper(out_dir, quick=False, progress=None, overwrite=False, jobs=1, plot_format="png",
+              figure_size=None) -> PaperReport:
     """Run every item, write the figures, ``report.md``, ``report.html`` and ``claims.json`` into ``out_dir``.
 
     ``jobs`` worker processes run the items (:func:`evaluate`; 1: serial, in this process).
     ``plot_format``: png (default, 200 dpi), pdf or svg figures; report.html shows PNG and SVG
-    inline and links PDF figures.
+    inline and links PDF figures.  ``figure_size``: their print size (column, page or WxH).
 
     All or nothing (:func:`snoworm.infra.folders.output_folder`): the figures and the report go to a
     temporary sibling folder that replaces ``out_dir`` when everything is written.
@@ -197,16 +198,17 @@ def run_paper(out_dir, quick=False, progress=None, overwrite=False, jobs=1, plot
     PaperReport
     """
     with output_folder(out_dir, overwrite) as out:
-        rep = _run_into(out, quick, progress, jobs, plot_format)
+        rep = _run_into(out, quick, progress, jobs, plot_format, figure_size)
     rep.paths = relocate(rep.paths, out, out_dir)
     for sec in rep.sections:
         sec.figures = relocate(sec.figures, out, out_dir)
     return rep
 
 
-def _run_into(out: Path, quick, progress, jobs, plot_format) -> PaperReport:
+def _run_into(out: Path, quick, progress, jobs, plot_format, figure_size=None) -> PaperReport:
     t0 = time.perf_counter()
-    sections = evaluate(None, quick, out_dir=out, progress=progress, jobs=jobs, plot_format=plot_format)
+    sections = evaluate(None, quick, out_dir=out, progress=progress, jobs=jobs, plot_format=plot_format,
+                        figure_size=figure_size)
     rep = PaperReport(sections, bool(quick), time.perf_counter() - t0)
     figs = [p for s in sections for p in s.figures]
     rep.paths = figs + [
