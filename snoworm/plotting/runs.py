@@ -15,7 +15,7 @@ from .style import (blank_figure, figure_function, force_text, legend_outside, n
 __all__ = ["plot_forces", "plot_speeds", "plot_positions", "plot_force_diagram", "plot_groups", "plot_result",
            "moving_groups", "plot_route", "PLOT_KINDS", "seg_label", "title", "gait_spans"]
 
-#: Up to this many links the forces share one panel; more get small multiples (a panel each).
+#: Up to this many links a gait's forces share one panel; more get small multiples (a panel each).
 OVERLAY_MAX = 3
 #: Beyond this many links small multiples are too small to read: colour charts instead.
 MULTIPLES_MAX = 8
@@ -94,16 +94,17 @@ def _force_chart(a, fig, t, F, label, ylabel):
 def plot_forces(result, *, ax=None, fig=None):
     """Connector (link) forces and net wheel force per segment against time (paper Figs 6-9).
 
-    Up to :data:`OVERLAY_MAX` links: two panels (links, segments), a line each.  More links on a
-    figure of ours: small multiples, a panel per link and per segment with shared axes (a gait's
-    square waves would tangle in one panel); beyond :data:`MULTIPLES_MAX`: two colour charts.
+    Two panels (links, segments), a line each, except for a gait (inchworm, supervisor) with more
+    than :data:`OVERLAY_MAX` links on a figure of ours: small multiples, a panel per link and per
+    segment with shared axes (its square waves would tangle in one panel); beyond
+    :data:`MULTIPLES_MAX` links: two colour charts.
     Gait phases are shaded.  ``ax``: two axes (links, segments) of your own (lines); ``fig``: a
     figure to draw in.  ``size``: print size (:func:`snoworm.plotting.style.parse_size`).
     Returns the Figure.
     """
     own = ax is None and fig is None
     nl = result.links["force_N"].shape[1]
-    if ax is None and OVERLAY_MAX < nl <= MULTIPLES_MAX:
+    if ax is None and OVERLAY_MAX < nl <= MULTIPLES_MAX and gait_spans(result):
         fig = fig if fig is not None else blank_figure((9, 1.3 * (nl + 1) + 0.8), nl + 1, row_in=1.0)
         return _force_multiples(fig, result, own)
     fig, axes = new_figure(ax, fig, 2, 1, figsize=(9, 6.5), sharex=True)
