@@ -133,10 +133,10 @@ def test_cached_properties_are_built_once():
 
 
 def test_mode_configs_registry_holds_the_built_in_modes():
-    from snoworm.config.mode_registry import MODE_CONFIGS
-    assert {"uniform", "force_control", "inchworm", "supervisor"} <= set(MODE_CONFIGS)
+    from snoworm.config.mode_registry import MODES
+    assert {"uniform", "force_control", "inchworm", "supervisor"} <= set(MODES)
     sc = load_scenario(SCENARIOS / "inchworm6.yaml")
-    assert type(sc.mode) is MODE_CONFIGS["inchworm"]
+    assert type(sc.mode) is MODES.config_class("inchworm")
 
 
 # ------------------------------------------------------------------ shipped names, vehicles as files, sources
