@@ -13,7 +13,8 @@ import sys
 import click
 
 from ._version import __version__
-from .cli_common import (EXIT_SOLVER, CommandGroup, allow_code_option, code_check, configure_logging, echo_claims,
+from .cli_common import (EXIT_SOLVER, CommandGroup, allow_code_option, code_check, command_line,
+                         configure_logging, echo_claims,
                          echo_run, echo_sweep, fail, handle_errors, model_file_option, out_option, overwrite_option,
                          param_set_option, plot_format_option, progress_bar, set_option, sweep_interrupted)
 
@@ -57,7 +58,7 @@ def run(scenario, out_dir, sets, no_plot, plot_format, overwrite, allow_code):
     from .modes.codeload import allow_code as allowed  # lazy: start-up
     with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar, allowed(allow_code):
         res = simulate(sc, progress=bar.set)
-    paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite)
+    paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite, command=command_line())
     echo_run(sc.name, res, paths, out_dir)
 
 
@@ -99,7 +100,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
     """
     from .studies.groundtruth import run_groundtruth  # lazy: start-up
     _, text, paths = run_groundtruth(out_dir, data_path, parameter_set_name, model_file, plot=not no_plot,
-                                     plot_format=plot_format, overwrite=overwrite)
+                                     plot_format=plot_format, overwrite=overwrite, command=command_line())
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -125,7 +126,8 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
     """
     from .studies.groundtruth import run_terrain_curves  # lazy: start-up
     _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name, model_file, plot=not no_plot,
-                                        n_points=n_points, plot_format=plot_format, overwrite=overwrite)
+                                        n_points=n_points, plot_format=plot_format, overwrite=overwrite,
+                                        command=command_line())
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -159,7 +161,7 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     with progress_bar(1, "calibrate", "model evaluations (budget)") as bar:
         _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
                                          torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, overwrite=overwrite,
-                                         progress=bar.set)
+                                         progress=bar.set, command=command_line())
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -222,7 +224,7 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
     from .studies.sweep import SweepExecutionError, run_sweep  # lazy: start-up
     # options: jobs, scheduler, zip_, save_cases, series, plot_format, batch, overwrite, allow_code, restart
     try:
-        table = run_sweep(scenario, sets, out_dir=out_dir, plot=not no_plot, **options)
+        table = run_sweep(scenario, sets, out_dir=out_dir, plot=not no_plot, command=command_line(), **options)
     except SweepExecutionError as exc:
         fail(str(exc), EXIT_SOLVER)
     except KeyboardInterrupt as exc:
@@ -275,7 +277,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot
     # (run_mobility_map's names)
     with progress_bar(1, "mobility map", "inching runs") as bar:
         _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, inching=not no_inching,
-                                          plot=not no_plot, progress=bar.set, **options)
+                                          plot=not no_plot, progress=bar.set, command=command_line(), **options)
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -308,7 +310,7 @@ def paper(out_dir, quick, strict, jobs, plot_format, overwrite):
     """
     from .studies.paper import default_jobs, run_paper  # lazy: start-up
     rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True), overwrite=overwrite,
-                    jobs=default_jobs() if jobs is None else jobs, plot_format=plot_format)
+                    jobs=default_jobs() if jobs is None else jobs, plot_format=plot_format, command=command_line())
     if echo_claims(rep, out_dir, quick) < len(rep.claims) and strict:
         sys.exit(1)
 

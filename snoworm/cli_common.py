@@ -18,7 +18,7 @@ import sys
 
 import click
 
-__all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "out_option",
+__all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "command_line", "out_option",
            "allow_code_option", "code_check",
            "overwrite_option", "set_option", "plot_format_option", "param_set_option", "model_file_option",
            "progress_bar", "StderrHandler", "configure_logging", "echo_run", "echo_sweep", "sweep_interrupted",
@@ -58,11 +58,8 @@ def handle_errors(fn):
         from .config.schema import ScenarioError  # lazy: start-up
         from .simulation.guard import SolverError  # lazy: start-up
         from .modes.controller import ControllerError  # lazy: start-up
-        from .infra import folders  # lazy: start-up
         from .infra.folders import OutputError  # lazy: start-up
         old = _catch_sigterm()
-        argv = click.get_current_context().find_root().meta.get("snoworm.argv")
-        folders.COMMAND = shlex.join(["snoworm", *argv]) if argv is not None else None   # for the manifests
         try:
             return fn(*a, **kw)
         except (ScenarioError, OutputError) as exc:
@@ -86,10 +83,17 @@ def handle_errors(fn):
             fail(f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
                   "rerun with SNOWORM_DEBUG=1 for the traceback and report it.", EXIT_SOLVER)
         finally:
-            folders.COMMAND = None
             if old is not None:
                 signal.signal(signal.SIGTERM, old)
     return wrapper
+
+
+def command_line() -> str | None:
+    """The running command's line, ``snoworm <its arguments>`` (recorded in the manifests of the
+    output folders it writes), or None outside a command."""
+    ctx = click.get_current_context(silent=True)
+    argv = ctx.find_root().meta.get("snoworm.argv") if ctx is not None else None
+    return shlex.join(["snoworm", *argv]) if argv is not None else None
 
 
 class CommandGroup(click.Group):
@@ -151,7 +155,7 @@ def code_check(sc, allow_code, verb=None):
     """Refuse (exit 2) a controller that may not run; with ``verb``, say on stderr which code runs."""
     if getattr(sc.mode, "type", None) == "controller":
         from .modes.controller import code_notice  # lazy: start-up (only controller scenarios)
-        notice = code_notice(sc.mode, allow_code)
+        notice = code_notice(sc, allow_code)
         if verb:
             click.echo(f"snoworm: {verb} {notice}", err=True)
 

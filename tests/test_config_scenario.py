@@ -1,5 +1,6 @@
 """Scenarios (snoworm.config.scenario): every shipped scenario is valid; bad input fails naming the field and the fix;
 Scenario.with_ and to_dict; the mode-config registry and cached properties."""
+import dataclasses
 import pytest
 import yaml
 from hypothesis import given, settings, strategies as st
@@ -247,3 +248,15 @@ def test_override_of_an_aliased_section_changes_only_the_named_place():
     raw["b"] = raw["a"]                    # what a YAML alias gives
     out = apply_overrides(raw, [("a.v", 2)])
     assert out["a"]["v"] == 2 and out["b"]["v"] == 1 and raw["a"]["v"] == 1
+
+
+def test_the_origin_keeps_the_folder_and_the_notes_through_edits(tmp_path, monkeypatch):
+    path = _vehicle_file(tmp_path, "name: my_rover\nbase: frostyboy\nsegment:\n  mass_kg: 120.0\n")
+    sc = load_scenario(path)
+    assert sc.origin.base_dir == tmp_path and sc.sources["vehicle.segment.mass_kg"] == "[user] rover.yaml"
+    noted = sc.with_({"sources": {"vehicle.segment.wheel_radius_m": "[field data] tape"}})
+    assert noted.origin.base_dir == tmp_path                 # with_ validates from the same folder
+    # dataclasses.replace keeps the notes and the parameter set's tags (before: they were lost)
+    edited = dataclasses.replace(noted, description="edited")
+    assert edited.sources == noted.sources
+    assert edited.sources["vehicle.segment.wheel_radius_m"] == "[field data] tape"

@@ -161,3 +161,15 @@ def test_failing_controller_is_a_sweep_case_status(tmp_path):
     out = run_case({"index": 0, "raw": raw, "source": str(p), "base_dir": str(tmp_path), "save_dir": None})
     assert out["status"] == "controller_failure" and "controller" in STATUSES[-1]
     assert "controller raised at t = 0.35 s" in out["error"] and "my controller broke" in out["error"]
+
+
+def test_resolve_paths_takes_a_relative_file_from_the_given_folder_only(tmp_path):
+    from snoworm.modes.controller import ControllerConfig
+    raw = {"type": "controller", "controller": "ctl/my.py:Mine", "period_s": 0.1}
+    out = ControllerConfig.resolve_paths(raw, tmp_path)
+    assert out["controller"] == f"{(tmp_path / 'ctl' / 'my.py').resolve()}:Mine"
+    assert raw["controller"] == "ctl/my.py:Mine"                 # the given mapping is not changed
+    for spec in ("tests.controller_helpers:Schedule", "/abs/file.py:X", 3):     # a module, absolute, not text
+        assert ControllerConfig.resolve_paths({**raw, "controller": spec}, tmp_path)["controller"] == spec
+    with pytest.raises(ScenarioError, match=r"^mode\.controller: expected 'file\.py:ClassName'"):
+        ControllerConfig.resolve_paths({**raw, "controller": "no colon.py"}, tmp_path)

@@ -35,6 +35,13 @@ class ModeConfig(Config):
     force_loop = False
     extra_plots = ()
 
+    @classmethod
+    def resolve_paths(cls, raw: dict, base_dir):
+        """The ``mode:`` mapping ``raw`` with its relative file paths taken from ``base_dir`` (the
+        scenario file's folder), before validation; default: unchanged.  Called by
+        :func:`snoworm.config.scenario.scenario_from_dict`, which knows the folder."""
+        return raw
+
     def check_vehicle(self, vehicle, path):
         """Rules that need the vehicle (e.g. one value per segment); raise ScenarioError."""
 
@@ -149,7 +156,10 @@ MODES = ModeRegistry(BUILT_IN_MODES)
 
 
 def build_mode_config(raw, path="mode") -> ModeConfig:
-    """Validate a ``mode`` mapping against the config class registered for its ``type``."""
+    """Validate a ``mode`` mapping against the config class registered for its ``type`` (a made
+    :class:`ModeConfig`, validated already, is returned as it is)."""
+    if isinstance(raw, ModeConfig):
+        return raw
     reg = MODES
     if not isinstance(raw, dict):
         raise ScenarioError(f"{path}: expected a mapping with a 'type' key ({', '.join(reg)}), got {quote(raw)}.")

@@ -13,7 +13,6 @@ exit status 2 at the command line): finite numbers, strictly increasing distance
 """
 from __future__ import annotations
 
-import contextvars
 import csv
 import math
 from dataclasses import dataclass
@@ -22,7 +21,7 @@ from pathlib import Path
 from .schema import Config, ScenarioError, field
 from ..slope import MAX_GRADE_DEG, ElevationProfile
 
-__all__ = ["BASE_DIR", "base_dir", "GRADE_DOMAIN", "ROUTE_COLUMNS", "GradePatchConfig", "Route", "read_route", "check_elevation_table",
+__all__ = ["GRADE_DOMAIN", "ROUTE_COLUMNS", "GradePatchConfig", "Route", "read_route", "check_elevation_table",
            "check_vehicle_on_grade"]
 
 #: Domain of every grade angle a scenario or a study gives [deg].
@@ -34,20 +33,6 @@ GRADE_DOMAIN = dict(ge=-MAX_GRADE_DEG, le=MAX_GRADE_DEG,
 ROUTE_COLUMNS = ("distance_m", "elevation_m", "xt")
 
 _FAR_M = 1e7
-
-#: folder of the scenario file being validated (None: the working directory); see :func:`base_dir`
-BASE_DIR = contextvars.ContextVar("snoworm_scenario_dir", default=None)
-
-
-def base_dir() -> Path:
-    """The folder that relative file paths in the scenario being validated are taken from.
-
-    The scenario file's folder while ``load_scenario`` validates it, else the working directory.
-    A config section resolving a file path (``terrain.route``, ``mode.controller``) calls it.
-    """
-    d = BASE_DIR.get()
-    return Path.cwd() if d is None else d
-
 
 @dataclass(frozen=True)
 class GradePatchConfig(Config):

@@ -8,6 +8,7 @@ declared by each mode (:mod:`snoworm.modes`).
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,7 +20,7 @@ from ..model.arrays import LinkArrays, SegmentArrays
 from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
 from ..slope import ElevationProfile, grade_patch_profile
 from ..terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
-from .routes import GRADE_DOMAIN, GradePatchConfig, base_dir, check_elevation_table, read_route
+from .routes import GRADE_DOMAIN, GradePatchConfig, check_elevation_table, read_route
 
 __all__ = ["XT_DOMAIN", "FINITE_WHY", "BIG_FORCE_N", "BIG_SPEED_MPS", "MAX_SEGMENTS", "MAX_OUTPUT_SAMPLES",
            "SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig", "TerrainConfig",
@@ -242,22 +243,32 @@ class TerrainConfig(Config):
         if self.elevation is not None:
             check_elevation_table(self.elevation, f"{path}.elevation")
         if self.route is not None:
-            route = Path(self.route)
-            route = route if route.is_absolute() else (base_dir() / route)
-            object.__setattr__(self, "route", str(route.resolve()))
-            object.__setattr__(self, "_route", read_route(self.route))
+            self.route_data()               # read (and checked) once, at validation
+
+    @classmethod
+    def resolve_paths(cls, raw: dict, base_dir) -> dict:
+        """The ``terrain`` mapping ``raw`` with a relative ``route`` file taken from ``base_dir`` (the
+        scenario file's folder) and made absolute, before validation (called by
+        :func:`~snoworm.config.scenario.scenario_from_dict`; a route given directly in Python is
+        read from the working directory)."""
+        route = raw.get("route")
+        if isinstance(route, str) and route:
+            p = Path(route)
+            return {**raw, "route": str((p if p.is_absolute() else Path(base_dir) / p).resolve())}
+        return raw
 
     def files(self) -> list:
         """The files this section refers to (the route file), as absolute paths."""
-        return [self.route] if self.route is not None else []
+        return [str(Path(self.route).resolve())] if self.route is not None else []
 
     def route_data(self):
         """The :class:`~snoworm.config.routes.Route` read from ``route`` (None without one)."""
-        if self.route is None:
-            return None
-        if "_route" not in self.__dict__:
-            object.__setattr__(self, "_route", read_route(self.route))
-        return self.__dict__["_route"]
+        return None if self.route is None else self._route_table
+
+    @functools.cached_property
+    def _route_table(self):
+        """The route file read once (a cache of a value derived from the config, not a setting)."""
+        return read_route(self.route)
 
     def elevation_profile(self) -> ElevationProfile | None:
         """The elevation along the track (docs/model.md section 7), or None on level ground."""

@@ -208,7 +208,8 @@ class Result:
                                + [self.links[c].reshape(-1) for c in LINK_COLUMNS])
         return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
 
-    def write(self, out_dir, plot: bool = True, plot_format: str = "png", overwrite: bool = False) -> list:
+    def write(self, out_dir, plot: bool = True, plot_format: str = "png", overwrite: bool = False, *,
+              command: str | None = None) -> list:
         """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots,
         ``plot_format`` files: png at 200 dpi, pdf or svg).
 
@@ -216,13 +217,14 @@ class Result:
         temporary sibling folder that replaces ``out_dir`` at the end, with a manifest; an earlier
         snoworm folder there is replaced as a whole, a non-empty folder snoworm did not write is
         refused unless ``overwrite``.  Returns the paths.  :func:`load_result` reads the folder back.
+        ``command`` is the command line recorded in the manifest (default: this process's).
 
         Raises
         ------
         snoworm.infra.folders.OutputError
             Unusable ``out_dir`` or an I/O failure (nothing is written then).
         """
-        with output_folder(out_dir, overwrite) as stage:
+        with output_folder(out_dir, overwrite, command) as stage:
             paths = [
                 atomic_write_text(stage / "segments.csv", self.segments_csv()),
                 atomic_write_text(stage / "links.csv", self.links_csv()),
@@ -335,11 +337,9 @@ def load_result(run_dir) -> Result:
     if missing:
         raise ResultFileError(f"{d} is not a snoworm run folder: {', '.join(missing)} missing")
     try:
-        sc = load_scenario(d / "scenario.yaml")
+        sc = load_scenario(d / "scenario.yaml", trust_folder=False)   # its controller, if any, runs from nowhere
     except (ScenarioError, RecursionError) as exc:
         raise ResultFileError(f"{d / 'scenario.yaml'}: {quote(str(exc), 300)}") from None
-    if "_root" in vars(sc.mode):       # a controller: checked statically, never run from a results folder
-        object.__setattr__(sc.mode, "_root", None)
     n = sc.vehicle.segments
     t, segments = _read_table(d / "segments.csv", "segment", SEGMENT_COLUMNS, n)
     t_links, links = _read_table(d / "links.csv", "link", LINK_COLUMNS, n - 1)

@@ -345,10 +345,11 @@ def calibration_json(res: CalibrationResult, source: str = "", parameter_set_nam
 
 def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyboy", model_file=None,
                     torque_scale_Nm: float = 1.0, slip_scale: float = 0.01, overwrite: bool = False,
-                    progress=None):
+                    progress=None, *, command: str | None = None):
     """Read, validate, fit, then write ``terrain_model.yaml`` and ``calibration.json`` to ``out_dir``.
 
     Nothing is written if the input is invalid (every check runs before the first write).
+    ``command`` is the command line the folder's manifest records (default: this process's).
 
     Returns
     -------
@@ -359,7 +360,7 @@ def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyb
     _check_fit(fit, len(data))
     check_output_folder(out_dir, overwrite)      # before the fit, not after
     res = calibrate(data, fit, seg, tp, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, progress=progress)
-    with output_folder(out_dir, overwrite) as out:
+    with output_folder(out_dir, overwrite, command) as out:
         paths = [atomic_write_text(out / "terrain_model.yaml", terrain_model_yaml(res, data.source)),
                  atomic_write_text(out / "calibration.json", calibration_json(res, data.source, parameter_set_name))]
     return res, format_report(res), relocate(paths, out, out_dir)

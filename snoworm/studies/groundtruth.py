@@ -148,12 +148,14 @@ def format_table2(rows) -> str:
 
 
 def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostyboy", model_file=None,
-                    plot: bool = True, plot_format: str = "png", overwrite: bool = False):
+                    plot: bool = True, plot_format: str = "png", overwrite: bool = False, *,
+                    command: str | None = None):
     """Compare the model with field data and write ``table2.csv`` (and ``table2.png``, or the
     ``plot_format``: png, pdf, svg).
 
     Everything is computed and validated before anything is written; each file is written
-    atomically.
+    atomically.  ``command`` is the command line the folder's manifest records (default: this
+    process's).
 
     Returns
     -------
@@ -166,7 +168,7 @@ def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostybo
     text = f"field data: {data.source}\nmodel: parameter set {parameter_set_name}" + \
         (f" with terrain model {model_file}" if model_file else "") + \
         f" (d = {tp.peak_exponent_d:g}, torque balance '{tp.torque_balance}')\n" + format_table2(rows)
-    with output_folder(out_dir, overwrite) as out:
+    with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows)]
         if plot:
             from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
@@ -272,9 +274,11 @@ def format_zero_crossings(c: TerrainCurves) -> str:
 
 
 def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", model_file=None, plot: bool = True,
-                       n_points: int = 1001, plot_format: str = "png", overwrite: bool = False):
+                       n_points: int = 1001, plot_format: str = "png", overwrite: bool = False, *,
+                       command: str | None = None):
     """Compute Figure 3's curves and write ``terrain_curves.csv`` (and ``terrain_curves.png``, or
-    the ``plot_format``: png, pdf, svg).
+    the ``plot_format``: png, pdf, svg); ``command``: the command line the folder's manifest
+    records (default: this process's).
 
     Returns
     -------
@@ -282,7 +286,7 @@ def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", mode
     """
     seg, tp = vehicle_model(parameter_set_name, model_file)
     c = terrain_curves(xts, seg, tp, n_points)
-    with output_folder(out_dir, overwrite) as out:
+    with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "terrain_curves.csv", CURVE_COLUMNS, _curve_rows(c))]
         if plot:
             from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it

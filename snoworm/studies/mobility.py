@@ -414,12 +414,13 @@ def map_csv(result: dict) -> str:
 
 def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, rolling_speed_mps=None,
                      inching=True, inch_duration_s=8.0, jobs=1, every_cell=False, plot=True, plot_format="png", overwrite=False,
-                     progress=None, grade_spec="0", gaits=None):
+                     progress=None, grade_spec="0", gaits=None, command=None):
     """Load a scenario, compute its map, write ``mobility_map.csv`` (and the plot, a ``plot_format`` file:
     png, pdf or svg; with several grades also ``gradeability``); return (map, text, paths).
 
     The output folder is checked before the map is computed and written all or nothing
-    (:func:`snoworm.infra.folders.output_folder`).
+    (:func:`snoworm.infra.folders.output_folder`; ``command``: the command line its manifest
+    records, default this process's).
     """
     sc = load_scenario(scenario_path, sets)
     v = rolling_speed_of(sc) if rolling_speed_mps is None else float(rolling_speed_mps)
@@ -430,7 +431,7 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
                        inch_duration_s=inch_duration_s, jobs=jobs, every_cell=every_cell, progress=progress,
                        gaits=[parse_gait(g) for g in gaits] if gaits else None)
     columns = MAP_COLUMNS + (("inching_gait",) if res["gait_labels"] else ())
-    with output_folder(out_dir, overwrite) as out:
+    with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "mobility_map.csv", columns, res["rows"], MAP_FORMAT)]
         if plot:
             from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it

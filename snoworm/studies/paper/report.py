@@ -182,7 +182,8 @@ def evaluate(items=None, quick=False, model=None, scenario_overrides=None, out_d
     return out
 
 
-def run_paper(out_dir, quick=False, progress=None, overwrite=False, jobs=1, plot_format="png") -> PaperReport:
+def run_paper(out_dir, quick=False, progress=None, overwrite=False, jobs=1, plot_format="png", *,
+              command: str | None = None) -> PaperReport:
     """Run every item, write the figures, ``report.md``, ``report.html`` and ``claims.json`` into ``out_dir``.
 
     ``jobs`` worker processes run the items (:func:`evaluate`; 1: serial, in this process).
@@ -190,13 +191,14 @@ def run_paper(out_dir, quick=False, progress=None, overwrite=False, jobs=1, plot
     inline and links PDF figures.
 
     All or nothing (:func:`snoworm.infra.folders.output_folder`): the figures and the report go to a
-    temporary sibling folder that replaces ``out_dir`` when everything is written.
+    temporary sibling folder that replaces ``out_dir`` when everything is written; ``command`` is
+    the command line its manifest records (default: this process's).
 
     Returns
     -------
     PaperReport
     """
-    with output_folder(out_dir, overwrite) as out:
+    with output_folder(out_dir, overwrite, command) as out:
         rep = _run_into(out, quick, progress, jobs, plot_format)
     rep.paths = relocate(rep.paths, out, out_dir)
     for sec in rep.sections:

@@ -68,7 +68,7 @@ class _Progress:
 def _base(scenario):
     """(raw mapping, source name, base_dir) of a path or a Scenario object."""
     if isinstance(scenario, Scenario):
-        bd = scenario.__dict__.get("_base_dir")
+        bd = scenario.origin.base_dir if scenario.origin is not None else None
         return scenario.to_dict(), scenario.name, (str(bd) if bd is not None else None)
     if isinstance(scenario, dict):
         return scenario, "scenario", None
@@ -91,7 +91,8 @@ def _definition(raw, axes, zip_, base_dir=None):
 def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
               save_cases: bool = False, progress=None, plot: bool = True, executor=None,
               batch: int = 0, series: str = "folders", plot_format: str = "png",
-              overwrite: bool = False, allow_code=(), restart: bool = False) -> SweepTable:
+              overwrite: bool = False, allow_code=(), restart: bool = False, *,
+              command: str | None = None) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
     Parameters
@@ -137,6 +138,8 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         Paths whose controller code may run outside the scenario's folder (:func:`snoworm.simulate`).
     restart : bool
         Start afresh (removing its rows) over a sweep in ``out_dir`` run from other inputs.
+    command : str, optional
+        The command line recorded in the folder's manifest (default: this process's).
 
     Returns
     -------
@@ -157,8 +160,9 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
     if own:                         # before anything is written: an unreachable scheduler writes nothing
         executor = _make_executor(scheduler, batch, jobs)
     try:
-        return _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases and series,
-                          overwrite or restart, plot_format)
+        return _in_folder(plan, out, executor, own, progress=progress, plot=plot, zip_=zip_,
+                          keep_series=save_cases and series, overwrite=overwrite or restart, plot_format=plot_format,
+                          command=command)
     except OSError as exc:            # writing sweep.json, the manifest or the plot
         raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
 
@@ -187,7 +191,8 @@ def _check_series(series: str) -> bool:
     return False
 
 
-def _in_folder(plan, out, executor, own, progress, plot, zip_, keep_series, overwrite, plot_format) -> SweepTable:
+def _in_folder(plan, out, executor, own, *, progress, plot, zip_, keep_series, overwrite, plot_format,
+               command) -> SweepTable:
     """Run the sweep with ``out`` (or None) locked and prepared; ``keep_series``: False or the series format."""
     with ExitStack() as stack:
         done = {}
@@ -197,14 +202,14 @@ def _in_folder(plan, out, executor, own, progress, plot, zip_, keep_series, over
                 stack.enter_context(folder_lock(out))
                 done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source,
                                    overwrite=overwrite)
-                write_manifest(out, status="running")
+                write_manifest(out, command, status="running")
             except BaseException:
                 if own:
                     executor.close()
                 raise
         table = _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_format)
         if out is not None:
-            write_manifest(out, status="complete")
+            write_manifest(out, command, status="complete")
         return table
 
 
@@ -289,7 +294,7 @@ def _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep) -> _Plan:
         except ScenarioError as exc:
             invalid[c.index] = one_line(exc)
             continue
-        why = trust_problem_of(sc.mode) if sc.mode.type == "controller" else None
+        why = trust_problem_of(sc) if sc.mode.type == "controller" else None
         if why is not None:                 # refused for the whole sweep, before anything runs
             raise ScenarioError(f"case {c.case_id}: {why}")
         n_links = max(n_links, sc.vehicle.segments - 1)
