@@ -13,10 +13,27 @@ import sys
 import click
 
 from ._version import __version__
-from .cli_common import (EXIT_SOLVER, CommandGroup, allow_code_option, code_check, command_line,
-                         configure_logging, echo_claims,
-                         echo_run, echo_sweep, fail, handle_errors, model_file_option, out_option, overwrite_option,
-                         param_set_option, plot_format_option, progress_bar, set_option, sweep_interrupted)
+from .cli_common import (
+    EXIT_SOLVER,
+    CommandGroup,
+    allow_code_option,
+    code_check,
+    command_line,
+    configure_logging,
+    echo_claims,
+    echo_run,
+    echo_sweep,
+    fail,
+    handle_errors,
+    model_file_option,
+    out_option,
+    overwrite_option,
+    param_set_option,
+    plot_format_option,
+    progress_bar,
+    set_option,
+    sweep_interrupted,
+)
 
 
 @click.group(cls=CommandGroup, context_settings={"help_option_names": ["-h", "--help"]})
@@ -48,9 +65,9 @@ def run(scenario, out_dir, sets, no_plot, plot_format, overwrite, allow_code):
     invalid (exit 2), the solver fails (exit 1) or the run is interrupted.  Progress in
     simulated time goes to stderr, and so does which controller code runs (if any).
     """
-    from .simulation.driver import simulate  # lazy: start-up
-    from .infra.folders import check_output_folder  # lazy: start-up
     from .config.scenario import load_scenario  # lazy: start-up
+    from .infra.folders import check_output_folder  # lazy: start-up
+    from .simulation.driver import simulate  # lazy: start-up
     out_dir = os.path.abspath(out_dir)          # once: a controller's os.chdir does not move it
     sc = load_scenario(scenario, sets)
     code_check(sc, allow_code, "running")

@@ -56,9 +56,9 @@ def handle_errors(fn):
     @functools.wraps(fn)
     def wrapper(*a, **kw):
         from .config.schema import ScenarioError  # lazy: start-up
-        from .simulation.guard import SolverError  # lazy: start-up
-        from .modes.controller import ControllerError  # lazy: start-up
         from .infra.folders import OutputError  # lazy: start-up
+        from .modes.controller import ControllerError  # lazy: start-up
+        from .simulation.guard import SolverError  # lazy: start-up
         old = _catch_sigterm()
         try:
             return fn(*a, **kw)

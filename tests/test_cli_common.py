@@ -13,8 +13,16 @@ import click
 import pytest
 from click.testing import CliRunner
 
-from snoworm.cli_common import (EXIT_INPUT, EXIT_SOLVER, CommandGroup, Terminated, command_line, configure_logging,
-                                handle_errors, out_option)
+from snoworm.cli_common import (
+    EXIT_INPUT,
+    EXIT_SOLVER,
+    CommandGroup,
+    Terminated,
+    command_line,
+    configure_logging,
+    handle_errors,
+    out_option,
+)
 from snoworm.config.schema import ScenarioError
 from snoworm.infra import folders
 from snoworm.infra.folders import OutputError

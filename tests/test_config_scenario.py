@@ -1,12 +1,24 @@
 """Scenarios (snoworm.config.scenario): every shipped scenario is valid; bad input fails naming the field and the fix;
 Scenario.with_ and to_dict; the mode-config registry and cached properties."""
 import dataclasses
+import json
+
 import pytest
 import yaml
+from click.testing import CliRunner
 from hypothesis import given, settings, strategies as st
 
-from snoworm.config.scenario import (ScenarioError, apply_overrides, dump_scenario, load_scenario, read_yaml,
-                              scenario_from_dict)
+from snoworm.config.params import PARAMETER_SETS, parameter_entries
+from snoworm.config.scenario import (
+    ScenarioError,
+    apply_overrides,
+    dump_scenario,
+    load_scenario,
+    read_yaml,
+    scenario_from_dict,
+    scenario_path,
+    shipped_scenarios,
+)
 from tests.conftest import SCENARIOS
 
 SHIPPED = sorted(SCENARIOS.glob("*.yaml"))
@@ -87,6 +99,7 @@ def test_round_trip_property(xt, tow, n, speed):
 def test_shipped_scenarios_run(path):
     """Every shipped scenario runs (first 3 s) and produces finite results of the right shape."""
     import numpy as np
+
     from snoworm import simulate
     sc = load_scenario(path, ["simulation.duration_s=3"])
     res = simulate(sc)
@@ -141,13 +154,6 @@ def test_mode_configs_registry_holds_the_built_in_modes():
 
 
 # ------------------------------------------------------------------ shipped names, vehicles as files, sources
-import json  # noqa: E402
-
-from click.testing import CliRunner  # noqa: E402
-
-from snoworm.config.params import PARAMETER_SETS  # noqa: E402
-from snoworm.config.params import parameter_entries  # noqa: E402
-from snoworm.config.scenario import scenario_path, shipped_scenarios  # noqa: E402
 
 
 def test_shipped_scenarios_by_name_from_anywhere(tmp_path, monkeypatch):
@@ -230,6 +236,7 @@ def test_a_missing_vehicle_file_names_it(tmp_path):
 
 def test_copy_tree_copies_every_level_and_leaves_the_original_alone():
     import numpy as np
+
     from snoworm.config.scenario import _copy_tree
     shared = {"k": [1, 2]}
     data = {"a": shared, "b": shared, "c": [{"x": 1.5, "s": "t", "n": None}], "arr": np.arange(3.0)}

@@ -1,7 +1,6 @@
 """Declarative validation of configs (snoworm.config.schema): on construction, on replace, from mappings."""
 import dataclasses
 from pathlib import Path
-from typing import Optional
 
 import numpy as np
 import pytest
@@ -27,7 +26,7 @@ class Probe(Config):
     values: tuple[float, ...] = field((1.0,), ge=0, unit="m", doc="non-negative lengths")
     kind: str = field("a", choices=("a", "b"), doc="a choice")
     flag: bool = field(False, doc="a switch")
-    limit: Optional[float] = field(None, gt=0, doc="an optional bound")
+    limit: float | None = field(None, gt=0, doc="an optional bound")
 
 
 # ------------------------------------------------------------------ validation on construction

@@ -6,11 +6,11 @@ import pytest
 
 import snoworm
 from snoworm import Mode, ModeConfig, ScenarioError, register_mode, scenario_from_dict, simulate
-from snoworm.model.inputs import Controls
-from snoworm.modes.base import MODES, Interval
 from snoworm.config import mode_registry
 from snoworm.config.scenario import apply_overrides, read_yaml
 from snoworm.config.schema import field
+from snoworm.model.inputs import Controls
+from snoworm.modes.base import MODES, Interval
 from tests.conftest import SCENARIOS
 
 

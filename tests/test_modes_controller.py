@@ -1,14 +1,13 @@
 """The controller mode (snoworm.modes.controller): loading, validation, the run, its errors."""
 import textwrap
-from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
 
 from snoworm import Simulator, load_scenario, simulate
-from snoworm.modes.controller import ControllerError, load_controller
 from snoworm.config.schema import ScenarioError
+from snoworm.modes.controller import ControllerError, load_controller
 from tests.conftest import SCENARIOS
 from tests.controller_helpers import schedule
 

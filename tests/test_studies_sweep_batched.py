@@ -5,9 +5,8 @@ The solver work budgets and the batched-vs-one-by-one driver test are in test_si
 import numpy as np
 import pytest
 
-from snoworm.studies.sweep import BatchExecutor, run_chunk
 from snoworm.config.scenario import apply_overrides, read_yaml
-from snoworm.studies.sweep import case_metrics, run_sweep
+from snoworm.studies.sweep import BatchExecutor, case_metrics, run_chunk, run_sweep
 from tests.conftest import assert_metrics_close
 
 

@@ -6,7 +6,7 @@ import pytest
 import snoworm.studies.sweep as sweep_mod
 from snoworm.config.schema import ScenarioError
 from snoworm.studies.sweep import BatchExecutor, SerialExecutor, run_sweep
-from tests.sweep_helpers import TOW6, SHORT, SMALL, comparable, csv_rows
+from tests.sweep_helpers import SHORT, SMALL, TOW6, comparable, csv_rows
 
 
 def test_serial_and_two_processes_give_identical_rows(tmp_path):

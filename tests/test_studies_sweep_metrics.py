@@ -6,7 +6,7 @@ import pytest
 from snoworm import SolverError, simulate
 from snoworm.config.scenario import load_scenario, read_yaml
 from snoworm.studies.sweep import case_metrics, run_case, run_sweep
-from tests.sweep_helpers import TOW6, SHORT, csv_rows
+from tests.sweep_helpers import SHORT, TOW6, csv_rows
 
 
 def test_case_metrics_match_a_direct_run():

@@ -18,8 +18,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from .schema import Config, ScenarioError, field
 from ..slope import MAX_GRADE_DEG, ElevationProfile
+from .schema import Config, ScenarioError, field
 
 __all__ = ["GRADE_DOMAIN", "ROUTE_COLUMNS", "GradePatchConfig", "Route", "read_route", "check_elevation_table",
            "check_vehicle_on_grade"]

@@ -10,21 +10,30 @@ from __future__ import annotations
 import copy
 import functools
 import os
-from importlib import resources
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 import yaml
 
-from . import yamlio
 from ..dynamics import ChainModel
+from . import yamlio
+from .mode_registry import MODES, ModeConfig, build_mode_config
 from .params import parameter_entries, read_model_file, source_notes
 from .routes import check_vehicle_on_grade
 from .schema import Config, ScenarioError, build, dump, field, internal, quote, short_key, suggest
-from .mode_registry import MODES, ModeConfig, build_mode_config
-from .sections import (MAX_OUTPUT_SAMPLES, LinkConfig, PatchConfig,
-                       RandomTerrainConfig, SegmentConfig, SimulationConfig, TerrainConfig, TerrainModelConfig,
-                       TowConfig, VehicleConfig)
+from .sections import (
+    MAX_OUTPUT_SAMPLES,
+    LinkConfig,
+    PatchConfig,
+    RandomTerrainConfig,
+    SegmentConfig,
+    SimulationConfig,
+    TerrainConfig,
+    TerrainModelConfig,
+    TowConfig,
+    VehicleConfig,
+)
 
 __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
@@ -141,7 +150,7 @@ class Scenario(Config):
             data["sources"] = dict(self.origin.notes)
         return data
 
-    def with_(self, changes=None, **kw) -> "Scenario":
+    def with_(self, changes=None, **kw) -> Scenario:
         """A new, validated scenario with dotted-key changes applied.
 
         ``sc.with_({"tow.force_N": 150, "terrain.xt": 0.7})``; keyword arguments set top-level

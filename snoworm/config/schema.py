@@ -19,6 +19,7 @@ import math
 import numbers
 import operator
 import reprlib
+import types
 import typing
 from typing import Any
 
@@ -176,7 +177,7 @@ def _check_number(path, value, md, kind):
     return value
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _type_info(tp):
     """``(origin, args, is a dataclass)`` of an annotation, computed once per type."""
     return typing.get_origin(tp), typing.get_args(tp), dataclasses.is_dataclass(tp)
@@ -186,7 +187,7 @@ def _convert(path, value, tp, md):
     if md.get("convert") is not None:
         return md["convert"](value, path)
     origin, args, is_dc = _type_info(tp)
-    if origin is typing.Union:
+    if origin is typing.Union or origin is types.UnionType:     # Optional[X] or X | None
         if value is None and type(None) in args:
             return None
         non_none = [a for a in args if a is not type(None)]
@@ -237,7 +238,7 @@ def _convert(path, value, tp, md):
     return value
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _type_hints(cls):
     """``typing.get_type_hints`` of a config class, resolved once (it compiles every annotation
     string on each call: ~10 ms per scenario before this cache, the main cost of a sweep case)."""

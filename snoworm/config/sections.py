@@ -12,15 +12,14 @@ import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional
 
 import numpy as np
 
 from ..model.arrays import LinkArrays, SegmentArrays
-from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
 from ..slope import ElevationProfile, grade_patch_profile
 from ..terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
 from .routes import GRADE_DOMAIN, GradePatchConfig, check_elevation_table, read_route
+from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
 
 __all__ = ["XT_DOMAIN", "FINITE_WHY", "BIG_FORCE_N", "BIG_SPEED_MPS", "MAX_SEGMENTS", "MAX_OUTPUT_SAMPLES",
            "SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig", "TerrainConfig",
@@ -181,16 +180,16 @@ class TerrainConfig(Config):
 
     _section = "terrain"
     model: TerrainModelConfig = field(doc="terrain-model coefficients")
-    xt: Optional[float] = field(None, **XT_DOMAIN, search=(0.05, 1.0),
+    xt: float | None = field(None, **XT_DOMAIN, search=(0.05, 1.0),
                                 doc="constant terrain coefficient X_t (the base X_t with patches)")
-    profile: Optional[tuple[tuple[float, ...], ...]] = field(None, doc="list of [position_m, xt] pairs")
-    patches: Optional[tuple[PatchConfig, ...]] = field(None, doc="patches of other snow on the base xt")
-    random: Optional[RandomTerrainConfig] = field(None, doc="seeded random X_t profile")
-    grade_deg: Optional[float] = field(None, **GRADE_DOMAIN, unit="deg",
+    profile: tuple[tuple[float, ...], ...] | None = field(None, doc="list of [position_m, xt] pairs")
+    patches: tuple[PatchConfig, ...] | None = field(None, doc="patches of other snow on the base xt")
+    random: RandomTerrainConfig | None = field(None, doc="seeded random X_t profile")
+    grade_deg: float | None = field(None, **GRADE_DOMAIN, unit="deg",
                                        doc="constant grade, positive uphill (the base grade with grade_patches)")
-    grade_patches: Optional[tuple[GradePatchConfig, ...]] = field(None, doc="stretches of other grade on grade_deg")
-    elevation: Optional[tuple[tuple[float, ...], ...]] = field(None, doc="list of [distance_m, elevation_m] pairs")
-    route: Optional[str] = field(None, doc="CSV route file (distance_m, elevation_m, xt columns), relative to the "
+    grade_patches: tuple[GradePatchConfig, ...] | None = field(None, doc="stretches of other grade on grade_deg")
+    elevation: tuple[tuple[float, ...], ...] | None = field(None, doc="list of [distance_m, elevation_m] pairs")
+    route: str | None = field(None, doc="CSV route file (distance_m, elevation_m, xt columns), relative to the "
                                            "scenario's folder")
 
     def _check(self, path):
@@ -376,8 +375,8 @@ class SimulationConfig(Config):
     rtol: float = field(1e-5, gt=0, lt=1, doc="relative tolerance")
     atol_scale: float = field(1.0, gt=0, le=1e3, why="At 1e3 the position tolerance is already 1 mm.",
                               doc="multiplies the per-component absolute tolerances")
-    max_step_s: Optional[float] = field(None, gt=0, le=BIG_TIME_S, why=FINITE_WHY, unit="s",
+    max_step_s: float | None = field(None, gt=0, le=BIG_TIME_S, why=FINITE_WHY, unit="s",
                                         doc="largest solver step (none: unlimited)")
-    max_wall_s: Optional[float] = field(None, gt=0, le=1e7, why=FINITE_WHY, unit="s",
+    max_wall_s: float | None = field(None, gt=0, le=1e7, why=FINITE_WHY, unit="s",
                                         doc="wall-clock time after which the run stops with a solver failure "
                                             "(none: no limit)")

@@ -15,9 +15,9 @@ from dataclasses import dataclass, field as dc_field
 
 import numpy as np
 
-from ..model.inputs import Controls
-from ..config.schema import ScenarioError
 from ..config.mode_registry import MODES, ModeConfig
+from ..config.schema import ScenarioError
+from ..model.inputs import Controls
 
 __all__ = ["Mode", "Interval", "MODES", "register_mode", "mode_class", "start_times", "rolling_interval"]
 

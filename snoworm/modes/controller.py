@@ -24,10 +24,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..config.schema import ScenarioError, field, quote
 from ..config.mode_registry import ModeConfig
+from ..config.schema import ScenarioError, field, quote
 from .base import Interval, Mode, register_mode
-from .codeload import allow_code as allow_code_ctx, check_reference, code_files, import_class, resolve_spec, trust_problem
+from .codeload import (
+    allow_code as allow_code_ctx,
+    check_reference,
+    code_files,
+    import_class,
+    resolve_spec,
+    trust_problem,
+)
 from .command import CommandState, observe
 from .watchdog import WallLimit, wall_limit
 

@@ -219,7 +219,10 @@ def plot_force_diagram(result, window_s=1.0, *, ax=None, fig=None):
     scale = 0.9 / fmax                             # the longest arrow is 0.9 box spacings
     fig, axes = new_figure(ax, fig, 1, 1, figsize=(2.6 * n + 1.5, 4.2))
     a = axes[0, 0]
-    pos = lambda k: (n - 1 - k) * 2.0              # leader on the right
+
+    def pos(k):
+        return (n - 1 - k) * 2.0                   # leader on the right
+
     for k in range(n):
         x0 = pos(k)
         a.add_patch(Rectangle((x0 - 0.45, -0.3), 0.9, 0.6, fc="0.9", ec="0.2"))

@@ -277,7 +277,10 @@ def plot_gradeability(mmap, *, ax=None, fig=None):
         g = mmap["gradeability"][f]
         ls = LINESTYLES[j % len(LINESTYLES)]
         sfx = f", tow {f:g} N" if len(mmap["tows"]) > 1 else ""
-        pick = lambda xs, vs: [(x, v) for x, v in zip(xs, vs) if v is not None]
+
+        def pick(xs, vs):
+            return [(x, v) for x, v in zip(xs, vs) if v is not None]
+
         curves = [("rolling (steady limit)", "rolling", g["rolling_max_grade_deg"], g["rolling_J_per_m_climbed"], {})]
         curves += [(f"{'inching' if lab == 'inching' else lab} (grid)", "inching" if lab == "inching" else lab,
                     c["grid_deg"], c["J_per_m_climbed"], {"mfc": "none"}) for lab, c in g["inching"].items()]

@@ -13,14 +13,14 @@ from pathlib import Path
 
 import numpy as np
 
-from . import frames
 from .._version import __version__
-from .energy import energy_metrics
+from ..config.scenario import dump_scenario, load_scenario
+from ..config.schema import ScenarioError, quote
 from ..infra.folders import atomic_write_text, output_folder, relocate
 from ..infra.manifest import ManifestProblem, read_small_file
 from ..model.quantities import output_series
-from ..config.scenario import dump_scenario, load_scenario
-from ..config.schema import ScenarioError, quote
+from . import frames
+from .energy import energy_metrics
 
 __all__ = ["Result", "ResultFileError", "SEGMENT_COLUMNS", "LINK_COLUMNS", "load_result", "read_back"]
 
@@ -188,7 +188,7 @@ class Result:
         :mod:`snoworm.plotting`).  ``ax``: your own axes (as many as the figure has panels), or
         ``fig``: a figure to draw in; neither: a new figure.  The matplotlib backend is not changed.
         """
-        from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+        from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
         if kind not in plotting.PLOT_KINDS:
             raise ValueError(f"unknown plot kind {kind!r}; kinds: {', '.join(plotting.PLOT_KINDS)}")
         return plotting.PLOT_KINDS[kind](self, ax=ax, fig=fig, **kwargs)
@@ -232,7 +232,7 @@ class Result:
                 atomic_write_text(stage / "scenario.yaml", dump_scenario(self.scenario)),
             ]
             if plot:
-                from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+                from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
                 paths += plotting.plot_result(self, stage, plot_format)
         return relocate(paths, stage, out_dir)
 

@@ -40,12 +40,12 @@ import yaml
 from scipy.optimize import least_squares
 
 from .. import steady
-from ..infra.folders import atomic_write_text, check_output_folder, output_folder, relocate
-from .field_data import FieldData, read_field_data
-from .groundtruth import compare_table2, format_table2, vehicle_model
 from ..config.schema import ScenarioError, suggest
 from ..config.sections import TerrainConfig, TerrainModelConfig
+from ..infra.folders import atomic_write_text, check_output_folder, output_folder, relocate
 from ..terrain import TerrainParams
+from .field_data import FieldData, read_field_data
+from .groundtruth import compare_table2, format_table2, vehicle_model
 
 __all__ = ["FIT_NAMES", "BOUNDS", "CalibrationResult", "model_predictions", "calibrate", "run_calibration",
            "format_report", "terrain_model_yaml"]

@@ -22,12 +22,11 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .. import steady, terrain
-from ..config.params import PARAMETER_SETS, parameter_set
-from ..config.params import read_model_file
+from ..config.params import PARAMETER_SETS, parameter_set, read_model_file
 from ..config.scenario import SegmentConfig, TerrainConfig, TerrainModelConfig
 from ..config.schema import ScenarioError, build, check_field, dump, suggest
-from ..infra.folders import output_folder, relocate
 from ..infra.csvwriter import csv_text, write_csv
+from ..infra.folders import output_folder, relocate
 from ..terrain import TerrainParams
 from .field_data import FieldData, read_field_data
 
@@ -171,7 +170,7 @@ def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostybo
     with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows)]
         if plot:
-            from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
+            from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
             paths.append(plotting.save(plotting.plot_table2(rows), out / "table2.png", plot_format))
     return rows, text, relocate(paths, out, out_dir)
 
@@ -242,7 +241,7 @@ def terrain_curves(xts, seg, tp: TerrainParams, n_points: int = 1001) -> Terrain
         up = np.nonzero((net[m, :-1] < 0) & (net[m, 1:] >= 0))[0]
         if up.size:
             j = int(up[0])
-            zc[m] = brentq(lambda s: float(_net_per_wheel_N(s, xt[m], F_n, tp)), i[j], i[j + 1], xtol=1e-12)
+            zc[m] = brentq(lambda s, x=xt[m]: float(_net_per_wheel_N(s, x, F_n, tp)), i[j], i[j + 1], xtol=1e-12)
     return TerrainCurves(i, xt, float(F_n), Ft, Ftr, net, zc)
 
 
@@ -289,6 +288,6 @@ def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", mode
     with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "terrain_curves.csv", CURVE_COLUMNS, _curve_rows(c))]
         if plot:
-            from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
+            from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
             paths.append(plotting.save(plotting.plot_terrain_curves(c), out / "terrain_curves.png", plot_format))
     return c, format_zero_crossings(c), relocate(paths, out, out_dir)

@@ -49,16 +49,16 @@ import time
 import numpy as np
 
 from .. import steady
-from ..simulation.driver import SolverError, simulate
-from ..results.energy import energy_metrics
+from ..config.scenario import SimulationConfig, TerrainConfig, TowConfig, load_scenario, scenario_from_dict
+from ..config.schema import ScenarioError, check_field, dump, quote
+from ..infra.csvwriter import CellFormat, csv_text, write_csv
 from ..infra.folders import check_output_folder, output_folder, relocate
 from ..infra.pool import ProcessExecutor
-from ..config.scenario import SimulationConfig, TerrainConfig, TowConfig, load_scenario, scenario_from_dict
 from ..modes import InchwormMode, SupervisorConfig
-from ..config.schema import ScenarioError, check_field, dump, quote
+from ..results.energy import energy_metrics
+from ..simulation.driver import SolverError, simulate
 from .gradeability import grade_text, gradeability
 from .sweep.spec import RANGE, parse_spec
-from ..infra.csvwriter import CellFormat, csv_text, write_csv
 
 __all__ = ["parse_grid", "parse_list", "parse_gait", "gait_label", "rolling_cell", "inching_scenario", "mobility_map", "map_csv",
            "rolling_speed_of", "gradeability", "REGIONS"]
@@ -291,8 +291,8 @@ def _inch_gaits(sc, rows, grades, every_cell, duration_s, min_speed, pool, progr
         if not cells:
             continue
         moved = [lab for lab, c in cells.items() if c["inching"]]
-        cost = lambda lab: cells[lab]["inching_energy_per_metre_J_per_m"] or math.inf
-        best = min(moved, key=cost) if moved else next(iter(cells))
+        best = (min(moved, key=lambda lab, c=cells: c[lab]["inching_energy_per_metre_J_per_m"] or math.inf)
+                if moved else next(iter(cells)))
         r.update(cells[best], inching_gait=best if moved else "", inching_by_gait=cells)
 
 
@@ -434,7 +434,7 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
     with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "mobility_map.csv", columns, res["rows"], MAP_FORMAT)]
         if plot:
-            from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
+            from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
             paths.append(plotting.save(plotting.plot_mobility_map(res), out / "mobility_map.png", plot_format))
             if len(res["grades"]) > 1:
                 paths.append(plotting.save(plotting.plot_gradeability(res), out / "gradeability.png", plot_format))

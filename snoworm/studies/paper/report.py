@@ -16,11 +16,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..._version import __version__
-from ...simulation.driver import SolverError
+from ...config.schema import ScenarioError
 from ...infra.folders import atomic_write_text, output_folder, relocate
 from ...infra.pool import ProcessExecutor
 from ...plotting import PLOT_FORMATS
-from ...config.schema import ScenarioError
+from ...simulation.driver import SolverError
 from .claims import Context, Section, make_claim
 from .fig3_table2 import item_fig3, item_table2
 from .fig5 import fig5_runs, item_fig5

@@ -56,11 +56,19 @@ order (and ``close()``); pass it to :func:`run_sweep` as ``executor=``.
 from ...infra.pool import ProcessExecutor
 from .cases import SweepCase, build_cases
 from .executors import BatchExecutor, DaskExecutor, SerialExecutor, SweepExecutionError, run_chunk
-from .metrics import (IMMOBILISED_SIGN_FACTOR, IMMOBILISED_SPEED_MPS, LATE_FRACTION, METRIC_COLUMNS, SLIP_FRACTION,
-                      STATUSES, case_metrics, run_case)
+from .metrics import (
+                      IMMOBILISED_SIGN_FACTOR,
+                      IMMOBILISED_SPEED_MPS,
+                      LATE_FRACTION,
+                      METRIC_COLUMNS,
+                      SLIP_FRACTION,
+                      STATUSES,
+                      case_metrics,
+                      run_case,
+)
 from .run import run_sweep
-from .spec import Axis, parse_spec, parse_sweep_option
 from .series import SERIES_FORMATS, combine_series, load_series
+from .spec import Axis, parse_spec, parse_sweep_option
 from .summary import SweepTable, load_sweep
 
 __all__ = ["Axis", "SweepCase", "SweepTable", "SweepExecutionError", "parse_spec", "parse_sweep_option", "build_cases",

@@ -14,12 +14,12 @@ import itertools
 import threading
 import time
 
-from ...simulation.driver import batch_key, simulate_batch
-from ...infra.pool import ProcessExecutor
 from ...config.scenario import scenario_from_dict
 from ...config.schema import ScenarioError, quote
-from .series import save_series
+from ...infra.pool import ProcessExecutor
+from ...simulation.driver import batch_key, simulate_batch
 from .metrics import case_metrics
+from .series import save_series
 
 __all__ = ["SweepExecutionError", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "BatchExecutor",
            "run_chunk"]
@@ -90,7 +90,7 @@ class DaskExecutor:
 
     def __init__(self, address):
         try:
-            from distributed import Client   # optional dependency (snoworm[dask]): imported only when used
+            from distributed import Client  # optional dependency (snoworm[dask]): imported only when used
         except ImportError:
             raise ScenarioError(f"--scheduler {address}: Dask is not installed. Install it with "
                                 "pip install 'snoworm[dask]' (or pip install 'dask[distributed]').") from None
@@ -99,7 +99,7 @@ class DaskExecutor:
         self._own = not hasattr(address, "submit")
 
     def map_unordered(self, fn, tasks):
-        from distributed import as_completed   # optional dependency, see __init__
+        from distributed import as_completed  # optional dependency, see __init__
         n_workers = max(len(self.client.scheduler_info().get("workers", {})), 1)
         window = 4 * n_workers
         it = iter(tasks)

@@ -16,11 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ...simulation.driver import SolverError, simulate
-from ...modes.codeload import allow_code
-from ...modes.controller import ControllerError
 from ...config.scenario import scenario_from_dict
 from ...config.schema import ScenarioError
+from ...modes.codeload import allow_code
+from ...modes.controller import ControllerError
+from ...simulation.driver import SolverError, simulate
 from .series import save_series
 
 __all__ = ["case_metrics", "run_case", "one_line", "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR",

@@ -19,20 +19,20 @@ from pathlib import Path
 import numpy as np
 
 from ..._version import __version__
-from ...results.frames import require_xarray
-from ...results.result import LINK_COLUMNS, SEGMENT_COLUMNS
 from ...config.scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
-from ...modes.codeload import allow_code as allowed_code
-from ...modes.controller import trust_problem_of
-from ...infra.folders import OutputError, check_output_folder, folder_lock, os_error_message, write_manifest
-from ...infra.progress import Progress
 from ...config.schema import ScenarioError
 from ...infra.csvwriter import FULL, canonical_json, format_cell
+from ...infra.folders import OutputError, check_output_folder, folder_lock, os_error_message, write_manifest
+from ...infra.progress import Progress
+from ...modes.codeload import allow_code as allowed_code
+from ...modes.controller import trust_problem_of
+from ...results.frames import require_xarray
+from ...results.result import LINK_COLUMNS, SEGMENT_COLUMNS
 from .cases import build_cases
 from .executors import BatchExecutor, DaskExecutor, ProcessExecutor, SerialExecutor, SweepExecutionError
+from .inputs import input_hashes
 from .metrics import METRIC_COLUMNS, case_metrics, one_line, run_case
 from .series import SERIES_FORMATS, case_series_path, combine_series
-from .inputs import input_hashes
 from .spec import as_axes
 from .summary import SweepTable, prepare_dir, summary_columns
 
@@ -415,7 +415,7 @@ def _plot_positions(values):
 
 
 def _plot(table, axes, zip_, out, plot_format="png"):
-    from ... import plotting   # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
+    from ... import plotting  # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
     varying = [a for a in axes if len(a.values) > 1]
     ok = [r["status"] == "ok" for r in table.rows]
     if zip_ or len(varying) == 1:
