@@ -142,9 +142,9 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
     crosses zero for each X_t, or says that it stays negative.
     """
     from .studies.groundtruth import run_terrain_curves  # lazy: start-up
-    _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name, model_file, plot=not no_plot,
-                                        n_points=n_points, plot_format=plot_format, overwrite=overwrite,
-                                        command=command_line())
+    _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name=parameter_set_name, model_file=model_file,
+                                        plot=not no_plot, n_points=n_points, plot_format=plot_format,
+                                        overwrite=overwrite, command=command_line())
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 
@@ -176,9 +176,10 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     """
     from .studies.calibrate import run_calibration  # lazy: start-up
     with progress_bar(1, "calibrate", "model evaluations (budget)") as bar:
-        _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
-                                         torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, overwrite=overwrite,
-                                         progress=bar.set, command=command_line())
+        _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name=parameter_set_name,
+                                         model_file=model_file, torque_scale_Nm=torque_scale_Nm,
+                                         slip_scale=slip_scale, overwrite=overwrite, progress=bar.set,
+                                         command=command_line())
     click.echo(text)
     click.echo(f"wrote {len(paths)} files to {out_dir}")
 

@@ -8,6 +8,7 @@ import yaml
 from snoworm import Simulator, load_scenario, simulate
 from snoworm.config.schema import ScenarioError
 from snoworm.modes.controller import ControllerError, load_controller
+from snoworm.studies.sweep import SweepTask
 from tests.conftest import SCENARIOS
 from tests.controller_helpers import schedule
 
@@ -157,7 +158,7 @@ def test_failing_controller_is_a_sweep_case_status(tmp_path):
     from snoworm.studies.sweep import STATUSES, run_case
     p = _write(tmp_path, GOOD, _mode("Raises"), sim={"duration_s": 1.0})
     raw = yaml.safe_load(p.read_text())
-    out = run_case({"index": 0, "raw": raw, "source": str(p), "base_dir": str(tmp_path), "save_dir": None})
+    out = run_case(SweepTask(0, raw=raw, source=str(p), base_dir=str(tmp_path)))
     assert out["status"] == "controller_failure" and "controller" in STATUSES[-1]
     assert "controller raised at t = 0.35 s" in out["error"] and "my controller broke" in out["error"]
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from snoworm.config.scenario import apply_overrides, read_yaml
-from snoworm.studies.sweep import BatchExecutor, case_metrics, run_chunk, run_sweep
+from snoworm.studies.sweep import BatchExecutor, SweepTask, case_metrics, run_chunk, run_sweep
 from tests.conftest import assert_metrics_close
 
 
@@ -26,15 +26,15 @@ def test_unbatchable_cases_run_one_by_one(scenario_path):
     """Event-driven modes and lone cases go through the ordinary per-case function."""
     uni = read_yaml(scenario_path("tow6_uniform"))
     inch = read_yaml(scenario_path("inchworm6"))
-    tasks = [{"index": 0, "raw": apply_overrides(uni, [("simulation.duration_s", 2)])},
-             {"index": 1, "raw": apply_overrides(uni, [("simulation.duration_s", 2), ("tow.force_N", 50)])},
-             {"index": 2, "raw": inch},
-             {"index": 3, "raw": apply_overrides(uni, [("simulation.duration_s", 3)])}]   # its own group of one
+    tasks = [SweepTask(0, raw=apply_overrides(uni, [("simulation.duration_s", 2)])),
+             SweepTask(1, raw=apply_overrides(uni, [("simulation.duration_s", 2), ("tow.force_N", 50)])),
+             SweepTask(2, raw=inch),
+             SweepTask(3, raw=apply_overrides(uni, [("simulation.duration_s", 3)]))]   # its own group of one
     seen = []
 
     def one(task):
-        seen.append(task["index"])
-        return {"index": task["index"], "status": "stub"}
+        seen.append(task.index)
+        return {"index": task.index, "status": "stub"}
     rows = {r["index"]: r for r in run_chunk(tasks, fn=one, metrics=case_metrics)}
     assert sorted(seen) == [2, 3]
     assert rows[0]["status"] == rows[1]["status"] == "ok"
@@ -45,7 +45,6 @@ def test_unbatchable_cases_run_one_by_one(scenario_path):
 @pytest.mark.parametrize("batch", [0, 10])
 def test_in_process_sweep_validates_each_case_once(scenario_path, monkeypatch, batch):
     """A sweep run in this process hands the scenarios it validated while planning to the executor."""
-    import snoworm.studies.sweep.executors as executors
     import snoworm.studies.sweep.metrics as metrics
     import snoworm.studies.sweep.run as run
     calls = []
@@ -56,8 +55,7 @@ def test_in_process_sweep_validates_each_case_once(scenario_path, monkeypatch, b
             return original(*args, **kwargs)
         return wrapped
     monkeypatch.setattr(run, "scenario_from_dict", counting(run.scenario_from_dict))
-    monkeypatch.setattr(executors, "scenario_from_dict", counting(executors.scenario_from_dict))
-    monkeypatch.setattr(metrics, "scenario_from_dict", counting(metrics.scenario_from_dict))
+    monkeypatch.setattr(metrics, "scenario_from_dict", counting(metrics.scenario_from_dict))   # SweepTask.validated
     table = run_sweep(scenario_path("tow6_uniform"), ["tow.force_N=0,100,200", "simulation.duration_s=1"],
                       plot=False, batch=batch)
     assert [r["status"] for r in table.rows] == ["ok"] * 3
@@ -72,12 +70,12 @@ def test_local_pool_tasks_carry_the_validated_scenarios(scenario_path):
     sets = ["tow.force_N=0,100", "simulation.duration_s=1"]
     plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=True)
     tasks = list(_tasks(plan, plan.cases, None, False))
-    assert [t["index"] for t in tasks] == [0, 1] and all("raw" not in t for t in tasks)
+    assert [t.index for t in tasks] == [0, 1] and all(t.raw is None for t in tasks)
     for t, f in zip(tasks, (0.0, 100.0)):
-        assert t["scenario"] == load_scenario(scenario_path("tow6_uniform"),
-                                              [("tow.force_N", f), ("simulation.duration_s", 1)])
+        assert t.scenario == load_scenario(scenario_path("tow6_uniform"),
+                                           [("tow.force_N", f), ("simulation.duration_s", 1)])
     plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=False)
-    assert all("scenario" not in t and t["raw"]["tow"]["force_N"] in (0, 100)
+    assert all(t.scenario is None and t.raw["tow"]["force_N"] in (0, 100)
                for t in _tasks(plan, plan.cases, None, False))
 
 

@@ -28,7 +28,7 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch):
     real = run_mod.run_case                                  # where run_sweep looks run_case up
 
     def counting(task):
-        calls.append(task["index"])
+        calls.append(task.index)
         return real(task)
 
     monkeypatch.setattr(run_mod, "run_case", counting)

@@ -114,7 +114,7 @@ def plot_sweep(x, metrics, xlabel, immobilised=None, ok=None, tick_labels=None, 
     return fig
 
 
-def plot_sweep_heatmap(x_labels, y_labels, values, xlabel, ylabel, label, immobilised=None, failed=None, *,
+def plot_sweep_heatmap(x_labels, y_labels, values, xlabel, ylabel, label, *, immobilised=None, failed=None,
                        ax=None, fig=None):
     """Heat map of one metric over a two-axis sweep (``heatmap.png``).
 

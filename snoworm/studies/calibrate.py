@@ -343,9 +343,9 @@ def calibration_json(res: CalibrationResult, source: str = "", parameter_set_nam
     return json.dumps(doc, indent=2) + "\n"
 
 
-def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyboy", model_file=None,
+def run_calibration(field_path, fit, out_dir, *, parameter_set_name: str = "frostyboy", model_file=None,
                     torque_scale_Nm: float = 1.0, slip_scale: float = 0.01, overwrite: bool = False,
-                    progress=None, *, command: str | None = None):
+                    progress=None, command: str | None = None):
     """Read, validate, fit, then write ``terrain_model.yaml`` and ``calibration.json`` to ``out_dir``.
 
     Nothing is written if the input is invalid (every check runs before the first write).

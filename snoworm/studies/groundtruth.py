@@ -272,8 +272,8 @@ def format_zero_crossings(c: TerrainCurves) -> str:
     return "\n".join(lines)
 
 
-def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", model_file=None, plot: bool = True,
-                       n_points: int = 1001, plot_format: str = "png", overwrite: bool = False, *,
+def run_terrain_curves(xts, out_dir, *, parameter_set_name: str = "frostyboy", model_file=None, plot: bool = True,
+                       n_points: int = 1001, plot_format: str = "png", overwrite: bool = False,
                        command: str | None = None):
     """Compute Figure 3's curves and write ``terrain_curves.csv`` (and ``terrain_curves.png``, or
     the ``plot_format``: png, pdf, svg); ``command``: the command line the folder's manifest

@@ -136,7 +136,7 @@ def _evaluate_pooled(ctx, keys, jobs, done):
     return out
 
 
-def evaluate(items=None, quick=False, model=None, scenario_overrides=None, out_dir=None, progress=None,
+def evaluate(items=None, quick=False, *, model=None, scenario_overrides=None, out_dir=None, progress=None,
              jobs=1, plot_format="png") -> list:
     """Run report items and return their :class:`Section` objects.
 

@@ -1,7 +1,7 @@
 """Running a sweep: :func:`run_sweep` and its steps.
 
 Data flow: the axes -> :func:`~snoworm.studies.sweep.cases.build_cases` -> every case validated up front
-(invalid ones are recorded, not run) -> tasks (small plain dicts: the overridden scenario
+(invalid ones are recorded, not run) -> tasks (:class:`~snoworm.studies.sweep.metrics.SweepTask`, small: the overridden scenario
 mapping, never a big object) -> an executor running :func:`~snoworm.studies.sweep.metrics.run_case` ->
 one row per case, appended to ``summary.csv`` as it finishes -> a :class:`SweepTable` sorted
 by case id (and a plot).
@@ -31,7 +31,7 @@ from ...results.result import LINK_COLUMNS, SEGMENT_COLUMNS
 from .cases import build_cases
 from .executors import BatchExecutor, DaskExecutor, ProcessExecutor, SerialExecutor, SweepExecutionError
 from .inputs import input_hashes
-from .metrics import METRIC_COLUMNS, case_metrics, one_line, run_case
+from .metrics import METRIC_COLUMNS, SweepTask, case_metrics, one_line, run_case
 from .series import SERIES_FORMATS, case_series_path, combine_series
 from .spec import as_axes
 from .summary import SweepTable, prepare_dir, summary_columns
@@ -88,10 +88,10 @@ def _definition(raw, axes, zip_, base_dir=None):
     }, default=str))
 
 
-def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
+def run_sweep(scenario, sets, out_dir=None, *, jobs: int = 1, scheduler=None, zip_: bool = False,
               save_cases: bool = False, progress=None, plot: bool = True, executor=None,
               batch: int = 0, series: str = "folders", plot_format: str = "png",
-              overwrite: bool = False, allow_code=(), restart: bool = False, *,
+              overwrite: bool = False, allow_code=(), restart: bool = False,
               command: str | None = None) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
@@ -207,7 +207,8 @@ def _in_folder(plan, out, executor, own, *, progress, plot, zip_, keep_series, o
                 if own:
                     executor.close()
                 raise
-        table = _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_format)
+        table = _run(plan, done, out, executor, own, progress=progress, plot=plot, zip_=zip_, keep_series=keep_series,
+                     plot_format=plot_format)
         if out is not None:
             write_manifest(out, command, status="complete")
         return table
@@ -220,7 +221,7 @@ def _mkdir(out: Path):
         raise OutputError(f"cannot write results: {os_error_message(exc, out)}") from None
 
 
-def _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_format) -> SweepTable:
+def _run(plan, done, out, executor, own, *, progress, plot, zip_, keep_series, plot_format) -> SweepTable:
     bar = _Progress(len(plan.cases), len(done), sys.stderr, progress is None or bool(progress))
     rows = dict(done)
     todo = [c for c in plan.cases if c.index not in done]
@@ -361,21 +362,17 @@ class _Recorder:
 
 
 def _tasks(plan: _Plan, todo, out, keep_series):
-    """The tasks of the cases still to run (small plain dicts, made one at a time).
+    """The tasks of the cases still to run (:class:`SweepTask`, made one at a time).
 
     ``keep_series``: False, or where the cases' series go ("folders" or "netcdf")."""
     for c in todo:
         if c.index in plan.invalid:
             continue
         save = case_series_path(out, c.case_id, keep_series) if keep_series else None
-        task = {"index": c.index, "source": plan.source, "base_dir": plan.base_dir, "save_dir": save,
-                "allow_code": plan.allow_code}
         sc = plan.scenarios.pop(c.index, None)        # validated by _plan: not again
-        if sc is not None:
-            task["scenario"] = sc
-        else:
-            task["raw"] = apply_overrides(plan.raw, c.overrides(plan.axes))
-        yield task
+        raw = apply_overrides(plan.raw, c.overrides(plan.axes)) if sc is None else None
+        yield SweepTask(c.index, raw=raw, scenario=sc, source=plan.source, base_dir=plan.base_dir, save_dir=save,
+                        allow_code=tuple(plan.allow_code))
 
 
 def _execute(plan: _Plan, todo, executor, rec: _Recorder, own: bool, out, keep_series):
