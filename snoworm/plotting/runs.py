@@ -219,12 +219,9 @@ def plot_force_diagram(result, window_s=1.0, *, ax=None, fig=None):
     scale = 0.9 / fmax                             # the longest arrow is 0.9 box spacings
     fig, axes = new_figure(ax, fig, 1, 1, figsize=(2.6 * n + 1.5, 4.2))
     a = axes[0, 0]
-
-    def pos(k):
-        return (n - 1 - k) * 2.0                   # leader on the right
-
+    pos = (n - 1 - np.arange(n)) * 2.0            # box centres, leader on the right
     for k in range(n):
-        x0 = pos(k)
+        x0 = pos[k]
         a.add_patch(Rectangle((x0 - 0.45, -0.3), 0.9, 0.6, fc="0.9", ec="0.2"))
         a.text(x0, 0.0, f"{_seg_label(k)}\nset-point {sp[k]:.3f} m/s", ha="center", va="center", fontsize=8)
         rows = [(-0.75, W[k], "#009E73", f"wheels {force_text(W[k])}"),
@@ -242,11 +239,11 @@ def plot_force_diagram(result, window_s=1.0, *, ax=None, fig=None):
             a.text(x0, yy + 0.12, lab, ha="center", va="bottom", fontsize=7.5, color=c)
         a.text(x0, -1.1, f"net connector {force_text(ahead[k] + behind[k])}", ha="center", va="top", fontsize=7.5)
     for j in range(n - 1):
-        a.text((pos(j) + pos(j + 1)) / 2, 0.0, f"T{j}\n{force_text(T[j])}", ha="center", va="center", fontsize=8,
+        a.text((pos[j] + pos[j + 1]) / 2, 0.0, f"T{j}\n{force_text(T[j])}", ha="center", va="center", fontsize=8,
                color="0.3")
-    a.annotate("travel", xy=(pos(0) + 0.9, -1.55), xytext=(pos(0) + 0.2, -1.55),
+    a.annotate("travel", xy=(pos[0] + 0.9, -1.55), xytext=(pos[0] + 0.2, -1.55),
                arrowprops=dict(arrowstyle="-|>", color="0.4"), va="center", fontsize=8, color="0.4")
-    a.set_xlim(-1.1, pos(0) + 1.1)
+    a.set_xlim(-1.1, pos[0] + 1.1)
     a.set_ylim(-1.75, 1.35)
     a.axis("off")
     a.set_title(f"{result.scenario.name}: steady-state forces on each segment "

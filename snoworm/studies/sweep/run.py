@@ -156,13 +156,18 @@ def run_sweep(scenario, sets, out_dir=None, *, jobs: int = 1, scheduler=None, zi
     local = executor is None and scheduler is None     # this process or its own pool: pass scenarios on
     plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=local, allow_code=allow_code)
     out = _new_output_folder(out_dir, overwrite)
+    opts = _Options(progress, plot, zip_, save_cases and series, overwrite or restart, plot_format, command)
+    return _on_executor(plan, out, executor, (scheduler, batch, jobs), opts)
+
+
+def _on_executor(plan, out, executor, how, opts) -> SweepTable:
+    """Run the planned sweep on ``executor`` (None: a new one for ``how`` = (scheduler, batch, jobs),
+    closed at the end); an I/O failure becomes :class:`OutputError`."""
     own = executor is None
     if own:                         # before anything is written: an unreachable scheduler writes nothing
-        executor = _make_executor(scheduler, batch, jobs)
+        executor = _make_executor(*how)
     try:
-        return _in_folder(plan, out, executor, own, progress=progress, plot=plot, zip_=zip_,
-                          keep_series=save_cases and series, overwrite=overwrite or restart, plot_format=plot_format,
-                          command=command)
+        return _in_folder(plan, out, executor, own, opts)
     except OSError as exc:            # writing sweep.json, the manifest or the plot
         raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
 
@@ -191,9 +196,21 @@ def _check_series(series: str) -> bool:
     return False
 
 
-def _in_folder(plan, out, executor, own, *, progress, plot, zip_, keep_series, overwrite, plot_format,
-               command) -> SweepTable:
-    """Run the sweep with ``out`` (or None) locked and prepared; ``keep_series``: False or the series format."""
+@dataclass(frozen=True)
+class _Options:
+    """How a sweep reports and what it writes besides the table (:func:`run_sweep`'s options)."""
+
+    progress: object          # None/True: progress on stderr; False: none
+    plot: bool
+    zip_: bool
+    keep_series: object       # False, or the series format ("folders" or "netcdf")
+    overwrite: bool
+    plot_format: str
+    command: str | None       # the command line the manifest records (None: this process's)
+
+
+def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
+    """Run the sweep with ``out`` (or None) locked and prepared."""
     with ExitStack() as stack:
         done = {}
         if out is not None:
@@ -201,16 +218,15 @@ def _in_folder(plan, out, executor, own, *, progress, plot, zip_, keep_series, o
                 _mkdir(out)
                 stack.enter_context(folder_lock(out))
                 done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source,
-                                   overwrite=overwrite)
-                write_manifest(out, command, status="running")
+                                   overwrite=opts.overwrite)
+                write_manifest(out, opts.command, status="running")
             except BaseException:
                 if own:
                     executor.close()
                 raise
-        table = _run(plan, done, out, executor, own, progress=progress, plot=plot, zip_=zip_, keep_series=keep_series,
-                     plot_format=plot_format)
+        table = _run(plan, done, out, executor, own, opts)
         if out is not None:
-            write_manifest(out, command, status="complete")
+            write_manifest(out, opts.command, status="complete")
         return table
 
 
@@ -221,17 +237,18 @@ def _mkdir(out: Path):
         raise OutputError(f"cannot write results: {os_error_message(exc, out)}") from None
 
 
-def _run(plan, done, out, executor, own, *, progress, plot, zip_, keep_series, plot_format) -> SweepTable:
-    bar = _Progress(len(plan.cases), len(done), sys.stderr, progress is None or bool(progress))
+def _run(plan, done, out, executor, own, opts: _Options) -> SweepTable:
+    bar = _Progress(len(plan.cases), len(done), sys.stderr, opts.progress is None or bool(opts.progress))
+    keep_series = opts.keep_series
     rows = dict(done)
     todo = [c for c in plan.cases if c.index not in done]
     _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, keep_series)
     table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys, out_dir=out)
     if keep_series == "netcdf":
-        combine_series(out, plan.axes, plan.cases, zip_, {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS},
+        combine_series(out, plan.axes, plan.cases, opts.zip_, {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS},
                        {"scenario": plan.source, "sweep_definition": json.dumps(plan.definition)})
-    if out is not None and plot:
-        _plot(table, plan.axes, zip_, out, plot_format)
+    if out is not None and opts.plot:
+        _plot(table, plan.axes, opts.zip_, out, opts.plot_format)
     return table
 
 
