@@ -2,8 +2,9 @@
 
 A config dataclass subclasses :class:`Config` and declares each field with :func:`field`, giving
 its bounds, allowed choices, unit and help text.  Validation runs when the object is
-constructed (``Config.__post_init__``), however it is constructed: from a mapping by
-:func:`build` (parsed YAML, which also rejects unknown keys with "did you mean" suggestions and
+constructed (values converted before the frozen object is made, by the metaclass of
+:class:`Config`; rules across fields in ``Config.__post_init__``), however it is constructed:
+from a mapping by :func:`build` (parsed YAML, which also rejects unknown keys with "did you mean" suggestions and
 missing required values), directly from Python, or by :func:`dataclasses.replace`.  Wrong types
 and values out of bounds raise a one-paragraph :class:`ScenarioError` that names the dotted
 field and says how to fix it.  NumPy scalars and arrays are accepted where numbers and lists
