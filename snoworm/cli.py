@@ -23,6 +23,7 @@ from .cli_common import (
     echo_claims,
     echo_run,
     echo_sweep,
+    echo_written,
     fail,
     handle_errors,
     model_file_option,
@@ -118,8 +119,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
     from .studies.groundtruth import run_groundtruth  # lazy: start-up
     _, text, paths = run_groundtruth(out_dir, data_path, parameter_set_name, model_file, plot=not no_plot,
                                      plot_format=plot_format, overwrite=overwrite, command=command_line())
-    click.echo(text)
-    click.echo(f"wrote {len(paths)} files to {out_dir}")
+    echo_written(text, paths, out_dir)
 
 
 @main.command("terrain-curves")
@@ -134,7 +134,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
 @plot_format_option
 @overwrite_option
 @handle_errors
-def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_plot, plot_format, overwrite):
+def terrain_curves(xts, out_dir, no_plot, **options):
     """Tractive, resistive and net force per wheel against slip (paper Figure 3).
 
     Normal load per wheel is the static one (a quarter of the segment weight); the resistance is
@@ -142,11 +142,9 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
     crosses zero for each X_t, or says that it stays negative.
     """
     from .studies.groundtruth import run_terrain_curves  # lazy: start-up
-    _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name=parameter_set_name, model_file=model_file,
-                                        plot=not no_plot, n_points=n_points, plot_format=plot_format,
-                                        overwrite=overwrite, command=command_line())
-    click.echo(text)
-    click.echo(f"wrote {len(paths)} files to {out_dir}")
+    # options: parameter_set_name, model_file, n_points, plot_format, overwrite (run_terrain_curves' names)
+    _, text, paths = run_terrain_curves(xts, out_dir, plot=not no_plot, command=command_line(), **options)
+    echo_written(text, paths, out_dir)
 
 
 @main.command()
@@ -164,7 +162,7 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
               help="Slip residual unit (fraction; 0.01 = one percentage point).")
 @overwrite_option
 @handle_errors
-def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_scale_Nm, slip_scale, overwrite):
+def calibrate(field_csv, fit, out_dir, **options):
     """Fit terrain-model coefficients to the steady cases of FIELD.csv (least squares).
 
     FIELD.csv has the columns case, surface, speed_mps, wheel_speed_mps, slip (a fraction),
@@ -175,13 +173,10 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
     """
     from .studies.calibrate import run_calibration  # lazy: start-up
+    # options: parameter_set_name, model_file, torque_scale_Nm, slip_scale, overwrite (run_calibration's names)
     with progress_bar(1, "calibrate", "model evaluations (budget)") as bar:
-        _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name=parameter_set_name,
-                                         model_file=model_file, torque_scale_Nm=torque_scale_Nm,
-                                         slip_scale=slip_scale, overwrite=overwrite, progress=bar.set,
-                                         command=command_line())
-    click.echo(text)
-    click.echo(f"wrote {len(paths)} files to {out_dir}")
+        _, text, paths = run_calibration(field_csv, fit, out_dir, progress=bar.set, command=command_line(), **options)
+    echo_written(text, paths, out_dir)
 
 @main.command()
 @click.argument("scenario", type=click.Path(dir_okay=False))
@@ -296,8 +291,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot
     with progress_bar(1, "mobility map", "inching runs") as bar:
         _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, inching=not no_inching,
                                           plot=not no_plot, progress=bar.set, command=command_line(), **options)
-    click.echo(text)
-    click.echo(f"wrote {len(paths)} files to {out_dir}")
+    echo_written(text, paths, out_dir)
 
 # ---------------------------------------------------------------- paper reproduction (snoworm/studies/paper/)
 

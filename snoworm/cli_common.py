@@ -18,10 +18,10 @@ import sys
 
 import click
 
-__all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "command_line", "out_option",
-           "allow_code_option", "code_check",
-           "overwrite_option", "set_option", "plot_format_option", "param_set_option", "model_file_option",
-           "progress_bar", "StderrHandler", "configure_logging", "echo_run", "echo_sweep", "sweep_interrupted",
+__all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "command_line",
+           "out_option", "allow_code_option", "code_check", "overwrite_option", "set_option", "plot_format_option",
+           "param_set_option", "model_file_option", "progress_bar", "StderrHandler", "configure_logging",
+           "echo_written", "echo_run", "echo_sweep", "sweep_interrupted",
            "echo_claims"]
 
 EXIT_SOLVER = 1
@@ -178,6 +178,12 @@ model_file_option = click.option("--model-file", type=click.Path(dir_okay=False)
 
 
 # ---------------------------------------------------------------- what the commands print at the end
+
+def echo_written(text, paths, out_dir):
+    """A study command's report, then how many files it wrote and where."""
+    click.echo(text)
+    click.echo(f"wrote {len(paths)} files to {out_dir}")
+
 
 def echo_run(name, res, paths, out_dir):
     """``snoworm run``'s report: simulated and wall time, distance, speed, final forces, files written."""

@@ -21,7 +21,7 @@ from pathlib import Path
 from ..slope import MAX_GRADE_DEG, ElevationProfile
 from .schema import Config, ScenarioError, field
 
-__all__ = ["GRADE_DOMAIN", "ROUTE_COLUMNS", "GradePatchConfig", "Route", "read_route", "check_elevation_table",
+__all__ = ["check_grade_inputs", "resolve_route", "GRADE_DOMAIN", "ROUTE_COLUMNS", "GradePatchConfig", "Route", "read_route", "check_elevation_table",
            "check_vehicle_on_grade"]
 
 #: Domain of every grade angle a scenario or a study gives [deg].
@@ -51,6 +51,41 @@ class GradePatchConfig(Config):
         if not self.end_m > self.start_m:
             raise ScenarioError(f"{path}.end_m: must be greater than start_m ({self.start_m} m), got {self.end_m} m. "
                                 "A grade patch covers [start_m, end_m].")
+
+
+def check_grade_inputs(terrain, path: str) -> None:
+    """The grade inputs of a ``terrain`` section (:class:`~snoworm.config.sections.TerrainConfig`):
+    at most one of ``grade_deg``, ``elevation``, ``route``; grade patches on a base grade, in order
+    without overlap; the elevation table; the route file, read (once) and checked."""
+    grades = [k for k in ("grade_deg", "elevation", "route") if getattr(terrain, k) is not None]
+    if len(grades) > 1:
+        raise ScenarioError(f"{path}: give at most one of 'grade_deg', 'elevation' and 'route' (a route file "
+                            f"carries its elevation); got {' and '.join(repr(g) for g in grades)}.")
+    if terrain.grade_patches is not None and terrain.grade_deg is None:
+        raise ScenarioError(f"{path}.grade_patches: grade patches lie on a base grade; give 'grade_deg' "
+                            "(the grade outside the patches, 0 for level).")
+    prev_end, prev_j = -math.inf, None
+    for j, pt in enumerate(terrain.grade_patches or ()):
+        if pt.start_m - pt.ramp_m < prev_end:
+            raise ScenarioError(f"{path}.grade_patches[{j}]: overlaps grade_patches[{prev_j}] (with its ramps); "
+                                "list grade patches in order along the route, without overlap.")
+        prev_end, prev_j = pt.end_m + pt.ramp_m, j
+    if terrain.elevation is not None:
+        check_elevation_table(terrain.elevation, f"{path}.elevation")
+    if terrain.route is not None:
+        terrain.route_data()               # read (and checked) once, at validation
+
+
+def resolve_route(terrain_raw: dict, base_dir) -> dict:
+    """The ``terrain`` mapping with a relative ``route`` file taken from ``base_dir`` (the scenario
+    file's folder) and made absolute, before validation (called by
+    :func:`~snoworm.config.scenario.scenario_from_dict`; a route given directly in Python is read
+    from the working directory)."""
+    route = terrain_raw.get("route")
+    if isinstance(route, str) and route:
+        p = Path(route)
+        return {**terrain_raw, "route": str((p if p.is_absolute() else Path(base_dir) / p).resolve())}
+    return terrain_raw
 
 
 def check_elevation_table(pairs, where: str) -> None:

@@ -20,7 +20,7 @@ from ..dynamics import ChainModel
 from . import yamlio
 from .mode_registry import MODES, ModeConfig, build_mode_config
 from .params import parameter_entries, read_model_file, source_notes
-from .routes import check_vehicle_on_grade
+from .routes import check_vehicle_on_grade, resolve_route
 from .schema import Config, ScenarioError, build, dump, field, internal, quote, short_key, suggest
 from .sections import (
     MAX_OUTPUT_SAMPLES,
@@ -234,7 +234,7 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None, *, tr
     raw["description"] = _text(raw.get("description", ""), "description")
     base = Path.cwd() if base_dir is None else Path(base_dir)
     if isinstance(raw["terrain"], dict):
-        raw["terrain"] = TerrainConfig.resolve_paths(raw["terrain"], base)
+        raw["terrain"] = resolve_route(raw["terrain"], base)
     raw["mode"] = _resolve_mode_paths(raw["mode"], base)
     origin = ScenarioOrigin(None if base_dir is None else Path(base_dir), notes, entries,
                             os.path.realpath(base) if trust_folder else None)

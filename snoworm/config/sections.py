@@ -18,7 +18,7 @@ import numpy as np
 from ..model.arrays import LinkArrays, SegmentArrays
 from ..slope import ElevationProfile, grade_patch_profile
 from ..terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
-from .routes import GRADE_DOMAIN, GradePatchConfig, check_elevation_table, read_route
+from .routes import GRADE_DOMAIN, GradePatchConfig, check_grade_inputs, read_route
 from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
 
 __all__ = ["XT_DOMAIN", "FINITE_WHY", "BIG_FORCE_N", "BIG_SPEED_MPS", "MAX_SEGMENTS", "MAX_OUTPUT_SAMPLES",
@@ -199,7 +199,7 @@ class TerrainConfig(Config):
                                 f"'profile' (a list of [position_m, xt] pairs), 'random' (a seeded random profile) or "
                                 f"'route' (a route file); "
                                 f"got {' and '.join(repr(g) for g in given) if given else 'none of them'}.")
-        self._check_grade(path)
+        check_grade_inputs(self, path)
         if self.patches is not None:
             if self.xt is None:
                 raise ScenarioError(f"{path}.patches: patches lie on a base X_t; give 'xt' (the X_t outside the "
@@ -224,37 +224,6 @@ class TerrainConfig(Config):
                 check_field(PatchConfig, "start_m", pair[0], f"{path}.profile[{j}][0]")
                 check_field(PatchConfig, "xt", pair[1], f"{path}.profile[{j}][1]")
                 prev = pair[0]
-
-    def _check_grade(self, path):
-        grades = [k for k in ("grade_deg", "elevation", "route") if getattr(self, k) is not None]
-        if len(grades) > 1:
-            raise ScenarioError(f"{path}: give at most one of 'grade_deg', 'elevation' and 'route' (a route file "
-                                f"carries its elevation); got {' and '.join(repr(g) for g in grades)}.")
-        if self.grade_patches is not None and self.grade_deg is None:
-            raise ScenarioError(f"{path}.grade_patches: grade patches lie on a base grade; give 'grade_deg' "
-                                "(the grade outside the patches, 0 for level).")
-        prev_end, prev_j = -math.inf, None
-        for j, pt in enumerate(self.grade_patches or ()):
-            if pt.start_m - pt.ramp_m < prev_end:
-                raise ScenarioError(f"{path}.grade_patches[{j}]: overlaps grade_patches[{prev_j}] (with its ramps); "
-                                    "list grade patches in order along the route, without overlap.")
-            prev_end, prev_j = pt.end_m + pt.ramp_m, j
-        if self.elevation is not None:
-            check_elevation_table(self.elevation, f"{path}.elevation")
-        if self.route is not None:
-            self.route_data()               # read (and checked) once, at validation
-
-    @classmethod
-    def resolve_paths(cls, raw: dict, base_dir) -> dict:
-        """The ``terrain`` mapping ``raw`` with a relative ``route`` file taken from ``base_dir`` (the
-        scenario file's folder) and made absolute, before validation (called by
-        :func:`~snoworm.config.scenario.scenario_from_dict`; a route given directly in Python is
-        read from the working directory)."""
-        route = raw.get("route")
-        if isinstance(route, str) and route:
-            p = Path(route)
-            return {**raw, "route": str((p if p.is_absolute() else Path(base_dir) / p).resolve())}
-        return raw
 
     def files(self) -> list:
         """The files this section refers to (the route file), as absolute paths."""
