@@ -22,6 +22,7 @@ from .cli_common import (
     configure_logging,
     echo_claims,
     echo_run,
+    echo_scenarios,
     echo_sweep,
     echo_written,
     fail,
@@ -335,11 +336,7 @@ def scenarios():
     Run one by name from anywhere: `snoworm run inchworm6 --out out/` (a path that exists wins
     over a name).
     """
-    from .config.scenario import shipped_scenarios  # lazy: start-up
-    items = shipped_scenarios()
-    width = max(map(len, items), default=0)
-    for name, (_, desc) in items.items():
-        click.echo(f"{name:<{width}}  {desc}")
+    echo_scenarios()
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -21,7 +21,7 @@ import click
 __all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "command_line",
            "out_option", "allow_code_option", "code_check", "overwrite_option", "set_option", "plot_format_option",
            "param_set_option", "model_file_option", "progress_bar", "StderrHandler", "configure_logging",
-           "echo_written", "echo_run", "echo_sweep", "sweep_interrupted",
+           "echo_scenarios", "echo_written", "echo_run", "echo_sweep", "sweep_interrupted",
            "echo_claims"]
 
 EXIT_SOLVER = 1
@@ -178,6 +178,15 @@ model_file_option = click.option("--model-file", type=click.Path(dir_okay=False)
 
 
 # ---------------------------------------------------------------- what the commands print at the end
+
+def echo_scenarios():
+    """The shipped scenarios, one line each: name and description."""
+    from .config.scenario import shipped_scenarios  # lazy: start-up
+    items = shipped_scenarios()
+    width = max(map(len, items), default=0)
+    for name, (_, desc) in items.items():
+        click.echo(f"{name:<{width}}  {desc}")
+
 
 def echo_written(text, paths, out_dir):
     """A study command's report, then how many files it wrote and where."""

@@ -111,3 +111,13 @@ def test_no_library_module_is_imported_at_import_time():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          env={**os.environ, "PYTHONWARNINGS": "ignore"}).stdout
     assert out.strip() == "[]"
+
+
+def test_echo_scenarios_and_echo_written(capsys):
+    from snoworm.cli_common import echo_scenarios, echo_written
+    from snoworm.config.scenario import shipped_scenarios
+    echo_scenarios()
+    lines = capsys.readouterr().out.splitlines()
+    assert [ln.split()[0] for ln in lines] == list(shipped_scenarios())
+    echo_written("report", ["a", "b"], "out/x")
+    assert capsys.readouterr().out == "report\nwrote 2 files to out/x\n"
