@@ -5,7 +5,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 OUT ?= out
 
-.PHONY: demo test test-x86-64-v2 bench paper docs clean
+.PHONY: demo test lint test-x86-64-v2 bench paper docs clean
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -28,6 +28,10 @@ docs: $(VENV)/.installed
 
 test: $(VENV)/.installed
 	$(PY) -m pytest -q
+
+# lint (rules in pyproject.toml [tool.ruff]); .ci/run runs it after the tests
+lint: $(VENV)/.installed
+	$(VENV)/bin/ruff check .
 
 # The reference tests again on a second numeric path: an x86-64-v2 CPU emulated (OpenBLAS's
 # Nehalem kernels, NumPy without AVX2/AVX-512 loops), which differs from the native path on any

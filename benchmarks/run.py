@@ -338,7 +338,7 @@ def bench_startup(repeats, report):
     labels = {"help": "snoworm --help", "run": "snoworm run tow6_uniform.yaml --no-plot --out D",
               "run_plots": "snoworm run tow6_uniform.yaml --out D (3 PNG plots)"}
     out = {}
-    for key, (cmd, floor) in cases.items():
+    for key, (cmd, _floor) in cases.items():
         out[key] = {"wall_s": best[key], "command": labels.get(key) or f"python -c {cmd[-1]!r}"}
     for key, (_, floor) in cases.items():
         if floor:
@@ -387,7 +387,7 @@ def main(argv=None):
     res["inchworm_sweep"] = bench_batched_inchworm(*((5, 4, 6) if args.quick else (10, 10, None)), report)
     report("Sweep memory (frostyboy_case3 over terrain.xt x mode.speed_mps, batched 500, child process):")
     res["memory"] = bench_memory(*((40, 25) if args.quick else (100, 100)), report)
-    report("Whole processes (best of %d):" % (1 if args.quick else 2))
+    report(f"Whole processes (best of {1 if args.quick else 2}):")
     res["processes"] = bench_processes(1 if args.quick else 2, report)
     report("Controllers (issue 14: solver restarted at every control period / step):")
     res["controllers"] = bench_controllers(repeats, report)

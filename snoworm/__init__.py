@@ -48,13 +48,13 @@ __all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Observation", "O
 
 if TYPE_CHECKING:  # for type checkers and editors; at run time the names come from __getattr__
     from . import modes as modes
-    from .simulation.driver import BatchMember, simulate, simulate_batch
-    from .simulation.guard import SolverError
+    from .config.mode_registry import ModeConfig
+    from .config.scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios
     from .infra.folders import OutputError
     from .modes import Mode, register_mode
     from .results.result import Result, ResultFileError, load_result
-    from .config.scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios
-    from .config.mode_registry import ModeConfig
+    from .simulation.driver import BatchMember, simulate, simulate_batch
+    from .simulation.guard import SolverError
     from .simulation.stepwise import Observation, Simulator
     from .studies.sweep import SweepTable, load_sweep, run_sweep
 

@@ -13,9 +13,30 @@ import sys
 import click
 
 from ._version import __version__
-from .cli_common import (EXIT_SOLVER, CommandGroup, allow_code_option, code_check, configure_logging, echo_claims,
-                         echo_run, echo_sweep, fail, handle_errors, model_file_option, out_option, overwrite_option,
-                         param_set_option, plot_format_option, figure_size_option, progress_bar, set_option, sweep_interrupted)
+from .cli_common import (
+    EXIT_SOLVER,
+    CommandGroup,
+    allow_code_option,
+    code_check,
+    command_line,
+    configure_logging,
+    echo_claims,
+    echo_run,
+    echo_scenarios,
+    echo_sweep,
+    echo_written,
+    fail,
+    figure_size_option,
+    handle_errors,
+    model_file_option,
+    out_option,
+    overwrite_option,
+    param_set_option,
+    plot_format_option,
+    progress_bar,
+    set_option,
+    sweep_interrupted,
+)
 
 
 @click.group(cls=CommandGroup, context_settings={"help_option_names": ["-h", "--help"]})
@@ -48,9 +69,9 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
     invalid (exit 2), the solver fails (exit 1) or the run is interrupted.  Progress in
     simulated time goes to stderr, and so does which controller code runs (if any).
     """
-    from .simulation.driver import simulate  # lazy: start-up
-    from .infra.folders import check_output_folder  # lazy: start-up
     from .config.scenario import load_scenario  # lazy: start-up
+    from .infra.folders import check_output_folder  # lazy: start-up
+    from .simulation.driver import simulate  # lazy: start-up
     out_dir = os.path.abspath(out_dir)          # once: a controller's os.chdir does not move it
     sc = load_scenario(scenario, sets)
     code_check(sc, allow_code, "running")
@@ -58,7 +79,8 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
     from .modes.codeload import allow_code as allowed  # lazy: start-up
     with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar, allowed(allow_code):
         res = simulate(sc, progress=bar.set)
-    paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite, figure_size=figure_size)
+    paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite, figure_size=figure_size,
+                      command=command_line())
     echo_run(sc.name, res, paths, out_dir)
 
 
@@ -101,9 +123,9 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
     """
     from .studies.groundtruth import run_groundtruth  # lazy: start-up
     _, text, paths = run_groundtruth(out_dir, data_path, parameter_set_name, model_file, plot=not no_plot,
-                                     plot_format=plot_format, overwrite=overwrite, figure_size=figure_size)
-    click.echo(text)
-    click.echo(f"wrote {len(paths)} files to {out_dir}")
+                                     plot_format=plot_format, overwrite=overwrite, figure_size=figure_size,
+                                     command=command_line())
+    echo_written(text, paths, out_dir)
 
 
 @main.command("terrain-curves")
@@ -119,8 +141,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
 @figure_size_option
 @overwrite_option
 @handle_errors
-def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_plot, plot_format, figure_size,
-                   overwrite):
+def terrain_curves(xts, out_dir, no_plot, **options):
     """Tractive, resistive and net force per wheel against slip (paper Figure 3).
 
     Normal load per wheel is the static one (a quarter of the segment weight); the resistance is
@@ -128,11 +149,9 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
     crosses zero for each X_t, or says that it stays negative.
     """
     from .studies.groundtruth import run_terrain_curves  # lazy: start-up
-    _, text, paths = run_terrain_curves(xts, out_dir, parameter_set_name, model_file, plot=not no_plot,
-                                        n_points=n_points, plot_format=plot_format, overwrite=overwrite,
-                                        figure_size=figure_size)
-    click.echo(text)
-    click.echo(f"wrote {len(paths)} files to {out_dir}")
+    # options: parameter_set_name, model_file, n_points, plot_format, overwrite (run_terrain_curves' names)
+    _, text, paths = run_terrain_curves(xts, out_dir, plot=not no_plot, command=command_line(), **options)
+    echo_written(text, paths, out_dir)
 
 
 @main.command()
@@ -150,7 +169,7 @@ def terrain_curves(xts, out_dir, parameter_set_name, model_file, n_points, no_pl
               help="Slip residual unit (fraction; 0.01 = one percentage point).")
 @overwrite_option
 @handle_errors
-def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_scale_Nm, slip_scale, overwrite):
+def calibrate(field_csv, fit, out_dir, **options):
     """Fit terrain-model coefficients to the steady cases of FIELD.csv (least squares).
 
     FIELD.csv has the columns case, surface, speed_mps, wheel_speed_mps, slip (a fraction),
@@ -161,12 +180,10 @@ def calibrate(field_csv, fit, out_dir, parameter_set_name, model_file, torque_sc
     --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
     """
     from .studies.calibrate import run_calibration  # lazy: start-up
-    with progress_bar(1, "calibrate", "model evaluations") as bar:
-        _, text, paths = run_calibration(field_csv, fit, out_dir, parameter_set_name, model_file,
-                                         torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, overwrite=overwrite,
-                                         progress=bar.set)
-    click.echo(text)
-    click.echo(f"wrote {len(paths)} files to {out_dir}")
+    # options: parameter_set_name, model_file, torque_scale_Nm, slip_scale, overwrite (run_calibration's names)
+    with progress_bar(1, "calibrate", "model evaluations (budget)") as bar:
+        _, text, paths = run_calibration(field_csv, fit, out_dir, progress=bar.set, command=command_line(), **options)
+    echo_written(text, paths, out_dir)
 
 @main.command()
 @click.argument("scenario", type=click.Path(dir_okay=False))
@@ -229,7 +246,7 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
     # options: jobs, scheduler, zip_, save_cases, series, plot_format, figure_size, batch, overwrite, allow_code,
     # restart
     try:
-        table = run_sweep(scenario, sets, out_dir=out_dir, plot=not no_plot, **options)
+        table = run_sweep(scenario, sets, out_dir=out_dir, plot=not no_plot, command=command_line(), **options)
     except SweepExecutionError as exc:
         fail(str(exc), EXIT_SOLVER)
     except KeyboardInterrupt as exc:
@@ -284,9 +301,8 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot
     # (run_mobility_map's names)
     with progress_bar(1, "mobility map", "inching runs") as bar:
         _, text, paths = run_mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, inching=not no_inching,
-                                          plot=not no_plot, progress=bar.set, **options)
-    click.echo(text)
-    click.echo(f"wrote {len(paths)} files to {out_dir}")
+                                          plot=not no_plot, progress=bar.set, command=command_line(), **options)
+    echo_written(text, paths, out_dir)
 
 # ---------------------------------------------------------------- paper reproduction (snoworm/studies/paper/)
 
@@ -319,7 +335,7 @@ def paper(out_dir, quick, strict, jobs, plot_format, figure_size, overwrite):
     from .studies.paper import default_jobs, run_paper  # lazy: start-up
     rep = run_paper(out_dir, quick=quick, progress=lambda line: click.echo(line, err=True), overwrite=overwrite,
                     jobs=default_jobs() if jobs is None else jobs, plot_format=plot_format,
-                    figure_size=figure_size)
+                    figure_size=figure_size, command=command_line())
     if echo_claims(rep, out_dir, quick) < len(rep.claims) and strict:
         sys.exit(1)
 
@@ -332,11 +348,7 @@ def scenarios():
     Run one by name from anywhere: `snoworm run inchworm6 --out out/` (a path that exists wins
     over a name).
     """
-    from .config.scenario import shipped_scenarios  # lazy: start-up
-    items = shipped_scenarios()
-    width = max(map(len, items), default=0)
-    for name, (_, desc) in items.items():
-        click.echo(f"{name:<{width}}  {desc}")
+    echo_scenarios()
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -18,10 +18,10 @@ import sys
 
 import click
 
-__all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "out_option",
-           "allow_code_option", "code_check",
-           "overwrite_option", "set_option", "plot_format_option", "figure_size_option", "param_set_option", "model_file_option",
-           "progress_bar", "StderrHandler", "configure_logging", "echo_run", "echo_sweep", "sweep_interrupted",
+__all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "command_line",
+           "out_option", "allow_code_option", "code_check", "overwrite_option", "set_option", "plot_format_option",
+           "figure_size_option", "param_set_option", "model_file_option", "progress_bar", "StderrHandler",
+           "configure_logging", "echo_scenarios", "echo_written", "echo_run", "echo_sweep", "sweep_interrupted",
            "echo_claims"]
 
 EXIT_SOLVER = 1
@@ -56,13 +56,10 @@ def handle_errors(fn):
     @functools.wraps(fn)
     def wrapper(*a, **kw):
         from .config.schema import ScenarioError  # lazy: start-up
-        from .simulation.guard import SolverError  # lazy: start-up
-        from .modes.controller import ControllerError  # lazy: start-up
-        from .infra import folders  # lazy: start-up
         from .infra.folders import OutputError  # lazy: start-up
+        from .modes.controller import ControllerError  # lazy: start-up
+        from .simulation.guard import SolverError  # lazy: start-up
         old = _catch_sigterm()
-        argv = click.get_current_context().find_root().meta.get("snoworm.argv")
-        folders.COMMAND = shlex.join(["snoworm", *argv]) if argv is not None else None   # for the manifests
         try:
             return fn(*a, **kw)
         except (ScenarioError, OutputError) as exc:
@@ -86,10 +83,17 @@ def handle_errors(fn):
             fail(f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
                   "rerun with SNOWORM_DEBUG=1 for the traceback and report it.", EXIT_SOLVER)
         finally:
-            folders.COMMAND = None
             if old is not None:
                 signal.signal(signal.SIGTERM, old)
     return wrapper
+
+
+def command_line() -> str | None:
+    """The running command's line, ``snoworm <its arguments>`` (recorded in the manifests of the
+    output folders it writes), or None outside a command."""
+    ctx = click.get_current_context(silent=True)
+    argv = ctx.find_root().meta.get("snoworm.argv") if ctx is not None else None
+    return shlex.join(["snoworm", *argv]) if argv is not None else None
 
 
 class CommandGroup(click.Group):
@@ -173,7 +177,7 @@ def code_check(sc, allow_code, verb=None):
     """Refuse (exit 2) a controller that may not run; with ``verb``, say on stderr which code runs."""
     if getattr(sc.mode, "type", None) == "controller":
         from .modes.controller import code_notice  # lazy: start-up (only controller scenarios)
-        notice = code_notice(sc.mode, allow_code)
+        notice = code_notice(sc, allow_code)
         if verb:
             click.echo(f"snoworm: {verb} {notice}", err=True)
 
@@ -196,6 +200,21 @@ model_file_option = click.option("--model-file", type=click.Path(dir_okay=False)
 
 
 # ---------------------------------------------------------------- what the commands print at the end
+
+def echo_scenarios():
+    """The shipped scenarios, one line each: name and description."""
+    from .config.scenario import shipped_scenarios  # lazy: start-up
+    items = shipped_scenarios()
+    width = max(map(len, items), default=0)
+    for name, (_, desc) in items.items():
+        click.echo(f"{name:<{width}}  {desc}")
+
+
+def echo_written(text, paths, out_dir):
+    """A study command's report, then how many files it wrote and where."""
+    click.echo(text)
+    click.echo(f"wrote {len(paths)} files to {out_dir}")
+
 
 def echo_run(name, res, paths, out_dir):
     """``snoworm run``'s report: simulated and wall time, distance, speed, final forces, files written."""

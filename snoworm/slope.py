@@ -57,7 +57,7 @@ class ElevationProfile:
     grade_deg: float = 0.0
 
     @classmethod
-    def constant(cls, grade_deg: float) -> "ElevationProfile":
+    def constant(cls, grade_deg: float) -> ElevationProfile:
         return cls((), (), float(grade_deg))
 
     @property

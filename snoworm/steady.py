@@ -147,7 +147,9 @@ def max_grade_deg(X, seg, tp: TerrainParams, wheel_speed_mps: float, drawbar_N: 
     cannot even downhill at ``-MAX_GRADE_DEG``.  The motor torque limit is not applied: check
     ``steady_state(..., grade_deg=...).torque_Nm`` against it.
     """
-    f = lambda g: max_drawbar_N(X, seg, tp, wheel_speed_mps, grade_deg=g) - drawbar_N
+    def f(g):
+        return max_drawbar_N(X, seg, tp, wheel_speed_mps, grade_deg=g) - drawbar_N
+
     if f(MAX_GRADE_DEG) >= 0:
         return MAX_GRADE_DEG
     if f(-MAX_GRADE_DEG) < 0:

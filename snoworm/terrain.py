@@ -271,7 +271,7 @@ class TerrainProfile:
     values: tuple
 
     @classmethod
-    def constant(cls, xt: float) -> "TerrainProfile":
+    def constant(cls, xt: float) -> TerrainProfile:
         return cls((), (float(xt),))
 
     @property

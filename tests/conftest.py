@@ -7,14 +7,14 @@ import pytest
 import yaml
 
 from snoworm import load_scenario, simulate
-from snoworm.dynamics import Controls
 from snoworm.config.scenario import apply_overrides, read_yaml, scenario_from_dict
+from snoworm.dynamics import Controls
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def shipped_result(name):
     """A shipped scenario run once per test session at its own settings (shared by the
     reference, tight-reference and solver-budget tests; callers must not modify it)."""

@@ -91,8 +91,9 @@ def test_no_import_cycle():
     for me in graph:
         graph[me] = {m for m in graph[me] if not me.startswith(m + ".")}
     index, low, stack, on, cycles = {}, {}, [], set(), []
+    counter = [0]
 
-    def strong(v, counter=[0]):
+    def strong(v):
         index[v] = low[v] = counter[0]
         counter[0] += 1
         stack.append(v)

@@ -76,6 +76,7 @@ def test_solver_failure_exit_1_nothing_written(tmp_path, monkeypatch):
 
 def _controller_scenario(tmp_path, body):
     import textwrap
+
     import yaml
     (tmp_path / "c.py").write_text(textwrap.dedent(body))
     raw = yaml.safe_load((SCENARIOS / "tow6_uniform.yaml").read_text())

@@ -13,8 +13,16 @@ import click
 import pytest
 from click.testing import CliRunner
 
-from snoworm.cli_common import (EXIT_INPUT, EXIT_SOLVER, CommandGroup, Terminated, configure_logging, handle_errors,
-                                out_option)
+from snoworm.cli_common import (
+    EXIT_INPUT,
+    EXIT_SOLVER,
+    CommandGroup,
+    Terminated,
+    command_line,
+    configure_logging,
+    handle_errors,
+    out_option,
+)
 from snoworm.config.schema import ScenarioError
 from snoworm.infra import folders
 from snoworm.infra.folders import OutputError
@@ -32,7 +40,7 @@ def _cli(exc=None, seen=None):
     @handle_errors
     def cmd(out_dir):
         if seen is not None:
-            seen.append(folders.COMMAND)
+            seen.append(command_line())
         if exc is not None:
             raise exc
         click.echo(f"ok {out_dir}")
@@ -62,11 +70,13 @@ def test_debug_shows_the_traceback_of_a_bug(monkeypatch):
     assert isinstance(r.exception, ZeroDivisionError)
 
 
-def test_the_command_line_is_kept_for_the_manifest_only_while_the_command_runs():
+def test_a_command_knows_its_command_line_for_the_manifests():
     seen = []
     r = CliRunner().invoke(_cli(seen=seen), ["cmd", "--out", "res dir"])
     assert r.exit_code == 0 and r.stdout == "ok res dir\n"
-    assert seen == ["snoworm cmd --out 'res dir'"] and folders.COMMAND is None
+    assert seen == ["snoworm cmd --out 'res dir'"]
+    assert command_line() is None                  # outside a command
+    assert not hasattr(folders, "COMMAND")         # no module global: the CLI passes it (command=)
 
 
 def test_sigterm_handler_is_restored_after_the_command():
@@ -101,3 +111,13 @@ def test_no_library_module_is_imported_at_import_time():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          env={**os.environ, "PYTHONWARNINGS": "ignore"}).stdout
     assert out.strip() == "[]"
+
+
+def test_echo_scenarios_and_echo_written(capsys):
+    from snoworm.cli_common import echo_scenarios, echo_written
+    from snoworm.config.scenario import shipped_scenarios
+    echo_scenarios()
+    lines = capsys.readouterr().out.splitlines()
+    assert [ln.split()[0] for ln in lines] == list(shipped_scenarios())
+    echo_written("report", ["a", "b"], "out/x")
+    assert capsys.readouterr().out == "report\nwrote 2 files to out/x\n"

@@ -12,8 +12,8 @@ import time
 import pytest
 from click.testing import CliRunner
 
-from snoworm.infra import folders
 from snoworm.cli import main
+from snoworm.infra import folders
 from snoworm.infra.folders import MANIFEST
 from tests.conftest import SCENARIOS
 
@@ -106,6 +106,7 @@ def test_run_shows_progress_in_simulated_time_on_stderr(tmp_path):
 
 def test_verbose_logs_solver_fallbacks(tmp_path, monkeypatch):
     import logging
+
     from snoworm.simulation import driver
     real = driver.solve_ivp
     calls = []
@@ -156,10 +157,11 @@ def test_python_dash_m_snoworm_runs_the_cli(tmp_path):
 
 def test_jobs_option_on_every_command_that_runs_cases_in_parallel():
     import inspect
-    from snoworm.studies import calibrate, groundtruth, mobility
+
+    from snoworm.studies import calibrate, groundtruth, inching
     from snoworm.studies.paper import report
     from snoworm.studies.sweep import run as sweep_run
-    parallel = {"sweep": sweep_run, "mobility-map": mobility, "paper": report}
+    parallel = {"sweep": sweep_run, "mobility-map": inching, "paper": report}     # the map's runs: studies.inching
     serial = {"calibrate": calibrate, "groundtruth": groundtruth}
     for name, mod in parallel.items():
         assert "ProcessExecutor" in inspect.getsource(mod)
@@ -176,6 +178,7 @@ def _sweep(out, *extra):
 
 def test_a_sweep_into_a_locked_folder_exits_2_naming_the_pid(tmp_path):
     import multiprocessing
+
     from tests.test_infra_folders import _hold
     ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
     ready, release = ctx.Event(), ctx.Event()

@@ -1,11 +1,24 @@
 """Scenarios (snoworm.config.scenario): every shipped scenario is valid; bad input fails naming the field and the fix;
 Scenario.with_ and to_dict; the mode-config registry and cached properties."""
+import dataclasses
+import json
+
 import pytest
 import yaml
+from click.testing import CliRunner
 from hypothesis import given, settings, strategies as st
 
-from snoworm.config.scenario import (ScenarioError, apply_overrides, dump_scenario, load_scenario, read_yaml,
-                              scenario_from_dict)
+from snoworm.config.params import PARAMETER_SETS, parameter_entries
+from snoworm.config.scenario import (
+    ScenarioError,
+    apply_overrides,
+    dump_scenario,
+    load_scenario,
+    read_yaml,
+    scenario_from_dict,
+    scenario_path,
+    shipped_scenarios,
+)
 from tests.conftest import SCENARIOS
 
 SHIPPED = sorted(SCENARIOS.glob("*.yaml"))
@@ -86,6 +99,7 @@ def test_round_trip_property(xt, tow, n, speed):
 def test_shipped_scenarios_run(path):
     """Every shipped scenario runs (first 3 s) and produces finite results of the right shape."""
     import numpy as np
+
     from snoworm import simulate
     sc = load_scenario(path, ["simulation.duration_s=3"])
     res = simulate(sc)
@@ -133,20 +147,13 @@ def test_cached_properties_are_built_once():
 
 
 def test_mode_configs_registry_holds_the_built_in_modes():
-    from snoworm.config.mode_registry import MODE_CONFIGS
-    assert {"uniform", "force_control", "inchworm", "supervisor"} <= set(MODE_CONFIGS)
+    from snoworm.config.mode_registry import MODES
+    assert {"uniform", "force_control", "inchworm", "supervisor"} <= set(MODES)
     sc = load_scenario(SCENARIOS / "inchworm6.yaml")
-    assert type(sc.mode) is MODE_CONFIGS["inchworm"]
+    assert type(sc.mode) is MODES.config_class("inchworm")
 
 
 # ------------------------------------------------------------------ shipped names, vehicles as files, sources
-import json  # noqa: E402
-
-from click.testing import CliRunner  # noqa: E402
-
-from snoworm.config.params import PARAMETER_SETS  # noqa: E402
-from snoworm.config.params import parameter_entries  # noqa: E402
-from snoworm.config.scenario import scenario_path, shipped_scenarios  # noqa: E402
 
 
 def test_shipped_scenarios_by_name_from_anywhere(tmp_path, monkeypatch):
@@ -229,6 +236,7 @@ def test_a_missing_vehicle_file_names_it(tmp_path):
 
 def test_copy_tree_copies_every_level_and_leaves_the_original_alone():
     import numpy as np
+
     from snoworm.config.scenario import _copy_tree
     shared = {"k": [1, 2]}
     data = {"a": shared, "b": shared, "c": [{"x": 1.5, "s": "t", "n": None}], "arr": np.arange(3.0)}
@@ -247,3 +255,15 @@ def test_override_of_an_aliased_section_changes_only_the_named_place():
     raw["b"] = raw["a"]                    # what a YAML alias gives
     out = apply_overrides(raw, [("a.v", 2)])
     assert out["a"]["v"] == 2 and out["b"]["v"] == 1 and raw["a"]["v"] == 1
+
+
+def test_the_origin_keeps_the_folder_and_the_notes_through_edits(tmp_path, monkeypatch):
+    path = _vehicle_file(tmp_path, "name: my_rover\nbase: frostyboy\nsegment:\n  mass_kg: 120.0\n")
+    sc = load_scenario(path)
+    assert sc.origin.base_dir == tmp_path and sc.sources["vehicle.segment.mass_kg"] == "[user] rover.yaml"
+    noted = sc.with_({"sources": {"vehicle.segment.wheel_radius_m": "[field data] tape"}})
+    assert noted.origin.base_dir == tmp_path                 # with_ validates from the same folder
+    # dataclasses.replace keeps the notes and the parameter set's tags (before: they were lost)
+    edited = dataclasses.replace(noted, description="edited")
+    assert edited.sources == noted.sources
+    assert edited.sources["vehicle.segment.wheel_radius_m"] == "[field data] tape"

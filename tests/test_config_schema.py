@@ -1,6 +1,6 @@
 """Declarative validation of configs (snoworm.config.schema): on construction, on replace, from mappings."""
 import dataclasses
-from typing import Optional
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -26,7 +26,7 @@ class Probe(Config):
     values: tuple[float, ...] = field((1.0,), ge=0, unit="m", doc="non-negative lengths")
     kind: str = field("a", choices=("a", "b"), doc="a choice")
     flag: bool = field(False, doc="a switch")
-    limit: Optional[float] = field(None, gt=0, doc="an optional bound")
+    limit: float | None = field(None, gt=0, doc="an optional bound")
 
 
 # ------------------------------------------------------------------ validation on construction
@@ -165,3 +165,31 @@ def test_a_huge_unknown_key_is_cut_in_the_message():
     with pytest.raises(ScenarioError) as exc:
         build(SimulationConfig, {"duration_s": 1.0, "k" * 100_000: 1}, "simulation")
     assert len(str(exc.value)) < 300 and "unknown key" in str(exc.value)
+
+
+def test_values_are_converted_before_the_frozen_object_is_made():
+    tow = TowConfig(force_N=3)                      # an int, converted to a float before construction
+    assert type(tow.force_N) is float and tow.force_N == 3.0
+    again = dataclasses.replace(tow, force_N=np.int64(5))
+    assert type(again.force_N) is float and again.force_N == 5.0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        tow.force_N = 1.0
+    with pytest.raises(TypeError, match="multiple values"):
+        TowConfig(1.0, force_N=2.0)
+
+
+def test_no_config_object_is_changed_after_it_is_made():
+    # frozen means frozen: nothing in the config layer or the modes sets an attribute of a made
+    # object (modes/command.py's Observation, a read-only view computed on first read, is no config)
+    root = Path(__file__).resolve().parents[1] / "snoworm"
+    files = [p for d in ("config", "modes") for p in (root / d).glob("*.py") if p.name != "command.py"]
+    offenders = [str(p.relative_to(root)) for p in files if "object.__setattr__" in p.read_text(encoding="utf-8")]
+    assert files and offenders == []
+
+
+def test_an_internal_field_is_no_setting(sc):
+    assert "origin" not in dump(sc) and sc.origin is not None
+    with pytest.raises(ScenarioError, match=r"^origin: unknown key"):
+        build(type(sc), {**dump(sc), "origin": None})
+    assert dataclasses.replace(sc, origin=None) == sc           # not compared
+    assert dataclasses.replace(sc, description="x").origin is sc.origin      # kept by edits

@@ -10,7 +10,7 @@ from hypothesis import given, settings, strategies as st
 
 from snoworm.config import yamlio
 from snoworm.config.schema import ScenarioError
-from snoworm.config.yamlio import MAX_BYTES, MAX_DEPTH, MAX_NODES, load_yaml_text, quote, read_yaml
+from snoworm.config.yamlio import MAX_BYTES, MAX_DEPTH, load_yaml_text, quote, read_yaml
 
 # Time bounds below are hang guards (pure-Python PyYAML on a slow CI machine), not benchmarks.
 HANG_GUARD_S = 5.0

@@ -104,5 +104,6 @@ def test_readme_figure_is_made_by_the_command_it_names(tmp_path):
                         "--figure-size", "column"], capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr
     made = (tmp_path / "inchworm6" / "speeds.png").read_bytes()
-    size = lambda png: struct.unpack(">II", png[16:24])
+    def size(png):
+        return struct.unpack(">II", png[16:24])
     assert size(made) == size(committed) and size(made)[0] == 700

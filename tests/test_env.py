@@ -17,6 +17,7 @@ def short6():
 
 def test_gymnasium_env_checker_passes(short6):
     from gymnasium.utils.env_checker import check_env
+
     from snoworm.env import SnowormEnv
     env = SnowormEnv(short6)
     assert isinstance(env, gymnasium.Env)
@@ -60,7 +61,7 @@ def test_terminated_when_immobilised(short6):
     from snoworm.env import SnowormEnv
     env = SnowormEnv(short6.with_({"simulation.duration_s": 10.0}), dt_s=0.25, stall_time_s=1.0)
     env.reset()
-    for k in range(8):
+    for _ in range(8):
         obs, r, terminated, truncated, info = env.step(np.zeros(6))    # wheels held at zero speed
         if terminated:
             break
@@ -79,6 +80,7 @@ def test_observation_carries_the_grade_under_each_segment(short6):
 def test_misuse_is_refused_with_clear_errors(short6):
     """Issue 24: a scalar action, NaN/negative arguments, step before reset or after the episode ended."""
     import gymnasium
+
     from snoworm.env import SnowormEnv
     for kw in ({"dt_s": float("nan")}, {"dt_s": -0.1}, {"energy_weight": float("nan")}, {"energy_weight": -1.0},
                {"stall_speed_mps": -0.01}, {"stall_time_s": float("inf")}):

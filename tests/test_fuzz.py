@@ -27,8 +27,7 @@ import numpy as np
 import pytest
 import yaml
 from click.testing import CliRunner
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
+from hypothesis import HealthCheck, given, settings, strategies as st
 
 from snoworm import load_scenario
 from snoworm.cli import main
@@ -344,6 +343,7 @@ def good_run(tmp_path_factory):
        pos=st.floats(0, 1), token=st.sampled_from(["nan", "inf", "-1e300", "x", "", "1,2", "[", "{}", "7"]))
 def test_fuzzed_result_folders_load_or_raise_one_error(tmp_path_factory, good_run, name, how, pos, token):
     import shutil
+
     from snoworm.results.result import ResultFileError, load_result
     d = tmp_path_factory.mktemp("t") / "run"
     shutil.copytree(good_run, d)

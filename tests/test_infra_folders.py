@@ -48,8 +48,17 @@ import os  # noqa: E402
 import stat  # noqa: E402
 
 from snoworm.infra import folders  # noqa: E402
-from snoworm.infra.folders import (LOCK, MANIFEST, FolderLocked, OutputError, check_output_folder,  # noqa: E402
-                            folder_lock, folder_state, output_folder, read_manifest)
+from snoworm.infra.folders import (  # noqa: E402
+    LOCK,
+    MANIFEST,
+    FolderLocked,
+    OutputError,
+    check_output_folder,
+    folder_lock,
+    folder_state,
+    output_folder,
+    read_manifest,
+)
 
 
 @pytest.fixture

@@ -14,8 +14,15 @@ from click.testing import CliRunner
 
 from snoworm.cli import main
 from snoworm.infra.folders import OutputError, atomic_write_text, folder_report, folder_state, output_folder
-from snoworm.infra.manifest import (MANIFEST, MAX_MANIFEST_BYTES, ManifestProblem, entry_problem, load_manifest,
-                              read_small_file, short)
+from snoworm.infra.manifest import (
+    MANIFEST,
+    MAX_MANIFEST_BYTES,
+    ManifestProblem,
+    entry_problem,
+    load_manifest,
+    read_small_file,
+    short,
+)
 
 SHORT = ["--set", "simulation.duration_s=2", "--no-plot"]
 

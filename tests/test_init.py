@@ -78,7 +78,7 @@ from dataclasses import dataclass
 from snoworm import Mode, ModeConfig, register_mode, scenario_from_dict, simulate
 from snoworm.model.inputs import Controls
 from snoworm.modes.base import Interval
-from snoworm.config.mode_registry import MODE_CONFIGS
+from snoworm.config.mode_registry import MODES
 from snoworm.config.scenario import apply_overrides, read_yaml
 from snoworm.config.schema import field
 
@@ -96,7 +96,7 @@ register_mode(Mine)
 raw = apply_overrides(read_yaml({str(SCENARIOS / 'tow6_uniform.yaml')!r}),
                       [("mode", {{"type": "mine"}}), ("simulation.duration_s", 2.0)])
 sc = scenario_from_dict(raw)
-print(type(sc.mode).__name__, sorted(MODE_CONFIGS), simulate(sc).summary()["distance_m"] > 0)
+print(type(sc.mode).__name__, sorted(MODES), simulate(sc).summary()["distance_m"] > 0)
 """
     out = fresh(code)
     assert out.split(maxsplit=1)[0] == "MineConfig"

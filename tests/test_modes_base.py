@@ -6,11 +6,11 @@ import pytest
 
 import snoworm
 from snoworm import Mode, ModeConfig, ScenarioError, register_mode, scenario_from_dict, simulate
-from snoworm.model.inputs import Controls
-from snoworm.modes.base import MODES, Interval
-from snoworm.config.mode_registry import MODE_CONFIGS
+from snoworm.config import mode_registry
 from snoworm.config.scenario import apply_overrides, read_yaml
 from snoworm.config.schema import field
+from snoworm.model.inputs import Controls
+from snoworm.modes.base import MODES, Interval
 from tests.conftest import SCENARIOS
 
 
@@ -38,8 +38,7 @@ def user_mode():
     """Register the user mode for one test, and remove it again."""
     register_mode(ConstantSpeedMode)
     yield ConstantSpeedMode
-    MODES.pop(ConstantSpeedMode.name, None)
-    MODE_CONFIGS.pop(ConstantSpeedMode.name, None)
+    MODES.unregister(ConstantSpeedMode.name)
 
 
 def raw_with_mode(mode, duration_s=8.0):
@@ -91,7 +90,7 @@ def test_registering_a_non_mode_raises_type_error():
         config_class = dict
     with pytest.raises(TypeError, match="ModeConfig"):
         register_mode(BadConfig)
-    assert "bad_config" not in MODES and "bad_config" not in MODE_CONFIGS
+    assert "bad_config" not in MODES
 
 
 def test_base_hooks_defaults():
@@ -101,3 +100,10 @@ def test_base_hooks_defaults():
     assert m.summary(None) == {} and m.log == []
     with pytest.raises(NotImplementedError, match="must implement interval"):
         m.interval(0.0, m.initial_state())
+
+
+def test_validation_and_the_driver_read_one_registry(user_mode):
+    assert snoworm.modes.MODES is MODES is mode_registry.MODES
+    sc = scenario_from_dict(raw_with_mode({"type": "constant_speed", "speed_mps": 1.0}))
+    assert mode_registry.MODES.config_class("constant_speed") is type(sc.mode) is ConstantSpeedConfig
+    assert snoworm.modes.mode_class(sc.mode) is ConstantSpeedMode

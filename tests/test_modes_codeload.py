@@ -16,8 +16,8 @@ from click.testing import CliRunner
 
 from snoworm import load_result, load_scenario, load_sweep, run_sweep, simulate
 from snoworm.cli import main
-from snoworm.modes.codeload import allow_code, check_reference, find_module_source, trust_problem
 from snoworm.config.schema import ScenarioError
+from snoworm.modes.codeload import allow_code, check_reference, find_module_source, trust_problem
 from tests.conftest import SCENARIOS
 
 EVIL = """

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from snoworm.drivetrain import motor_envelope
-from snoworm.modes.command import COMMAND_KEYS, CommandState, observe
 from snoworm.model.quantities import output_series
+from snoworm.modes.command import COMMAND_KEYS, CommandState, observe
 from tests.conftest import SCENARIOS, model_for, random_state
 
 

@@ -1,14 +1,14 @@
 """The controller mode (snoworm.modes.controller): loading, validation, the run, its errors."""
 import textwrap
-from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
 
 from snoworm import Simulator, load_scenario, simulate
-from snoworm.modes.controller import ControllerError, load_controller
 from snoworm.config.schema import ScenarioError
+from snoworm.modes.controller import ControllerError, load_controller
+from snoworm.studies.sweep import SweepTask
 from tests.conftest import SCENARIOS
 from tests.controller_helpers import schedule
 
@@ -158,6 +158,18 @@ def test_failing_controller_is_a_sweep_case_status(tmp_path):
     from snoworm.studies.sweep import STATUSES, run_case
     p = _write(tmp_path, GOOD, _mode("Raises"), sim={"duration_s": 1.0})
     raw = yaml.safe_load(p.read_text())
-    out = run_case({"index": 0, "raw": raw, "source": str(p), "base_dir": str(tmp_path), "save_dir": None})
+    out = run_case(SweepTask(0, raw=raw, source=str(p), base_dir=str(tmp_path)))
     assert out["status"] == "controller_failure" and "controller" in STATUSES[-1]
     assert "controller raised at t = 0.35 s" in out["error"] and "my controller broke" in out["error"]
+
+
+def test_resolve_paths_takes_a_relative_file_from_the_given_folder_only(tmp_path):
+    from snoworm.modes.controller import ControllerConfig
+    raw = {"type": "controller", "controller": "ctl/my.py:Mine", "period_s": 0.1}
+    out = ControllerConfig.resolve_paths(raw, tmp_path)
+    assert out["controller"] == f"{(tmp_path / 'ctl' / 'my.py').resolve()}:Mine"
+    assert raw["controller"] == "ctl/my.py:Mine"                 # the given mapping is not changed
+    for spec in ("tests.controller_helpers:Schedule", "/abs/file.py:X", 3):     # a module, absolute, not text
+        assert ControllerConfig.resolve_paths({**raw, "controller": spec}, tmp_path)["controller"] == spec
+    with pytest.raises(ScenarioError, match=r"^mode\.controller: expected 'file\.py:ClassName'"):
+        ControllerConfig.resolve_paths({**raw, "controller": "no colon.py"}, tmp_path)

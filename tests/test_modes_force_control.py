@@ -15,9 +15,9 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
+from snoworm import simulate
 from snoworm.cli import main
 from snoworm.config.scenario import ScenarioError, dump_scenario, load_scenario, scenario_from_dict
-from snoworm import simulate
 
 SCEN = Path(__file__).resolve().parent.parent / "scenarios"
 F_TOL_N = 2.0

@@ -3,14 +3,13 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from snoworm import load_scenario, simulate
-from snoworm.modes.gait import progress_conditions
-from snoworm.config.scenario import apply_overrides, read_yaml, scenario_from_dict
-from snoworm import terrain
+from snoworm import load_scenario, simulate, terrain
 from snoworm.config.params import terrain_params
+from snoworm.config.scenario import apply_overrides, read_yaml, scenario_from_dict
+from snoworm.modes.gait import progress_conditions
+from tests.conftest import SCENARIOS
 
 FROSTYBOY_TERRAIN = terrain_params("frostyboy")
-from tests.conftest import SCENARIOS
 
 FN = 90 * 9.81 / 4
 V_S = 0.002          # smooth-sign speed of the property test [m/s] (see test docstring)

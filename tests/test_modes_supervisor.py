@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from snoworm.results.energy import energy_metrics
 from snoworm.config.scenario import ScenarioError, scenario_from_dict
+from snoworm.results.energy import energy_metrics
 from tests.conftest import traverse_raw as _base
 
 PATCH_START_M, PATCH_END_M, PATCH_RAMP_M = 8.0, 18.0, 0.5

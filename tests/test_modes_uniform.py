@@ -31,6 +31,7 @@ def test_fig7_staggered_reaches_fig6(fig6, scenario_path):
 
 def test_steady_state_agrees_with_root_finder(fig6):
     from types import SimpleNamespace
+
     from snoworm.config.params import parameter_set, terrain_params
     from snoworm.steady import steady_state
     FROSTYBOY_TERRAIN = terrain_params("frostyboy")

@@ -4,7 +4,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from snoworm import load_scenario, simulate
-from snoworm.plotting import FIGURE_SIZES, headless, quantities
+from snoworm.plotting import FIGURE_SIZES, headless
 from tests.conftest import SCENARIOS
 from tests.figure_checks import problems
 

@@ -2,9 +2,9 @@
 import numpy as np
 from matplotlib.figure import Figure
 
+from snoworm.plotting import studies
 from snoworm.studies.groundtruth import run_groundtruth, run_terrain_curves
 from snoworm.studies.mobility import REGIONS
-from snoworm.plotting import studies
 
 
 def _mmap():

@@ -4,7 +4,7 @@ import struct
 import pytest
 from matplotlib.figure import Figure
 
-from snoworm.plotting.style import (COLOURS, DPI, force_text, new_figure, quantity_label, save, series_style)
+from snoworm.plotting.style import COLOURS, DPI, force_text, new_figure, quantity_label, save, series_style
 
 
 @pytest.mark.parametrize("key, label", [

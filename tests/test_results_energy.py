@@ -45,6 +45,7 @@ def test_energy_along_ends_at_the_metrics_totals(scenario_path):
     """The cumulative energy (trapezoids summed step by step) ends at energy_metrics' totals (the
     same trapezoids summed by numpy: equal to rounding, 1e-9 relative), never decreases, starts at 0."""
     import numpy as np
+
     from snoworm.results.energy import energy_along
     res = simulate(load_scenario(scenario_path("inchworm2"), ["simulation.duration_s=4"]))
     e, m = energy_along(res), energy_metrics(res)

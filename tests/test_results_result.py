@@ -181,3 +181,11 @@ def test_a_tampered_run_folder_raises_one_error_type_naming_the_file(tmp_path, k
     with pytest.raises(ResultFileError) as err:
         load_result(d)
     assert name in str(err.value) and len(str(err.value)) < 700
+
+
+def test_write_records_the_command_it_is_given(short_run, tmp_path):
+    from snoworm.infra.folders import read_manifest
+    short_run.write(tmp_path / "given", plot=False, command="snoworm run x.yaml --out given")
+    assert read_manifest(tmp_path / "given")["command"] == "snoworm run x.yaml --out given"
+    short_run.write(tmp_path / "default", plot=False)          # default: this process's command line
+    assert read_manifest(tmp_path / "default")["command"] != "snoworm run x.yaml --out given"

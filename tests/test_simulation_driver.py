@@ -10,8 +10,8 @@ import pytest
 
 from snoworm import SolverError, load_scenario, simulate
 from snoworm.simulation.driver import batch_key, simulate_batch
-from snoworm.studies.sweep import case_metrics
 from snoworm.simulation.vode import VodeError, VodeStepper
+from snoworm.studies.sweep import case_metrics
 from tests.conftest import assert_metrics_close, shipped_result
 
 
@@ -152,6 +152,7 @@ def test_progress_reports_simulated_time_and_changes_nothing(scenario_path):
 
 def test_solver_fallbacks_are_logged(monkeypatch, scenario_path, caplog):
     import logging
+
     from snoworm.simulation import driver
     real, calls = driver.solve_ivp, []
 

@@ -144,8 +144,11 @@ def test_locked_chain_holds_or_slides_where_the_terrain_law_says(factor):
         # holds: creeps back at the speed V* where the laws balance gravity, with the locked wheel's slip
         # |V|/v_eps (regularised Eq. 1) and the smooth sign of Eq. 3:  c_t(|V|/v_eps) + c_r tanh(|V|/v_s) = tan(theta)
         tp = m.tp
-        bal = lambda u: (float(terrain.traction_force(u / tp.slip_eps_mps, 1.0, X, tp))
-                         + float(terrain.resistance_force(u, 1.0, X, tp)) - math.tan(th))
+
+        def bal(u):
+            return (float(terrain.traction_force(u / tp.slip_eps_mps, 1.0, X, tp))
+                    + float(terrain.resistance_force(u, 1.0, X, tp)) - math.tan(th))
+
         creep = brentq(bal, 1e-9, tp.slip_eps_mps)
         assert abs(v[1] - v[0]) < 1e-3                       # settled (sliding would be ~0.4 m/s^2)
         # 10 %: the PI holds w at 0 only up to its integral's lag, so the wheel turns back slightly and the

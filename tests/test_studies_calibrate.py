@@ -13,14 +13,11 @@ import numpy as np
 import pytest
 import yaml
 from click.testing import CliRunner
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from snoworm.studies import calibrate as cal
-from snoworm.studies import field_data as fd
-from snoworm.studies import groundtruth as gt
 from snoworm.cli import main
 from snoworm.config.scenario import load_scenario
+from snoworm.studies import calibrate as cal, field_data as fd, groundtruth as gt
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("1", "2", "3", "4", "5")

@@ -13,11 +13,10 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from snoworm.studies import groundtruth as gt
-from snoworm import steady
+from snoworm import simulate, steady
 from snoworm.cli import main
 from snoworm.config.scenario import load_scenario
-from snoworm import simulate
+from snoworm.studies import groundtruth as gt
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("1", "2", "3", "4", "5")

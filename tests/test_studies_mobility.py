@@ -7,8 +7,8 @@ from click.testing import CliRunner
 
 from snoworm import steady
 from snoworm.cli import main
-from snoworm.studies.mobility import mobility_map
 from snoworm.config.scenario import load_scenario
+from snoworm.studies.mobility import mobility_map
 
 
 def test_map_rolling_boundary_matches_steady_limit(scenario_path):
@@ -139,7 +139,10 @@ def test_grade_axis_bisection_equals_every_cell(scenario_path):
     kw = dict(wheel_speed_mps=1.8, grades=[0.0, 8.0, 16.0, 24.0], inch_duration_s=4.0, jobs=2)
     fast = mobility_map(sc, [0.4, 0.7], [0.0], **kw)
     full = mobility_map(sc, [0.4, 0.7], [0.0], every_cell=True, **kw)
-    region = lambda m: {(r["xt"], r["grade_deg"]): r["region"] for r in m["rows"]}
+
+    def region(m):
+        return {(r["xt"], r["grade_deg"]): r["region"] for r in m["rows"]}
+
     assert region(fast) == region(full)
     assert set(region(full).values()) == {"rolling", "inching only", "immobile"}
     simulated = [r for r in fast["rows"] if r["inching_speed_mps"] is not None]
@@ -174,8 +177,8 @@ def test_cli_mobility_map_grade_axis(scenario_path, tmp_path):
 def test_several_gaits_one_curve_each(scenario_path):
     """Two gaits on a 2 x 2 grid: each gait's cells are its own runs; a cell inches when any gait
     moves the chain, reporting that gait; a bad gait is a one-line error before any run."""
-    from snoworm.studies.mobility import parse_gait
     from snoworm.config.schema import ScenarioError
+    from snoworm.studies.mobility import parse_gait
     sc = load_scenario(scenario_path("traverse_patch"))
     gaits = ["six_segment", parse_gait("[[0],[1],[2],[3],[4],[5]]")]
     m = mobility_map(sc, [0.4], [0.0], wheel_speed_mps=1.8, grades=[0.0, 8.0], inch_duration_s=4.0, gaits=gaits)

@@ -10,8 +10,8 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from snoworm.studies import paper
 from snoworm.cli import main
+from snoworm.studies import paper
 
 FIGURES = ("fig3_terrain_curves.png", "table2.png", "fig5_speeds.png", "fig5_positions.png", "fig6_forces.png",
            "fig7_forces.png", "fig8_forces.png", "fig8_speeds.png", "fig9_forces.png", "fig9_speeds.png",
@@ -117,7 +117,7 @@ def test_plot_format_of_the_figures_and_how_the_report_shows_them(tmp_path, fmt,
     html, md = paper.render_html(rep), paper.render_markdown(rep)
     assert shown in html and "data:image/png" not in html
     assert (f"![fig3_terrain_curves](fig3_terrain_curves.{fmt})" in md) == (fmt == "svg")
-    assert (f"[fig3_terrain_curves.pdf](fig3_terrain_curves.pdf)" in md) == (fmt == "pdf")
+    assert ("[fig3_terrain_curves.pdf](fig3_terrain_curves.pdf)" in md) == (fmt == "pdf")
 
 
 def test_figure_size_of_the_report_figures(tmp_path):
@@ -149,7 +149,7 @@ def _fake_report(holds):
 @pytest.mark.parametrize("holds,strict,code", [(True, True, 0), (False, False, 0), (False, True, 1)])
 def test_cli_exit_status(monkeypatch, tmp_path, holds, strict, code):
     monkeypatch.setattr(paper, "run_paper", lambda out, quick=False, progress=None, overwrite=False, jobs=1,
-                        plot_format="png", figure_size=None: _fake_report(holds))
+                        plot_format="png", figure_size=None, command=None: _fake_report(holds))
     args = ["paper", "--out", str(tmp_path), "--quick"] + (["--strict"] if strict else [])
     res = CliRunner().invoke(main, args)
     assert res.exit_code == code, res.output

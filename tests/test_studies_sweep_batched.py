@@ -5,9 +5,8 @@ The solver work budgets and the batched-vs-one-by-one driver test are in test_si
 import numpy as np
 import pytest
 
-from snoworm.studies.sweep import BatchExecutor, run_chunk
 from snoworm.config.scenario import apply_overrides, read_yaml
-from snoworm.studies.sweep import case_metrics, run_sweep
+from snoworm.studies.sweep import BatchExecutor, SweepTask, case_metrics, run_chunk, run_sweep
 from tests.conftest import assert_metrics_close
 
 
@@ -27,15 +26,15 @@ def test_unbatchable_cases_run_one_by_one(scenario_path):
     """Event-driven modes and lone cases go through the ordinary per-case function."""
     uni = read_yaml(scenario_path("tow6_uniform"))
     inch = read_yaml(scenario_path("inchworm6"))
-    tasks = [{"index": 0, "raw": apply_overrides(uni, [("simulation.duration_s", 2)])},
-             {"index": 1, "raw": apply_overrides(uni, [("simulation.duration_s", 2), ("tow.force_N", 50)])},
-             {"index": 2, "raw": inch},
-             {"index": 3, "raw": apply_overrides(uni, [("simulation.duration_s", 3)])}]   # its own group of one
+    tasks = [SweepTask(0, raw=apply_overrides(uni, [("simulation.duration_s", 2)])),
+             SweepTask(1, raw=apply_overrides(uni, [("simulation.duration_s", 2), ("tow.force_N", 50)])),
+             SweepTask(2, raw=inch),
+             SweepTask(3, raw=apply_overrides(uni, [("simulation.duration_s", 3)]))]   # its own group of one
     seen = []
 
     def one(task):
-        seen.append(task["index"])
-        return {"index": task["index"], "status": "stub"}
+        seen.append(task.index)
+        return {"index": task.index, "status": "stub"}
     rows = {r["index"]: r for r in run_chunk(tasks, fn=one, metrics=case_metrics)}
     assert sorted(seen) == [2, 3]
     assert rows[0]["status"] == rows[1]["status"] == "ok"
@@ -46,9 +45,8 @@ def test_unbatchable_cases_run_one_by_one(scenario_path):
 @pytest.mark.parametrize("batch", [0, 10])
 def test_in_process_sweep_validates_each_case_once(scenario_path, monkeypatch, batch):
     """A sweep run in this process hands the scenarios it validated while planning to the executor."""
-    import snoworm.studies.sweep.executors as executors
     import snoworm.studies.sweep.metrics as metrics
-    import snoworm.studies.sweep.run as run
+    import snoworm.studies.sweep.plan as plan_mod
     calls = []
 
     def counting(original):
@@ -56,9 +54,8 @@ def test_in_process_sweep_validates_each_case_once(scenario_path, monkeypatch, b
             calls.append(1)
             return original(*args, **kwargs)
         return wrapped
-    monkeypatch.setattr(run, "scenario_from_dict", counting(run.scenario_from_dict))
-    monkeypatch.setattr(executors, "scenario_from_dict", counting(executors.scenario_from_dict))
-    monkeypatch.setattr(metrics, "scenario_from_dict", counting(metrics.scenario_from_dict))
+    monkeypatch.setattr(plan_mod, "scenario_from_dict", counting(plan_mod.scenario_from_dict))
+    monkeypatch.setattr(metrics, "scenario_from_dict", counting(metrics.scenario_from_dict))   # SweepTask.validated
     table = run_sweep(scenario_path("tow6_uniform"), ["tow.force_N=0,100,200", "simulation.duration_s=1"],
                       plot=False, batch=batch)
     assert [r["status"] for r in table.rows] == ["ok"] * 3
@@ -69,16 +66,17 @@ def test_local_pool_tasks_carry_the_validated_scenarios(scenario_path):
     """For a local executor (this process or its own pool) the tasks carry the scenarios validated
     while planning, and no mapping to validate again; each equals a fresh validation of its case."""
     from snoworm.config.scenario import load_scenario
-    from snoworm.studies.sweep.run import _plan, _tasks
+    from snoworm.studies.sweep.plan import plan_sweep as _plan
+    from snoworm.studies.sweep.run import _tasks
     sets = ["tow.force_N=0,100", "simulation.duration_s=1"]
     plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=True)
     tasks = list(_tasks(plan, plan.cases, None, False))
-    assert [t["index"] for t in tasks] == [0, 1] and all("raw" not in t for t in tasks)
+    assert [t.index for t in tasks] == [0, 1] and all(t.raw is None for t in tasks)
     for t, f in zip(tasks, (0.0, 100.0)):
-        assert t["scenario"] == load_scenario(scenario_path("tow6_uniform"),
-                                              [("tow.force_N", f), ("simulation.duration_s", 1)])
+        assert t.scenario == load_scenario(scenario_path("tow6_uniform"),
+                                           [("tow.force_N", f), ("simulation.duration_s", 1)])
     plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=False)
-    assert all("scenario" not in t and t["raw"]["tow"]["force_N"] in (0, 100)
+    assert all(t.scenario is None and t.raw["tow"]["force_N"] in (0, 100)
                for t in _tasks(plan, plan.cases, None, False))
 
 

@@ -5,8 +5,8 @@ import pytest
 
 import snoworm.studies.sweep as sweep_mod
 from snoworm.config.schema import ScenarioError
-from snoworm.studies.sweep import BatchExecutor, SerialExecutor, run_sweep
-from tests.sweep_helpers import TOW6, SHORT, SMALL, comparable, csv_rows
+from snoworm.studies.sweep import BatchExecutor, SerialExecutor, SweepTask, run_sweep
+from tests.sweep_helpers import SHORT, SMALL, TOW6, comparable, csv_rows
 
 
 def test_serial_and_two_processes_give_identical_rows(tmp_path):
@@ -59,10 +59,10 @@ def test_batch_executor_without_pool_yields_every_task_once():
     seen = []
 
     def fn(task):
-        seen.append(task["index"])
-        return {"index": task["index"], "status": "stub"}
+        seen.append(task.index)
+        return {"index": task.index, "status": "stub"}
     ex = BatchExecutor(batch_size=3, metrics=None)
-    out = list(ex.map_unordered(fn, ({"index": j, "raw": "not a mapping"} for j in range(7))))
+    out = list(ex.map_unordered(fn, (SweepTask(j, raw="not a mapping") for j in range(7))))
     ex.close()
     assert sorted(r["index"] for r in out) == list(range(7)) == sorted(seen)
     assert list(SerialExecutor().map_unordered(lambda t: 2 * t, [1, 2, 3])) == [2, 4, 6]

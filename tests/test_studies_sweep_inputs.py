@@ -63,8 +63,8 @@ def test_another_snoworm_version_refuses_the_resume(tmp_path, monkeypatch):
     out = tmp_path / "out"
     run_sweep(SCENARIOS / "tow6_uniform.yaml", ["terrain.xt=0.8", "simulation.duration_s=1"], out_dir=out,
               progress=False, plot=False)
-    import snoworm.studies.sweep.run as run_mod
-    monkeypatch.setattr(run_mod, "__version__", "999.0")
+    import snoworm.studies.sweep.plan as plan_mod  # the resume key is the plan's
+    monkeypatch.setattr(plan_mod, "__version__", "999.0")
     with pytest.raises(ScenarioError, match="run by snoworm .* this is 999.0"):
         run_sweep(SCENARIOS / "tow6_uniform.yaml", ["terrain.xt=0.8", "simulation.duration_s=1"], out_dir=out,
                   progress=False, plot=False)

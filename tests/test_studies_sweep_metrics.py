@@ -5,8 +5,8 @@ import pytest
 
 from snoworm import SolverError, simulate
 from snoworm.config.scenario import load_scenario, read_yaml
-from snoworm.studies.sweep import case_metrics, run_case, run_sweep
-from tests.sweep_helpers import TOW6, SHORT, csv_rows
+from snoworm.studies.sweep import SweepTask, case_metrics, run_case, run_sweep
+from tests.sweep_helpers import SHORT, TOW6, csv_rows
 
 
 def test_case_metrics_match_a_direct_run():
@@ -61,14 +61,14 @@ def test_rolling_speed_falls_with_xt_and_immobilised_below_0586():
 def test_run_case_reports_each_status_without_raising(monkeypatch):
     raw = read_yaml(TOW6)
     raw["simulation"]["duration_s"] = 1
-    ok = run_case({"index": 3, "raw": raw})
+    ok = run_case(SweepTask(3, raw=raw))
     assert ok["index"] == 3 and ok["status"] == "ok" and ok["error"] == "" and ok["wall_time_s"] > 0
-    bad = run_case({"index": 4, "raw": {**raw, "terrain": {"xt": -1}}})
+    bad = run_case(SweepTask(4, raw={**raw, "terrain": {"xt": -1}}))
     assert bad["status"] == "invalid" and "terrain.xt" in bad["error"] and "distance_m" not in bad
 
     def buggy(sc):
         raise ZeroDivisionError("line one\nline two")
     monkeypatch.setattr("snoworm.studies.sweep.metrics.simulate", buggy)
-    err = run_case({"index": 5, "raw": raw})
+    err = run_case(SweepTask(5, raw=raw))
     assert err["status"] == "error"
     assert err["error"].startswith("ZeroDivisionError: line one | line two at test_studies_sweep_metrics.py:")

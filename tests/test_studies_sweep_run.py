@@ -11,7 +11,7 @@ from snoworm.cli import main
 from snoworm.config.scenario import load_scenario
 from snoworm.config.schema import ScenarioError
 from snoworm.studies.sweep import run_sweep
-from tests.sweep_helpers import TOW6, SHORT, SMALL, csv_rows
+from tests.sweep_helpers import SHORT, SMALL, TOW6, csv_rows
 
 
 def test_cli_writes_summary_plot_and_cases(tmp_path):

@@ -6,8 +6,8 @@ import pytest
 import xarray as xr
 
 from snoworm import load_scenario, load_sweep, simulate
-from snoworm.results.result import ResultFileError
 from snoworm.config.schema import ScenarioError
+from snoworm.results.result import ResultFileError
 from snoworm.studies.sweep import run_sweep
 from tests.sweep_helpers import TOW6, comparable
 

@@ -5,14 +5,13 @@ import csv
 import json
 
 import pytest
-
 from click.testing import CliRunner
 
 import snoworm.studies.sweep as sweep_mod
 import snoworm.studies.sweep.run as run_mod
 from snoworm.cli import main
 from snoworm.studies.sweep import load_sweep, run_sweep
-from tests.sweep_helpers import TOW6, SHORT, comparable, csv_rows
+from tests.sweep_helpers import SHORT, TOW6, comparable, csv_rows
 
 
 def test_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch):
@@ -29,7 +28,7 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch):
     real = run_mod.run_case                                  # where run_sweep looks run_case up
 
     def counting(task):
-        calls.append(task["index"])
+        calls.append(task.index)
         return real(task)
 
     monkeypatch.setattr(run_mod, "run_case", counting)

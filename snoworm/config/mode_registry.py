@@ -1,19 +1,19 @@
-"""The scenario's mode section: the :class:`ModeConfig` base and the registry of mode types.
+"""The scenario's mode section: the :class:`ModeConfig` base and the one registry of modes.
 
-The config layer validates a ``mode:`` section without importing the modes (they sit above it):
-:data:`MODE_CONFIGS` maps a ``type`` to its config class, filled by
-:func:`snoworm.modes.register_mode` (through :func:`register_mode_config`); a built-in mode's
-module, named in :data:`BUILT_IN_MODES`, is imported when its type is first looked up
-(:class:`ModeRegistry`).
+:data:`MODES` maps a ``mode.type`` to its mode class (a :class:`snoworm.modes.Mode` subclass
+naming its :class:`ModeConfig` subclass): the config layer validates a ``mode:`` section with it
+and the driver builds the mode from it.  :func:`snoworm.modes.register_mode` adds a mode; a
+built-in mode's module, named in :data:`BUILT_IN_MODES`, is imported when its type is first
+looked up (:class:`ModeRegistry`), since the modes sit above this layer.
 """
 from __future__ import annotations
 
 import importlib
-from collections.abc import MutableMapping
+from collections.abc import Mapping
 
 from .schema import Config, ScenarioError, build, quote, suggest
 
-__all__ = ["ModeConfig", "BUILT_IN_MODES", "ModeRegistry", "MODE_CONFIGS", "register_mode_config", "build_mode_config"]
+__all__ = ["ModeConfig", "BUILT_IN_MODES", "ModeRegistry", "MODES", "build_mode_config"]
 
 
 class ModeConfig(Config):
@@ -34,6 +34,13 @@ class ModeConfig(Config):
     _section = "mode"
     force_loop = False
     extra_plots = ()
+
+    @classmethod
+    def resolve_paths(cls, raw: dict, base_dir):
+        """The ``mode:`` mapping ``raw`` with its relative file paths taken from ``base_dir`` (the
+        scenario file's folder), before validation; default: unchanged.  Called by
+        :func:`snoworm.config.scenario.scenario_from_dict`, which knows the folder."""
+        return raw
 
     def check_vehicle(self, vehicle, path):
         """Rules that need the vehicle (e.g. one value per segment); raise ScenarioError."""
@@ -64,20 +71,25 @@ class ModeConfig(Config):
         return None
 
 
-#: The built-in modes: ``type`` -> the module whose import registers it (:mod:`snoworm.modes`).
+#: The built-in modes: ``type`` -> the module of :mod:`snoworm.modes` whose import registers it.
+#: The one list of them: a new built-in mode adds its line here (docs/architecture.md).
 BUILT_IN_MODES = {"controller": "snoworm.modes.controller", "force_control": "snoworm.modes.force_control",
                   "inchworm": "snoworm.modes.inchworm", "supervisor": "snoworm.modes.supervisor",
                   "uniform": "snoworm.modes.uniform"}
 
 
-class ModeRegistry(MutableMapping):
-    """A dict of mode ``type`` -> class that imports a built-in mode's module the first time the
-    mode is looked up (all of them when the registry is listed).
+class ModeRegistry(Mapping):
+    """The registry of mobility modes: ``type`` -> the registered mode class.
 
-    :data:`MODE_CONFIGS` (config classes) and ``snoworm.modes.MODES`` (mode classes)
-    are two; ``register_mode`` fills both.  So ``import snoworm`` and the command line start
-    without the modes (and SciPy), a run imports only its own mode, and a scenario still finds
-    every built-in mode.  Writing (registering a mode) imports nothing.
+    The one registry of modes: validation reads a mode's config class from it
+    (``registry.config_class(type)``, the mode class's ``config_class``) and the driver its mode
+    class (``registry[type]``, through :func:`snoworm.modes.mode_class`).  A built-in mode's module
+    (:data:`BUILT_IN_MODES`) is imported the first time its type is looked up (all of them when
+    the registry is listed), so ``import snoworm`` and the command line start without the modes
+    (and SciPy), a run imports only its own mode, and a scenario finds every built-in mode from a
+    fresh interpreter.  A user's mode is added by :meth:`register` (``snoworm.register_mode``),
+    which imports nothing.  The modes sit above this layer, so built-in modes are named here by
+    their module's dotted name, never imported statically.
 
     Parameters
     ----------
@@ -105,32 +117,50 @@ class ModeRegistry(MutableMapping):
     def __len__(self):
         return len(list(iter(self)))
 
-    def __setitem__(self, key, value):
-        self._d[key] = value
-
-    def __delitem__(self, key):
-        del self._d[key]
-
     def __repr__(self):
         return f"ModeRegistry({dict(self.items())!r})"
 
+    def register(self, mode_cls):
+        """Register a mode class under its ``name`` (its ``config_class`` validates the section).
 
-#: The scenario's ``mode.type`` -> its :class:`ModeConfig` subclass.  Filled by
-#: :func:`snoworm.modes.register_mode`; a built-in mode's module is imported (by name: the modes sit
-#: above this layer) when the mode is first looked up.
-MODE_CONFIGS = ModeRegistry(BUILT_IN_MODES)
+        The modes layer checks that ``mode_cls`` is a :class:`snoworm.modes.Mode` subclass
+        (:func:`snoworm.modes.register_mode`); this checks what validation relies on.
+
+        Raises
+        ------
+        TypeError
+            If ``mode_cls`` is not a class with a non-empty ``name`` and a :class:`ModeConfig`
+            subclass as ``config_class``.
+        """
+        name = getattr(mode_cls, "name", None) if isinstance(mode_cls, type) else None
+        if not name or not isinstance(name, str):
+            raise TypeError(f"register_mode needs a Mode subclass with a name, got {mode_cls!r}")
+        cfg = getattr(mode_cls, "config_class", None)
+        if not (isinstance(cfg, type) and issubclass(cfg, ModeConfig)):
+            raise TypeError(f"mode {name!r}: its config_class must subclass snoworm.ModeConfig, got {cfg!r}")
+        self._d[name] = mode_cls
+        return mode_cls
+
+    def unregister(self, name: str) -> None:
+        """Remove a registered mode (a user's; a built-in one comes back when next looked up)."""
+        self._d.pop(name, None)
+
+    def config_class(self, name: str):
+        """The :class:`ModeConfig` subclass that validates ``mode: {type: name, ...}`` (KeyError if unknown)."""
+        return self[name].config_class
 
 
-def register_mode_config(name: str, cls) -> None:
-    """Make ``mode: {type: name, ...}`` validate against the config class ``cls``."""
-    if not (isinstance(cls, type) and issubclass(cls, ModeConfig)):
-        raise TypeError(f"a mode config must subclass snoworm.ModeConfig, got {cls!r}")
-    MODE_CONFIGS[name] = cls
+#: The registry of mobility modes (``mode.type`` -> mode class): the one both the scenario's
+#: validation and the driver read.  ``snoworm.modes.MODES`` is this object.
+MODES = ModeRegistry(BUILT_IN_MODES)
 
 
 def build_mode_config(raw, path="mode") -> ModeConfig:
-    """Validate a ``mode`` mapping against the config class registered for its ``type``."""
-    reg = MODE_CONFIGS
+    """Validate a ``mode`` mapping against the config class registered for its ``type`` (a made
+    :class:`ModeConfig`, validated already, is returned as it is)."""
+    if isinstance(raw, ModeConfig):
+        return raw
+    reg = MODES
     if not isinstance(raw, dict):
         raise ScenarioError(f"{path}: expected a mapping with a 'type' key ({', '.join(reg)}), got {quote(raw)}.")
     kind = raw.get("type")
@@ -141,4 +171,4 @@ def build_mode_config(raw, path="mode") -> ModeConfig:
                             f"{type(kind).__name__} {quote(kind)}.")
     if kind not in reg:
         raise ScenarioError(f"{path}.type: unknown mode {quote(kind)}.{suggest(kind, reg)} Known modes: {', '.join(reg)}.")
-    return build(reg[kind], raw, path)
+    return build(reg.config_class(kind), raw, path)

@@ -13,16 +13,15 @@ exit status 2 at the command line): finite numbers, strictly increasing distance
 """
 from __future__ import annotations
 
-import contextvars
 import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from .schema import Config, ScenarioError, field
 from ..slope import MAX_GRADE_DEG, ElevationProfile
+from .schema import Config, ScenarioError, field
 
-__all__ = ["BASE_DIR", "base_dir", "GRADE_DOMAIN", "ROUTE_COLUMNS", "GradePatchConfig", "Route", "read_route", "check_elevation_table",
+__all__ = ["check_grade_inputs", "resolve_route", "GRADE_DOMAIN", "ROUTE_COLUMNS", "GradePatchConfig", "Route", "read_route", "check_elevation_table",
            "check_vehicle_on_grade"]
 
 #: Domain of every grade angle a scenario or a study gives [deg].
@@ -34,20 +33,6 @@ GRADE_DOMAIN = dict(ge=-MAX_GRADE_DEG, le=MAX_GRADE_DEG,
 ROUTE_COLUMNS = ("distance_m", "elevation_m", "xt")
 
 _FAR_M = 1e7
-
-#: folder of the scenario file being validated (None: the working directory); see :func:`base_dir`
-BASE_DIR = contextvars.ContextVar("snoworm_scenario_dir", default=None)
-
-
-def base_dir() -> Path:
-    """The folder that relative file paths in the scenario being validated are taken from.
-
-    The scenario file's folder while ``load_scenario`` validates it, else the working directory.
-    A config section resolving a file path (``terrain.route``, ``mode.controller``) calls it.
-    """
-    d = BASE_DIR.get()
-    return Path.cwd() if d is None else d
-
 
 @dataclass(frozen=True)
 class GradePatchConfig(Config):
@@ -66,6 +51,41 @@ class GradePatchConfig(Config):
         if not self.end_m > self.start_m:
             raise ScenarioError(f"{path}.end_m: must be greater than start_m ({self.start_m} m), got {self.end_m} m. "
                                 "A grade patch covers [start_m, end_m].")
+
+
+def check_grade_inputs(terrain, path: str) -> None:
+    """The grade inputs of a ``terrain`` section (:class:`~snoworm.config.sections.TerrainConfig`):
+    at most one of ``grade_deg``, ``elevation``, ``route``; grade patches on a base grade, in order
+    without overlap; the elevation table; the route file, read (once) and checked."""
+    grades = [k for k in ("grade_deg", "elevation", "route") if getattr(terrain, k) is not None]
+    if len(grades) > 1:
+        raise ScenarioError(f"{path}: give at most one of 'grade_deg', 'elevation' and 'route' (a route file "
+                            f"carries its elevation); got {' and '.join(repr(g) for g in grades)}.")
+    if terrain.grade_patches is not None and terrain.grade_deg is None:
+        raise ScenarioError(f"{path}.grade_patches: grade patches lie on a base grade; give 'grade_deg' "
+                            "(the grade outside the patches, 0 for level).")
+    prev_end, prev_j = -math.inf, None
+    for j, pt in enumerate(terrain.grade_patches or ()):
+        if pt.start_m - pt.ramp_m < prev_end:
+            raise ScenarioError(f"{path}.grade_patches[{j}]: overlaps grade_patches[{prev_j}] (with its ramps); "
+                                "list grade patches in order along the route, without overlap.")
+        prev_end, prev_j = pt.end_m + pt.ramp_m, j
+    if terrain.elevation is not None:
+        check_elevation_table(terrain.elevation, f"{path}.elevation")
+    if terrain.route is not None:
+        terrain.route_data()               # read (and checked) once, at validation
+
+
+def resolve_route(terrain_raw: dict, base_dir) -> dict:
+    """The ``terrain`` mapping with a relative ``route`` file taken from ``base_dir`` (the scenario
+    file's folder) and made absolute, before validation (called by
+    :func:`~snoworm.config.scenario.scenario_from_dict`; a route given directly in Python is read
+    from the working directory)."""
+    route = terrain_raw.get("route")
+    if isinstance(route, str) and route:
+        p = Path(route)
+        return {**terrain_raw, "route": str((p if p.is_absolute() else Path(base_dir) / p).resolve())}
+    return terrain_raw
 
 
 def check_elevation_table(pairs, where: str) -> None:

@@ -9,28 +9,63 @@ from __future__ import annotations
 
 import copy
 import functools
-from importlib import resources
+import os
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 import yaml
 
-from . import yamlio
 from ..dynamics import ChainModel
+from . import yamlio
+from .mode_registry import MODES, ModeConfig, build_mode_config
 from .params import parameter_entries, read_model_file, source_notes
-from .routes import BASE_DIR as _BASE_DIR, base_dir, check_vehicle_on_grade
-from .schema import Config, ScenarioError, build, dump, field, quote, short_key, suggest
-from .mode_registry import ModeConfig, build_mode_config
-from .sections import (MAX_OUTPUT_SAMPLES, LinkConfig, PatchConfig,
-                       RandomTerrainConfig, SegmentConfig, SimulationConfig, TerrainConfig, TerrainModelConfig,
-                       TowConfig, VehicleConfig)
+from .routes import check_vehicle_on_grade, resolve_route
+from .schema import Config, ScenarioError, build, dump, field, internal, quote, short_key, suggest
+from .sections import (
+    MAX_OUTPUT_SAMPLES,
+    LinkConfig,
+    PatchConfig,
+    RandomTerrainConfig,
+    SegmentConfig,
+    SimulationConfig,
+    TerrainConfig,
+    TerrainModelConfig,
+    TowConfig,
+    VehicleConfig,
+)
 
 __all__ = [
     "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
     "TerrainModelConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "load_scenario", "scenario_from_dict", "dump_scenario", "apply_overrides",
-    "parse_set_option", "read_yaml", "ScenarioError", "base_dir", "shipped_scenarios",
+    "parse_set_option", "read_yaml", "ScenarioError", "ScenarioOrigin", "shipped_scenarios",
     "scenario_path", "read_scenario_yaml",
 ]
+
+@dataclass(frozen=True)
+class ScenarioOrigin:
+    """Where a scenario came from: not a setting, but what explains and re-validates its values.
+
+    Attributes
+    ----------
+    base_dir : Path or None
+        The folder relative file paths of the scenario were taken from (the scenario file's
+        folder; None: the working directory).
+    notes : dict
+        The scenario's ``sources:`` notes, ``{dotted key: note}``.
+    entries : dict
+        The parameter set's values with their source tags (:func:`~snoworm.config.params.parameter_entries`).
+    code_root : str or None
+        The folder (resolved) whose controller files the scenario may run: its file's folder, or
+        the working directory; None for a scenario read back from a results folder
+        (:func:`snoworm.modes.controller.code_root`, docs/controllers.md).
+    """
+
+    base_dir: Path | None
+    notes: dict
+    entries: dict
+    code_root: str | None = None
+
 
 @dataclass(frozen=True)
 class Scenario(Config):
@@ -46,15 +81,15 @@ class Scenario(Config):
     vehicle: VehicleConfig = field(doc="the vehicle")
     terrain: TerrainConfig = field(doc="the terrain")
     tow: TowConfig = field(doc="towed load")
-    mode: object = field(doc="mobility mode (a ModeConfig, or a mapping with its type)")
+    mode: ModeConfig = field(doc="mobility mode (a ModeConfig, or a mapping with its type)",
+                             convert=build_mode_config)
     simulation: SimulationConfig = field(doc="numerics")
     description: str = field("", doc="free text")
+    #: where the scenario was read from (set by :func:`scenario_from_dict`; None if made directly)
+    origin: ScenarioOrigin | None = internal()
 
     def _check(self, path):
         mode = self.mode
-        if not isinstance(mode, ModeConfig):
-            mode = build_mode_config(mode)
-            object.__setattr__(self, "mode", mode)
         sim = self.simulation
         n_out = (sim.duration_s / sim.output_dt_s + 1) * self.vehicle.segments
         if n_out > MAX_OUTPUT_SAMPLES:
@@ -83,10 +118,9 @@ class Scenario(Config):
         """The source tag of every physical value, ``{dotted key: tag}`` (e.g. ``"vehicle.segment.mass_kg":
         "[Lines] incl. wheels"``): the parameter set's tag, the scenario's ``sources:`` note, or
         ``[user] scenario`` for a value the scenario changed."""
-        entries = self.__dict__.get("_entries")
-        if entries is None:
-            entries = parameter_entries(self.vehicle.parameter_set)[0]
-        notes = self.__dict__.get("_notes", {})
+        origin = self.origin
+        entries = origin.entries if origin is not None else parameter_entries(self.vehicle.parameter_set)[0]
+        notes = origin.notes if origin is not None else {}
         values = {"segment": dump(self.vehicle.segment), "links": dump(self.vehicle.links),
                   "terrain_model": dump(self.terrain.model)}
         out = {}
@@ -112,19 +146,21 @@ class Scenario(Config):
         for key in ("max_step_s", "max_wall_s"):
             if data["simulation"][key] is None:
                 data["simulation"].pop(key)
-        if self.__dict__.get("_notes"):
-            data["sources"] = dict(self.__dict__["_notes"])
+        if self.origin is not None and self.origin.notes:
+            data["sources"] = dict(self.origin.notes)
         return data
 
-    def with_(self, changes=None, **kw) -> "Scenario":
+    def with_(self, changes=None, **kw) -> Scenario:
         """A new, validated scenario with dotted-key changes applied.
 
         ``sc.with_({"tow.force_N": 150, "terrain.xt": 0.7})``; keyword arguments set top-level
         keys (``sc.with_(name="other")``).  Raises :class:`ScenarioError` like a scenario file.
         """
         items = list((changes or {}).items()) + list(kw.items())
+        o = self.origin
         return scenario_from_dict(apply_overrides(self.to_dict(), items), self.name,
-                                  base_dir=self.__dict__.get("_base_dir"))
+                                  base_dir=o.base_dir if o is not None else None,
+                                  trust_folder=o is None or o.code_root is not None)
 
 
 _TOP_KEYS = ("name", "description", "vehicle", "terrain", "tow", "mode", "simulation", "sources")
@@ -153,8 +189,12 @@ def _copy_tree(data):
     return copy.deepcopy(data)
 
 
-def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Scenario:
+def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None, *, trust_folder: bool = True) -> Scenario:
     """Validate a scenario mapping (as parsed from YAML) into a :class:`Scenario`.
+
+    Relative file paths are taken from ``base_dir`` (default: the working directory), which is
+    also the folder whose controller files the scenario may run (``Scenario.origin.code_root``),
+    unless ``trust_folder`` is False (a scenario read back from a results folder trusts none).
 
     Raises
     ------
@@ -192,15 +232,21 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None) -> Sc
         raw["terrain"]["model"] = _merge(model_defaults, raw["terrain"].get("model", {}))
     raw["name"] = _text(raw["name"], "name")
     raw["description"] = _text(raw.get("description", ""), "description")
-    token = _BASE_DIR.set(None if base_dir is None else Path(base_dir))
-    try:
-        sc = build(Scenario, raw, "")
-    finally:
-        _BASE_DIR.reset(token)
-    object.__setattr__(sc, "_notes", notes)
-    object.__setattr__(sc, "_entries", entries)
-    object.__setattr__(sc, "_base_dir", base_dir)     # with_ and sweeps validate edits from the same folder
-    return sc
+    base = Path.cwd() if base_dir is None else Path(base_dir)
+    if isinstance(raw["terrain"], dict):
+        raw["terrain"] = resolve_route(raw["terrain"], base)
+    raw["mode"] = _resolve_mode_paths(raw["mode"], base)
+    origin = ScenarioOrigin(None if base_dir is None else Path(base_dir), notes, entries,
+                            os.path.realpath(base) if trust_folder else None)
+    return build(Scenario, raw, "", internal_values={"origin": origin})
+
+
+def _resolve_mode_paths(mode, base: Path):
+    """The ``mode`` mapping with its file paths taken from ``base`` (:meth:`ModeConfig.resolve_paths`
+    of its registered type; anything else is left for validation to report)."""
+    if isinstance(mode, dict) and isinstance(mode.get("type"), str) and mode["type"] in MODES:
+        return MODES.config_class(mode["type"]).resolve_paths(mode, base)
+    return mode
 
 
 #: Sections of a parameter set and their dotted prefixes in a scenario.
@@ -318,7 +364,7 @@ def read_scenario_yaml(name_or_path):
                             "(`snoworm scenarios` lists them).") from None
 
 
-def load_scenario(path, overrides=()) -> Scenario:
+def load_scenario(path, overrides=(), *, trust_folder: bool = True) -> Scenario:
     """Load, override and validate a scenario file.
 
     Parameters
@@ -329,6 +375,9 @@ def load_scenario(path, overrides=()) -> Scenario:
     overrides : iterable of (str, object) or of "key=value" strings
         Dotted-key overrides applied before validation (the CLI's ``--set``; on a shipped
         scenario a relative controller file in them is taken from the working directory).
+    trust_folder : bool
+        Whether the scenario may run controller files from its folder (False for a scenario read
+        back from a results folder; see :func:`scenario_from_dict`).
     """
     raw, path = read_scenario_yaml(path)
     ov = [parse_set_option(o) if isinstance(o, str) else o for o in overrides]
@@ -337,7 +386,7 @@ def load_scenario(path, overrides=()) -> Scenario:
             raise ScenarioError(f"{path}: a scenario must be a YAML mapping.")
         shipped = Path(path).resolve().parent == _shipped_dir().resolve()   # --set paths are the user's, not ours
         raw = apply_overrides(raw, yamlio.controller_paths_from_cwd(ov) if shipped else ov)
-    return scenario_from_dict(raw, str(path), base_dir=Path(path).parent)
+    return scenario_from_dict(raw, str(path), base_dir=Path(path).parent, trust_folder=trust_folder)
 
 
 def dump_scenario(sc: Scenario) -> str:

@@ -2,8 +2,9 @@
 
 A config dataclass subclasses :class:`Config` and declares each field with :func:`field`, giving
 its bounds, allowed choices, unit and help text.  Validation runs when the object is
-constructed (``Config.__post_init__``), however it is constructed: from a mapping by
-:func:`build` (parsed YAML, which also rejects unknown keys with "did you mean" suggestions and
+constructed (values converted before the frozen object is made, by the metaclass of
+:class:`Config`; rules across fields in ``Config.__post_init__``), however it is constructed:
+from a mapping by :func:`build` (parsed YAML, which also rejects unknown keys with "did you mean" suggestions and
 missing required values), directly from Python, or by :func:`dataclasses.replace`.  Wrong types
 and values out of bounds raise a one-paragraph :class:`ScenarioError` that names the dotted
 field and says how to fix it.  NumPy scalars and arrays are accepted where numbers and lists
@@ -19,12 +20,13 @@ import math
 import numbers
 import operator
 import reprlib
+import types
 import typing
 from typing import Any
 
 import numpy as np
 
-__all__ = ["Config", "ScenarioError", "field", "build", "dump", "suggest", "quote", "short_key", "check_field",
+__all__ = ["Config", "ScenarioError", "field", "internal", "build", "dump", "suggest", "quote", "short_key", "check_field",
            "domain_text"]
 
 _MISSING = dataclasses.MISSING
@@ -35,7 +37,7 @@ class ScenarioError(ValueError):
 
 
 def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None, unit="", doc="",
-          default_factory=_MISSING, search=None, why=""):
+          default_factory=_MISSING, search=None, why="", convert=None):
     """A dataclass field with validation metadata.
 
     Parameters
@@ -55,8 +57,12 @@ def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None,
     why : str
         Why the bounds are what they are (the physical domain, or what a larger value would cost),
         shown when a value is out of bounds.
+    convert : callable, optional
+        ``convert(value, path) -> value`` validates the value instead of its type annotation (e.g.
+        the scenario's ``mode``, whose class depends on its ``type``).
     """
-    md = dict(gt=gt, ge=ge, lt=lt, le=le, choices=choices, unit=unit, doc=doc, search=search, why=why)
+    md = dict(gt=gt, ge=ge, lt=lt, le=le, choices=choices, unit=unit, doc=doc, search=search, why=why,
+              convert=convert)
     kw = {"metadata": md}
     if default is not _MISSING:
         kw["default"] = default
@@ -188,15 +194,17 @@ def _check_number(path, value, md, kind):
     return value
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _type_info(tp):
     """``(origin, args, is a dataclass)`` of an annotation, computed once per type."""
     return typing.get_origin(tp), typing.get_args(tp), dataclasses.is_dataclass(tp)
 
 
 def _convert(path, value, tp, md):
+    if md.get("convert") is not None:
+        return md["convert"](value, path)
     origin, args, is_dc = _type_info(tp)
-    if origin is typing.Union:
+    if origin is typing.Union or origin is types.UnionType:     # Optional[X] or X | None
         if value is None and type(None) in args:
             return None
         non_none = [a for a in args if a is not type(None)]
@@ -247,7 +255,7 @@ def _convert(path, value, tp, md):
     return value
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _type_hints(cls):
     """``typing.get_type_hints`` of a config class, resolved once (it compiles every annotation
     string on each call: ~10 ms per scenario before this cache, the main cost of a sweep case)."""
@@ -258,36 +266,74 @@ def _type_hints(cls):
 _PATH = contextvars.ContextVar("snoworm_config_path", default=None)
 
 
-class Config:
+def internal(default=None):
+    """A field of a config object that is not a setting: not read from a scenario file, not
+    validated, not written by :func:`dump`, not compared (e.g. where a scenario was read from)."""
+    return dataclasses.field(default=default, compare=False, repr=False, metadata={"internal": True})
+
+
+def _settings(cls) -> dict:
+    """Name -> dataclass field of the settings of ``cls`` (its init fields but internal ones)."""
+    return {f.name: f for f in dataclasses.fields(cls) if f.init and not f.metadata.get("internal")}
+
+
+class _Validated(type):
+    """Metaclass of :class:`Config`: converts and validates the values *before* the frozen
+    dataclass is made, however it is made (a call, :func:`build`, :func:`dataclasses.replace`),
+    so a config object is never changed after its construction."""
+
+    def __call__(cls, *args, **kwargs):
+        if not dataclasses.is_dataclass(cls):
+            return super().__call__(*args, **kwargs)
+        fields = _settings(cls)
+        names = [f.name for f in dataclasses.fields(cls) if f.init]
+        if len(args) > len(names):
+            return super().__call__(*args, **kwargs)      # the dataclass's own TypeError
+        for name, value in zip(names, args):
+            if name in kwargs:
+                raise TypeError(f"{cls.__name__}() got multiple values for argument {name!r}")
+            kwargs[name] = value
+        path = _PATH.get()
+        path = cls._section if path is None else path
+        prefix = f"{path}." if path else ""
+        hints = _type_hints(cls)
+        for name, f in fields.items():
+            if name in kwargs:
+                value = kwargs[name]
+            elif f.default is not _MISSING:
+                value = f.default
+            elif f.default_factory is not _MISSING:
+                value = f.default_factory()
+            else:
+                continue                                   # missing: the dataclass's own TypeError
+            kwargs[name] = _convert(f"{prefix}{name}", value, hints[name], f.metadata)
+        return super().__call__(**kwargs)
+
+
+class Config(metaclass=_Validated):
     """Base of the frozen config dataclasses: every field is validated on construction.
 
     Subclasses are ``@dataclass(frozen=True)`` with fields declared by :func:`field`; they may
     define ``_check(path)`` for rules across fields, and set ``_section`` (the dotted path used in
-    messages when the object is constructed directly rather than by :func:`build`).
+    messages when the object is constructed directly rather than by :func:`build`).  The values
+    are converted (e.g. an int to a float, a list to a tuple) before the object is made (the
+    metaclass), so nothing sets an attribute of a made config object.
     """
 
     _section = ""
 
     def __post_init__(self):
         path = _PATH.get()
-        path = self._section if path is None else path
-        prefix = f"{path}." if path else ""
-        hints = _type_hints(type(self))
-        for f in dataclasses.fields(self):
-            if not f.init:
-                continue
-            value = getattr(self, f.name)
-            new = _convert(f"{prefix}{f.name}", value, hints[f.name], f.metadata)
-            if new is not value:
-                object.__setattr__(self, f.name, new)
-        self._check(path)
+        self._check(self._section if path is None else path)
 
     def _check(self, path):
         """Rules across fields (override); raise :class:`ScenarioError` naming ``path``."""
 
 
-def build(cls, data: dict, path: str = ""):
+def build(cls, data: dict, path: str = "", internal_values=None):
     """Validate ``data`` against dataclass ``cls`` and construct it.
+
+    ``internal_values`` sets fields declared with :func:`internal` (never read from ``data``).
 
     Raises
     ------
@@ -298,7 +344,7 @@ def build(cls, data: dict, path: str = ""):
         data = {}
     if not isinstance(data, dict):
         _fail(path or "scenario", f"expected a mapping of keys, got {type(data).__name__} {quote(data)}.")
-    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    fields = _settings(cls)
     prefix = f"{path}." if path else ""
     for key in data:
         if key not in fields:
@@ -309,7 +355,7 @@ def build(cls, data: dict, path: str = ""):
     token = _PATH.set(path)
     try:
         if issubclass(cls, Config):
-            return cls(**data)
+            return cls(**data, **(internal_values or {}))
         hints = _type_hints(cls)    # a plain dataclass: convert here
         return cls(**{k: _convert(f"{prefix}{k}", v, hints[k], fields[k].metadata) for k, v in data.items()})
     finally:
@@ -342,7 +388,7 @@ def check_field(cls, name: str, value, path: str | None = None):
 def dump(obj):
     """Plain (YAML-safe) data for a config dataclass, every field written out."""
     if dataclasses.is_dataclass(obj):
-        return {f.name: dump(getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.init}
+        return {name: dump(getattr(obj, name)) for name in _settings(type(obj))}
     if isinstance(obj, (tuple, list)):
         return [dump(v) for v in obj]
     if isinstance(obj, dict):

@@ -8,18 +8,18 @@ declared by each mode (:mod:`snoworm.modes`).
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional
 
 import numpy as np
 
 from ..model.arrays import LinkArrays, SegmentArrays
-from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
 from ..slope import ElevationProfile, grade_patch_profile
 from ..terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
-from .routes import GRADE_DOMAIN, GradePatchConfig, base_dir, check_elevation_table, read_route
+from .routes import GRADE_DOMAIN, GradePatchConfig, check_grade_inputs, read_route
+from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
 
 __all__ = ["XT_DOMAIN", "FINITE_WHY", "BIG_FORCE_N", "BIG_SPEED_MPS", "MAX_SEGMENTS", "MAX_OUTPUT_SAMPLES",
            "SegmentConfig", "LinkConfig", "TerrainModelConfig", "PatchConfig", "RandomTerrainConfig", "TerrainConfig",
@@ -180,16 +180,16 @@ class TerrainConfig(Config):
 
     _section = "terrain"
     model: TerrainModelConfig = field(doc="terrain-model coefficients")
-    xt: Optional[float] = field(None, **XT_DOMAIN, search=(0.05, 1.0),
+    xt: float | None = field(None, **XT_DOMAIN, search=(0.05, 1.0),
                                 doc="constant terrain coefficient X_t (the base X_t with patches)")
-    profile: Optional[tuple[tuple[float, ...], ...]] = field(None, doc="list of [position_m, xt] pairs")
-    patches: Optional[tuple[PatchConfig, ...]] = field(None, doc="patches of other snow on the base xt")
-    random: Optional[RandomTerrainConfig] = field(None, doc="seeded random X_t profile")
-    grade_deg: Optional[float] = field(None, **GRADE_DOMAIN, unit="deg",
+    profile: tuple[tuple[float, ...], ...] | None = field(None, doc="list of [position_m, xt] pairs")
+    patches: tuple[PatchConfig, ...] | None = field(None, doc="patches of other snow on the base xt")
+    random: RandomTerrainConfig | None = field(None, doc="seeded random X_t profile")
+    grade_deg: float | None = field(None, **GRADE_DOMAIN, unit="deg",
                                        doc="constant grade, positive uphill (the base grade with grade_patches)")
-    grade_patches: Optional[tuple[GradePatchConfig, ...]] = field(None, doc="stretches of other grade on grade_deg")
-    elevation: Optional[tuple[tuple[float, ...], ...]] = field(None, doc="list of [distance_m, elevation_m] pairs")
-    route: Optional[str] = field(None, doc="CSV route file (distance_m, elevation_m, xt columns), relative to the "
+    grade_patches: tuple[GradePatchConfig, ...] | None = field(None, doc="stretches of other grade on grade_deg")
+    elevation: tuple[tuple[float, ...], ...] | None = field(None, doc="list of [distance_m, elevation_m] pairs")
+    route: str | None = field(None, doc="CSV route file (distance_m, elevation_m, xt columns), relative to the "
                                            "scenario's folder")
 
     def _check(self, path):
@@ -199,7 +199,7 @@ class TerrainConfig(Config):
                                 f"'profile' (a list of [position_m, xt] pairs), 'random' (a seeded random profile) or "
                                 f"'route' (a route file); "
                                 f"got {' and '.join(repr(g) for g in given) if given else 'none of them'}.")
-        self._check_grade(path)
+        check_grade_inputs(self, path)
         if self.patches is not None:
             if self.xt is None:
                 raise ScenarioError(f"{path}.patches: patches lie on a base X_t; give 'xt' (the X_t outside the "
@@ -225,39 +225,18 @@ class TerrainConfig(Config):
                 check_field(PatchConfig, "xt", pair[1], f"{path}.profile[{j}][1]")
                 prev = pair[0]
 
-    def _check_grade(self, path):
-        grades = [k for k in ("grade_deg", "elevation", "route") if getattr(self, k) is not None]
-        if len(grades) > 1:
-            raise ScenarioError(f"{path}: give at most one of 'grade_deg', 'elevation' and 'route' (a route file "
-                                f"carries its elevation); got {' and '.join(repr(g) for g in grades)}.")
-        if self.grade_patches is not None and self.grade_deg is None:
-            raise ScenarioError(f"{path}.grade_patches: grade patches lie on a base grade; give 'grade_deg' "
-                                "(the grade outside the patches, 0 for level).")
-        prev_end, prev_j = -math.inf, None
-        for j, pt in enumerate(self.grade_patches or ()):
-            if pt.start_m - pt.ramp_m < prev_end:
-                raise ScenarioError(f"{path}.grade_patches[{j}]: overlaps grade_patches[{prev_j}] (with its ramps); "
-                                    "list grade patches in order along the route, without overlap.")
-            prev_end, prev_j = pt.end_m + pt.ramp_m, j
-        if self.elevation is not None:
-            check_elevation_table(self.elevation, f"{path}.elevation")
-        if self.route is not None:
-            route = Path(self.route)
-            route = route if route.is_absolute() else (base_dir() / route)
-            object.__setattr__(self, "route", str(route.resolve()))
-            object.__setattr__(self, "_route", read_route(self.route))
-
     def files(self) -> list:
         """The files this section refers to (the route file), as absolute paths."""
-        return [self.route] if self.route is not None else []
+        return [str(Path(self.route).resolve())] if self.route is not None else []
 
     def route_data(self):
         """The :class:`~snoworm.config.routes.Route` read from ``route`` (None without one)."""
-        if self.route is None:
-            return None
-        if "_route" not in self.__dict__:
-            object.__setattr__(self, "_route", read_route(self.route))
-        return self.__dict__["_route"]
+        return None if self.route is None else self._route_table
+
+    @functools.cached_property
+    def _route_table(self):
+        """The route file read once (a cache of a value derived from the config, not a setting)."""
+        return read_route(self.route)
 
     def elevation_profile(self) -> ElevationProfile | None:
         """The elevation along the track (docs/model.md section 7), or None on level ground."""
@@ -365,8 +344,8 @@ class SimulationConfig(Config):
     rtol: float = field(1e-5, gt=0, lt=1, doc="relative tolerance")
     atol_scale: float = field(1.0, gt=0, le=1e3, why="At 1e3 the position tolerance is already 1 mm.",
                               doc="multiplies the per-component absolute tolerances")
-    max_step_s: Optional[float] = field(None, gt=0, le=BIG_TIME_S, why=FINITE_WHY, unit="s",
+    max_step_s: float | None = field(None, gt=0, le=BIG_TIME_S, why=FINITE_WHY, unit="s",
                                         doc="largest solver step (none: unlimited)")
-    max_wall_s: Optional[float] = field(None, gt=0, le=1e7, why=FINITE_WHY, unit="s",
+    max_wall_s: float | None = field(None, gt=0, le=1e7, why=FINITE_WHY, unit="s",
                                         doc="wall-clock time after which the run stops with a solver failure "
                                             "(none: no limit)")

@@ -111,13 +111,8 @@ def read_manifest(folder) -> dict | None:
         return None
 
 
-#: The command recorded in manifests when none is given (the CLI sets it to its own command line).
-COMMAND = None
-
-
 def _command_line() -> str:
-    if COMMAND is not None:
-        return COMMAND
+    """This process's command line (what a manifest records when no command is given)."""
     prog = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "python"
     if prog in ("__main__.py", "snoworm"):
         prog = "snoworm"

@@ -33,7 +33,7 @@ class SegmentArrays:
     com_height_m: np.ndarray
 
     @classmethod
-    def from_list(cls, segments) -> "SegmentArrays":
+    def from_list(cls, segments) -> SegmentArrays:
         """Stack a list of per-segment parameter objects (with the same attribute names)."""
         names = cls.__dataclass_fields__
         return cls(**{n: np.array([float(getattr(s, n)) for s in segments]) for n in names})

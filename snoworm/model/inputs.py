@@ -77,7 +77,7 @@ class Controls:
                 object.__setattr__(self, name, np.zeros(n))
 
     @classmethod
-    def rolling(cls, n: int, motor_on, speed_sp_mps) -> "Controls":
+    def rolling(cls, n: int, motor_on, speed_sp_mps) -> Controls:
         """Plain wheel-speed control: no force loop, every joint holding its length."""
         z = np.zeros(n)
         zl = np.zeros(max(n - 1, 0))
@@ -95,7 +95,7 @@ class Controls:
         )
 
     @classmethod
-    def stack(cls, controls) -> "Controls":
+    def stack(cls, controls) -> Controls:
         """The controls of B stacked chains (:meth:`ChainModel.stack`): arrays equal in every member
         stay as they are, the others get a leading batch axis; index arrays must be equal."""
         kw = {}
@@ -109,6 +109,6 @@ class Controls:
                 kw[name] = np.stack(arrs)
         return cls(**kw)
 
-    def with_(self, **kw) -> "Controls":
+    def with_(self, **kw) -> Controls:
         """A copy with some arrays replaced (converted to float arrays)."""
         return replace(self, **{k: np.asarray(v) for k, v in kw.items()})

@@ -17,10 +17,10 @@ __all__ = ["sparsity", "bandwidths", "BandedDifferences", "to_sparse"]
 
 def _blocks(layout, force_loop: bool, joints: bool):
     """The (own, previous, next) segment blocks of the pattern for one segment's rows."""
-    ns, I = layout.n_s, layout.index
+    ns, idx = layout.n_s, layout.index
     own = np.ones((ns, ns), bool)
-    own[I["x_m"], :] = False
-    own[I["x_m"], I["v_mps"]] = True
+    own[idx["x_m"], :] = False
+    own[idx["x_m"], idx["v_mps"]] = True
     prev = np.zeros((ns, ns), bool)    # rows of segment k, columns of segment k-1
     nxt = np.zeros((ns, ns), bool)     # rows of segment k, columns of segment k+1
     ahead_rows = ["v_mps"]             # rows that see link k-1
@@ -33,12 +33,12 @@ def _blocks(layout, force_loop: bool, joints: bool):
         behind_rows += loop_rows
     for r in ahead_rows:
         for c in ("x_m", "v_mps"):
-            prev[I[r], I[c]] = True
+            prev[idx[r], idx[c]] = True
         if joints:
-            prev[I[r], I["s_m"]] = True
+            prev[idx[r], idx["s_m"]] = True
     for r in behind_rows:
         for c in ("x_m", "v_mps"):
-            nxt[I[r], I[c]] = True
+            nxt[idx[r], idx[c]] = True
     return own, prev, nxt
 
 

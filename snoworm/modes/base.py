@@ -15,14 +15,11 @@ from dataclasses import dataclass, field as dc_field
 
 import numpy as np
 
-from ..model.inputs import Controls
+from ..config.mode_registry import MODES, ModeConfig
 from ..config.schema import ScenarioError
-from ..config.mode_registry import BUILT_IN_MODES, ModeConfig, ModeRegistry, register_mode_config
+from ..model.inputs import Controls
 
 __all__ = ["Mode", "Interval", "MODES", "register_mode", "mode_class", "start_times", "rolling_interval"]
-
-#: ``mode.type`` -> :class:`Mode` subclass (see :func:`register_mode`).
-MODES = ModeRegistry(BUILT_IN_MODES)
 
 
 @dataclass
@@ -114,13 +111,12 @@ def register_mode(cls):
     """Register a :class:`Mode` subclass under ``cls.name`` (usable as a class decorator).
 
     Makes ``mode: {type: <name>, ...}`` in a scenario validate against ``cls.config_class`` and
-    run with ``cls``.
+    run with ``cls``: both read the one registry, :data:`snoworm.config.mode_registry.MODES`
+    (also ``snoworm.modes.MODES``).
     """
     if not (isinstance(cls, type) and issubclass(cls, Mode)) or not cls.name:
         raise TypeError(f"register_mode needs a Mode subclass with a name, got {cls!r}")
-    register_mode_config(cls.name, cls.config_class)
-    MODES[cls.name] = cls
-    return cls
+    return MODES.register(cls)
 
 
 def mode_class(cfg):

@@ -24,16 +24,22 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..config.schema import ScenarioError, field, quote
-from ..config.scenario import base_dir
 from ..config.mode_registry import ModeConfig
+from ..config.schema import ScenarioError, field, quote
 from .base import Interval, Mode, register_mode
-from .codeload import allow_code as allow_code_ctx, check_reference, code_files, import_class, resolve_spec, trust_problem
+from .codeload import (
+    allow_code as allow_code_ctx,
+    check_reference,
+    code_files,
+    import_class,
+    resolve_spec,
+    trust_problem,
+)
 from .command import CommandState, observe
 from .watchdog import WallLimit, wall_limit
 
 __all__ = ["ControllerConfig", "ControllerMode", "ControllerError", "load_controller", "construct", "user_traceback",
-           "trust_problem_of", "code_notice"]
+           "code_root", "trust_problem_of", "code_notice"]
 
 _PKG_DIR = Path(__file__).resolve().parents[1]
 
@@ -52,26 +58,41 @@ class ControllerConfig(ModeConfig):
     period_s: float = field(gt=0, le=1e5, unit="s", doc="control period: the command is held this long")
     params: dict[str, Any] = field(default_factory=dict, doc="parameters handed to the controller's constructor")
 
+    @classmethod
+    def resolve_paths(cls, raw, base_dir):
+        """A relative controller file made absolute from ``base_dir`` (the scenario file's folder),
+        before validation, so that sweeps and the written ``scenario.yaml`` find it."""
+        spec = raw.get("controller")
+        if isinstance(spec, str):
+            return {**raw, "controller": resolve_spec(spec, "mode.controller", Path(base_dir))}
+        return raw                          # not text: validation reports it
+
     def _check(self, path):
-        spec = resolve_spec(self.controller, f"{path}.controller", base_dir())
-        object.__setattr__(self, "controller", spec)    # file paths made absolute (scenario.yaml records them)
-        check_reference(spec, f"{path}.controller")      # static: nothing imported, nothing run
-        object.__setattr__(self, "_root", os.path.realpath(base_dir()))   # the folder trusted to run code
+        check_reference(self.controller, f"{path}.controller")      # static: nothing imported, nothing run
 
 
-def trust_problem_of(cfg, path="mode.controller") -> str | None:
-    """Why ``cfg``'s controller may not run here (see :func:`snoworm.modes.codeload.trust_problem`)."""
-    return trust_problem(cfg.controller, cfg.__dict__.get("_root"), path)
+def code_root(scenario) -> str | None:
+    """The folder whose controller files ``scenario`` may run: ``scenario.origin.code_root`` (the
+    scenario file's folder, resolved; None for a scenario read back from a results folder), or the
+    working directory for a scenario made in Python."""
+    origin = scenario.origin
+    return origin.code_root if origin is not None else os.path.realpath(os.getcwd())
 
 
-def code_notice(cfg, allow_code=()) -> str:
-    """``controller code <spec> (<files>)`` for the CLI's notice; ScenarioError if it may not run
-    (with ``allow_code`` allowed too)."""
+def trust_problem_of(scenario, path="mode.controller") -> str | None:
+    """Why ``scenario``'s controller may not run here (see :func:`snoworm.modes.codeload.trust_problem`)."""
+    return trust_problem(scenario.mode.controller, code_root(scenario), path)
+
+
+def code_notice(scenario, allow_code=()) -> str:
+    """``controller code <spec> (<files>)`` for the CLI's notice; ScenarioError if ``scenario``'s
+    controller may not run (with ``allow_code`` allowed too)."""
     with allow_code_ctx(allow_code):
-        why = trust_problem_of(cfg)
+        why = trust_problem_of(scenario)
     if why is not None:
         raise ScenarioError(why)
-    return f"controller code {cfg.controller} ({', '.join(str(f) for f in code_files(cfg.controller))})"
+    spec = scenario.mode.controller
+    return f"controller code {spec} ({', '.join(str(f) for f in code_files(spec))})"
 
 
 def load_controller(spec: str, path: str = "mode.controller", root=None):
@@ -90,7 +111,7 @@ def load_controller(spec: str, path: str = "mode.controller", root=None):
 
 def construct(cfg, scenario, path="mode.controller"):
     """A new controller instance, ``cls(params, scenario)`` (ScenarioError if the constructor fails)."""
-    cls = import_class(cfg.controller, cfg.__dict__.get("_root"), path)
+    cls = import_class(cfg.controller, code_root(scenario), path)
     try:
         return cls(dict(cfg.params), scenario)
     except Exception as exc:  # noqa: BLE001 - a failing constructor is bad input

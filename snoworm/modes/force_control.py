@@ -28,14 +28,13 @@ and their steady state predicted when the scenario is validated: :mod:`snoworm.m
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional, Union
 
 import numpy as np
 
-from ..model.inputs import Controls
-from ..config.schema import Config, ScenarioError, field, suggest
 from ..config.mode_registry import ModeConfig
+from ..config.schema import Config, ScenarioError, field, suggest
 from ..config.sections import FINITE_WHY
+from ..model.inputs import Controls
 from .base import Mode, register_mode, rolling_interval, start_times
 from .force_plan import plan
 
@@ -54,11 +53,11 @@ class TargetsConfig(Config):
 
     _section = "mode.targets"
 
-    link_forces_N: Optional[tuple[float, ...]] = field(
+    link_forces_N: tuple[float, ...] | None = field(
         None, ge=-1e6, le=1e6, unit="N", doc="link-force references, tension positive, one per link from the front")
-    load_shares: Optional[Union[str, tuple[float, ...]]] = field(
+    load_shares: str | tuple[float, ...] | None = field(
         None, doc="fractions of the tow per segment (summing to 1), or a rule: even, drawbar, inverse_slip")
-    net_connector_N: Optional[dict[int, float]] = field(
+    net_connector_N: dict[int, float] | None = field(
         None, ge=-1e6, le=1e6, unit="N", doc="net connector force on chosen segments {index: force}, forward positive")
 
     def _check(self, path):
@@ -94,14 +93,14 @@ class ForceControlConfig(ModeConfig):
     start_time_s: tuple[float, ...] = field(ge=0, le=1e5, unit="s",
                                             doc="motor start time, one for all or one per segment")
     targets: TargetsConfig = field(doc="link forces, load shares or net connector forces")
-    free_segment: Optional[int] = field(
+    free_segment: int | None = field(
         None, ge=0, le=1000, why="A segment index (vehicle.segments is at most 200).",
         doc="segment driven at its nominal speed without a force loop (default: the rear one)")
     kp_mps_per_N: float = field(1.6e-3, gt=0, le=1, why=FINITE_WHY, unit="m/s per N",
                                 doc="force-loop proportional gain [assumed]")
     ki_mps_per_Ns: float = field(4.0e-3, ge=0, le=10, why=FINITE_WHY, unit="m/s per N s",
                                  doc="force-loop integral gain [assumed]")
-    max_speed_mps: Optional[float] = field(
+    max_speed_mps: float | None = field(
         None, gt=0, le=100, why=FINITE_WHY, unit="m/s",
         doc="upper limit of a loop's set-point (default: the no-load wheel speed R_w*w_nl)")
 

@@ -166,10 +166,23 @@ def _shares(rule, idx, W_total, xt, segs, tp, nominal):
     return w / w.sum()
 
 
-def _check_drawbar(W, T, F_tow, xt, segs, tp, nominal, tpath):
+@dataclass(frozen=True)
+class _Chain:
+    """The chain on its terrain, as the plan's checks need it: per segment the X_t under it, its
+    parameters and its nominal and largest wheel-speed set-points [m/s]; the terrain model."""
+
+    xt: np.ndarray
+    segs: list
+    tp: terrain.TerrainParams
+    nominal: np.ndarray
+    vmax: np.ndarray
+
+
+def _check_drawbar(W, T, F_tow, ch: _Chain, tpath):
     """Every segment can pull its net wheel force ``W`` (and the chain the tow); the available drawbar."""
     n = len(W)
-    avail, why = zip(*(available_drawbar_N(xt[j], segs[j], tp, nominal[j]) for j in range(n)))
+    xt = ch.xt
+    avail, why = zip(*(available_drawbar_N(xt[j], ch.segs[j], ch.tp, ch.nominal[j]) for j in range(n)))
     avail = np.array(avail)
     if F_tow > avail.sum() + 1e-9:
         raise ScenarioError(
@@ -186,9 +199,10 @@ def _check_drawbar(W, T, F_tow, xt, segs, tp, nominal, tpath):
     return avail, why
 
 
-def _predict(W, f, controlled, xt, segs, tp, nominal, vmax, path, tpath):
+def _predict(W, f, controlled, ch: _Chain, path, tpath):
     """Predicted steady state: the free segment ``f`` sets the ground speed; ``(V, set-points, slips)``."""
     n = len(W)
+    xt, segs, tp, nominal, vmax = ch.xt, ch.segs, ch.tp, ch.nominal, ch.vmax
     slip = np.full(n, np.nan)
     i_f = _slip_for(W[f], xt[f], segs[f], tp, wheel_speed_mps=nominal[f])
     if i_f is None:
@@ -259,7 +273,8 @@ def plan(cfg, sc, model, path="mode") -> ForcePlan:
     sigma = np.where(k < f, 1.0, -1.0)
     link = np.where(k < f, k, k - 1)
     link[f] = n - 1
-    avail, why = _check_drawbar(W, T, F_tow, xt, segs, tp, nominal, tpath)
-    V, sp, slip = _predict(W, f, controlled, xt, segs, tp, nominal, vmax, path, tpath)
+    ch = _Chain(xt, segs, tp, nominal, vmax)
+    avail, why = _check_drawbar(W, T, F_tow, ch, tpath)
+    V, sp, slip = _predict(W, f, controlled, ch, path, tpath)
     return ForcePlan(W, T, f, controlled, link.astype(int), sigma, avail, tuple(why), xt, nominal, vmax,
                      float(V), sp, slip)

@@ -29,15 +29,14 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
 from .. import terrain
-from ..model.inputs import Controls
-from ..config.schema import ScenarioError, field, suggest
 from ..config.mode_registry import ModeConfig
+from ..config.schema import ScenarioError, field, suggest
 from ..config.sections import FINITE_WHY
+from ..model.inputs import Controls
 from .base import Interval, Mode, register_mode
 from .gait import GAITS, gait_plan, progress_conditions
 
@@ -57,7 +56,7 @@ class InchwormConfig(ModeConfig):
                                     doc="speed of a moving segment that the joint force loop aims at")
     mover_wheel_speed_mps: float = field(ge=0, le=100, why=FINITE_WHY, unit="m/s",
                                          doc="wheel-speed set-point R_w*omega of moving segments (held: 0)")
-    hold_margin: Optional[float] = field(gt=0, le=100,
+    hold_margin: float | None = field(gt=0, le=100,
                                          doc="fraction of an anchor cluster's resistance the joints may load it with "
                                                    "(Eq. 5); null: no limit but the joint force limit")
     joint_control: str = field("speed", choices=("speed", "length", "force"),
@@ -65,7 +64,7 @@ class InchwormConfig(ModeConfig):
                                    "force: constant joint_force_N")
     speed_gain_Ns_per_m: float = field(2000.0, ge=0, le=1e6, why=FINITE_WHY, unit="N s/m",
                                        doc="joint force loop gain K_v on the mover's speed error")
-    joint_force_N: Optional[float] = field(None, gt=0, le=1e6, why=FINITE_WHY, unit="N",
+    joint_force_N: float | None = field(None, gt=0, le=1e6, why=FINITE_WHY, unit="N",
                                            doc="joint force of joint_control: force")
     anchor_gain_Ns_per_m: float = field(0.0, ge=0, le=1e6, why=FINITE_WHY, unit="N s/m",
                                         doc="joint force reduction per m/s of backward sliding of its anchor")
@@ -230,12 +229,12 @@ class InchwormMode(Mode):
         for j in np.nonzero(active)[0]:
             k = m.layout.flat_index(j, "s_m")      # extension of joint j (the link behind segment j)
             if plan.role[j] > 0:
-                target = L.stroke_max_m[j] - STROKE_TOL_M
-                ev = (lambda t_, y_, k=k, a=target: y_[k] - a)
+                def ev(t_, y_, k=k, a=L.stroke_max_m[j] - STROKE_TOL_M):
+                    return y_[k] - a
             else:
-                target = L.stroke_min_m[j] + STROKE_TOL_M
-                ev = (lambda t_, y_, k=k, a=target: a - y_[k])
-            ev.direction = 1
+                def ev(t_, y_, k=k, a=L.stroke_min_m[j] + STROKE_TOL_M):
+                    return a - y_[k]
+            ev.direction = 1       # scipy's solve_ivp event API (rising crossings only)
             events.append(ev)
             self._event_joints.append(int(j))
         label = f"phase {self.phase} (moving {[k for k in range(n) if moving[k]]})"

@@ -49,10 +49,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import steady, terrain
-from ..model.inputs import Controls
-from ..config.schema import ScenarioError, build, field
 from ..config.mode_registry import ModeConfig
+from ..config.schema import ScenarioError, build, field
 from ..config.sections import FINITE_WHY
+from ..model.inputs import Controls
 from .base import Interval, Mode, register_mode
 from .inchworm import InchwormConfig, InchwormMode
 

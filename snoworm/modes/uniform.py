@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.inputs import Controls
-from ..config.schema import ScenarioError, field
 from ..config.mode_registry import ModeConfig
+from ..config.schema import ScenarioError, field
 from ..config.sections import FINITE_WHY
+from ..model.inputs import Controls
 from .base import Mode, register_mode, rolling_interval, start_times
 
 __all__ = ["UniformConfig", "UniformMode"]

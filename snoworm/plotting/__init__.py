@@ -16,14 +16,42 @@ energy), :mod:`.overlay` (several runs on one figure: :func:`compare`), :mod:`.p
 phases as shaded spans), :mod:`.studies` (Table 2, terrain curves, sweeps, mobility map,
 gradeability).
 """
-from .runs import (PLOT_KINDS, moving_groups, plot_force_diagram, plot_forces, plot_groups, plot_positions,
-                   plot_result, plot_route, plot_speeds)
 from .overlay import COMPARE_KINDS, compare
 from .quantities import plot_energy, plot_motor, plot_slip
-from .studies import (plot_gradeability, plot_mobility_map, plot_sweep, plot_sweep_heatmap, plot_table2,
-                      plot_terrain_curves)
-from .style import (COLOURS, DPI, FIGURE_SIZES, PLOT_FORMATS, force_text, headless, new_figure, parse_size,
-                    figure_style, quantity_label, save, series_style, write_figure)
+from .runs import (
+                   PLOT_KINDS,
+                   moving_groups,
+                   plot_force_diagram,
+                   plot_forces,
+                   plot_groups,
+                   plot_positions,
+                   plot_result,
+                   plot_route,
+                   plot_speeds,
+)
+from .studies import (
+                   plot_gradeability,
+                   plot_mobility_map,
+                   plot_sweep,
+                   plot_sweep_heatmap,
+                   plot_table2,
+                   plot_terrain_curves,
+)
+from .style import (
+                   COLOURS,
+                   DPI,
+                   FIGURE_SIZES,
+                   PLOT_FORMATS,
+                   figure_style,
+                   force_text,
+                   headless,
+                   new_figure,
+                   parse_size,
+                   quantity_label,
+                   save,
+                   series_style,
+                   write_figure,
+)
 
 # the kinds of .quantities join Result.plot's table here (.quantities imports .runs, not the reverse)
 PLOT_KINDS.update(slip=plot_slip, motor=plot_motor, energy=plot_energy)

@@ -9,8 +9,18 @@ from matplotlib.patches import Patch, Rectangle
 from matplotlib.ticker import MaxNLocator
 
 from .phases import PHASE_COLOURS, gait_spans, shade_phases
-from .style import (blank_figure, figure_function, force_text, legend_outside, new_figure, series_style, small_pt,
-                    target_width, wrap_title, write_figure)
+from .style import (
+    blank_figure,
+    figure_function,
+    force_text,
+    legend_outside,
+    new_figure,
+    series_style,
+    small_pt,
+    target_width,
+    wrap_title,
+    write_figure,
+)
 
 __all__ = ["plot_forces", "plot_speeds", "plot_positions", "plot_force_diagram", "plot_groups", "plot_result",
            "moving_groups", "plot_route", "PLOT_KINDS", "seg_label", "title", "gait_spans"]
@@ -354,7 +364,8 @@ def plot_force_diagram(result, window_s=1.0, *, ax=None, fig=None):
     nrow = -(-n // per_row)
     fig, axes = new_figure(ax, fig, 1, 1, figsize=(width, 1.75 * nrow + 0.5))
     a = axes[0, 0]
-    pos = lambda k: ((per_row - 1 - k % per_row) * 2.0, -3.2 * (k // per_row))   # leader on the right
+    def pos(k):
+        return ((per_row - 1 - k % per_row) * 2.0, -3.2 * (k // per_row))   # leader on the right
     for k in range(n):
         _diagram_box(a, *pos(k), k, n, W, ahead, behind, sp, fmax)
     for j in range(n - 1):

@@ -8,8 +8,18 @@ from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from .style import (COLOURS, LINESTYLES, MARKERS, figure_function, legend_outside, new_figure, quantity_label,
-                    small_pt, target_width, wrap_title)
+from .style import (
+    COLOURS,
+    LINESTYLES,
+    MARKERS,
+    figure_function,
+    legend_outside,
+    new_figure,
+    quantity_label,
+    small_pt,
+    target_width,
+    wrap_title,
+)
 
 __all__ = ["plot_table2", "plot_terrain_curves", "plot_sweep", "plot_sweep_heatmap", "plot_mobility_map",
            "plot_gradeability"]
@@ -126,7 +136,7 @@ def plot_sweep(x, metrics, xlabel, immobilised=None, ok=None, tick_labels=None, 
 
 
 @figure_function
-def plot_sweep_heatmap(x_labels, y_labels, values, xlabel, ylabel, label, immobilised=None, failed=None, *,
+def plot_sweep_heatmap(x_labels, y_labels, values, xlabel, ylabel, label, *, immobilised=None, failed=None,
                        ax=None, fig=None):
     """Heat map of one metric over a two-axis sweep (``heatmap.png``).
 
@@ -294,7 +304,10 @@ def plot_gradeability(mmap, *, ax=None, fig=None):
         g = mmap["gradeability"][f]
         ls = LINESTYLES[j % len(LINESTYLES)]
         sfx = f", tow {f:g} N" if len(mmap["tows"]) > 1 else ""
-        pick = lambda xs, vs: [(x, v) for x, v in zip(xs, vs) if v is not None]
+
+        def pick(xs, vs):
+            return [(x, v) for x, v in zip(xs, vs) if v is not None]
+
         curves = [("rolling (steady limit)", "rolling", g["rolling_max_grade_deg"], g["rolling_J_per_m_climbed"], {})]
         curves += [(f"{'inching' if lab == 'inching' else lab} (grid)", "inching" if lab == "inching" else lab,
                     c["grid_deg"], c["J_per_m_climbed"], {"mfc": "none"}) for lab, c in g["inching"].items()]

@@ -30,7 +30,7 @@ _EXTRA = "pip install 'snoworm[data]'"
 def require_pandas():
     """The pandas module, or an ImportError saying how to install it."""
     try:
-        import pandas   # lazy: optional dependency (snoworm[data])
+        import pandas  # lazy: optional dependency (snoworm[data])
     except ImportError as exc:
         raise ImportError(f"this needs pandas, which is not installed: {_EXTRA}") from exc
     return pandas
@@ -39,7 +39,7 @@ def require_pandas():
 def require_xarray():
     """The xarray module, or an ImportError saying how to install it."""
     try:
-        import xarray   # lazy: optional dependency (snoworm[data])
+        import xarray  # lazy: optional dependency (snoworm[data])
     except ImportError as exc:
         raise ImportError(f"this needs xarray, which is not installed: {_EXTRA}") from exc
     return xarray

@@ -13,14 +13,14 @@ from pathlib import Path
 
 import numpy as np
 
-from . import frames
 from .._version import __version__
-from .energy import energy_along, energy_metrics
+from ..config.scenario import dump_scenario, load_scenario
+from ..config.schema import ScenarioError, quote
 from ..infra.folders import atomic_write_text, output_folder, relocate
 from ..infra.manifest import ManifestProblem, read_small_file
 from ..model.quantities import output_series
-from ..config.scenario import dump_scenario, load_scenario
-from ..config.schema import ScenarioError, quote
+from . import frames
+from .energy import energy_along, energy_metrics
 
 __all__ = ["Result", "ResultFileError", "SEGMENT_COLUMNS", "LINK_COLUMNS", "load_result", "read_back"]
 
@@ -212,7 +212,7 @@ class Result:
         ``size``: ``"column"`` (3.5 in), ``"page"`` (7.16 in, default) or ``"WxH"`` inches.  The
         matplotlib backend is never selected or changed.
         """
-        from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+        from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
         if kind not in plotting.PLOT_KINDS:
             raise ValueError(f"unknown plot kind {kind!r}; kinds: {', '.join(plotting.PLOT_KINDS)}")
         return plotting.PLOT_KINDS[kind](self, ax=ax, fig=fig, size=size, **kwargs)
@@ -233,7 +233,7 @@ class Result:
         return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
 
     def write(self, out_dir, plot: bool = True, plot_format: str = "png", overwrite: bool = False,
-              figure_size=None) -> list:
+              figure_size=None, *, command: str | None = None) -> list:
         """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots,
         ``plot_format`` files: png at 200 dpi, pdf or svg, at print ``figure_size``: column,
         page or WxH).
@@ -242,13 +242,14 @@ class Result:
         temporary sibling folder that replaces ``out_dir`` at the end, with a manifest; an earlier
         snoworm folder there is replaced as a whole, a non-empty folder snoworm did not write is
         refused unless ``overwrite``.  Returns the paths.  :func:`load_result` reads the folder back.
+        ``command`` is the command line recorded in the manifest (default: this process's).
 
         Raises
         ------
         snoworm.infra.folders.OutputError
             Unusable ``out_dir`` or an I/O failure (nothing is written then).
         """
-        with output_folder(out_dir, overwrite) as stage:
+        with output_folder(out_dir, overwrite, command) as stage:
             paths = [
                 atomic_write_text(stage / "segments.csv", self.segments_csv()),
                 atomic_write_text(stage / "links.csv", self.links_csv()),
@@ -256,7 +257,7 @@ class Result:
                 atomic_write_text(stage / "scenario.yaml", dump_scenario(self.scenario)),
             ]
             if plot:
-                from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+                from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
                 paths += plotting.plot_result(self, stage, plot_format, size=figure_size)
         return relocate(paths, stage, out_dir)
 
@@ -361,11 +362,9 @@ def load_result(run_dir) -> Result:
     if missing:
         raise ResultFileError(f"{d} is not a snoworm run folder: {', '.join(missing)} missing")
     try:
-        sc = load_scenario(d / "scenario.yaml")
+        sc = load_scenario(d / "scenario.yaml", trust_folder=False)   # its controller, if any, runs from nowhere
     except (ScenarioError, RecursionError) as exc:
         raise ResultFileError(f"{d / 'scenario.yaml'}: {quote(str(exc), 300)}") from None
-    if "_root" in vars(sc.mode):       # a controller: checked statically, never run from a results folder
-        object.__setattr__(sc.mode, "_root", None)
     n = sc.vehicle.segments
     t, segments = _read_table(d / "segments.csv", "segment", SEGMENT_COLUMNS, n)
     t_links, links = _read_table(d / "links.csv", "link", LINK_COLUMNS, n - 1)

@@ -40,12 +40,12 @@ import yaml
 from scipy.optimize import least_squares
 
 from .. import steady
-from ..infra.folders import atomic_write_text, check_output_folder, output_folder, relocate
-from .field_data import FieldData, read_field_data
-from .groundtruth import compare_table2, format_table2, vehicle_model
 from ..config.schema import ScenarioError, suggest
 from ..config.sections import TerrainConfig, TerrainModelConfig
+from ..infra.folders import atomic_write_text, check_output_folder, output_folder, relocate
 from ..terrain import TerrainParams
+from .field_data import FieldData, read_field_data
+from .groundtruth import compare_table2, format_table2, vehicle_model
 
 __all__ = ["FIT_NAMES", "BOUNDS", "CalibrationResult", "model_predictions", "calibrate", "run_calibration",
            "format_report", "terrain_model_yaml"]
@@ -345,12 +345,13 @@ def calibration_json(res: CalibrationResult, source: str = "", parameter_set_nam
     return json.dumps(doc, indent=2) + "\n"
 
 
-def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyboy", model_file=None,
+def run_calibration(field_path, fit, out_dir, *, parameter_set_name: str = "frostyboy", model_file=None,
                     torque_scale_Nm: float = 1.0, slip_scale: float = 0.01, overwrite: bool = False,
-                    progress=None):
+                    progress=None, command: str | None = None):
     """Read, validate, fit, then write ``terrain_model.yaml`` and ``calibration.json`` to ``out_dir``.
 
     Nothing is written if the input is invalid (every check runs before the first write).
+    ``command`` is the command line the folder's manifest records (default: this process's).
 
     Returns
     -------
@@ -361,7 +362,7 @@ def run_calibration(field_path, fit, out_dir, parameter_set_name: str = "frostyb
     _check_fit(fit, len(data))
     check_output_folder(out_dir, overwrite)      # before the fit, not after
     res = calibrate(data, fit, seg, tp, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, progress=progress)
-    with output_folder(out_dir, overwrite) as out:
+    with output_folder(out_dir, overwrite, command) as out:
         paths = [atomic_write_text(out / "terrain_model.yaml", terrain_model_yaml(res, data.source)),
                  atomic_write_text(out / "calibration.json", calibration_json(res, data.source, parameter_set_name))]
     return res, format_report(res), relocate(paths, out, out_dir)

@@ -46,8 +46,10 @@ def gradeability(result: dict, tow_N: float) -> dict:
         out["rolling_grid_deg"].append(g)
         out["rolling_J_per_m_climbed"].append(e)
         for lab in gaits:
-            per = lambda r: r.get("inching_by_gait", {}).get(lab, r)
-            g, e = _top(cells, lambda r: per(r).get("inching"), lambda r: per(r).get("inching_energy_per_metre_J_per_m"))
+            def per(r, lab=lab):
+                return r.get("inching_by_gait", {}).get(lab, r)
+            g, e = _top(cells, lambda r, per=per: per(r).get("inching"),
+                        lambda r, per=per: per(r).get("inching_energy_per_metre_J_per_m"))
             out["inching"][lab]["grid_deg"].append(g)
             out["inching"][lab]["J_per_m_climbed"].append(e)
     return out

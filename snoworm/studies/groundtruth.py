@@ -22,12 +22,11 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .. import steady, terrain
-from ..config.params import PARAMETER_SETS, parameter_set
-from ..config.params import read_model_file
+from ..config.params import PARAMETER_SETS, parameter_set, read_model_file
 from ..config.scenario import SegmentConfig, TerrainConfig, TerrainModelConfig
 from ..config.schema import ScenarioError, build, check_field, dump, suggest
-from ..infra.folders import output_folder, relocate
 from ..infra.csvwriter import csv_text, write_csv
+from ..infra.folders import output_folder, relocate
 from ..terrain import TerrainParams
 from .field_data import FieldData, read_field_data
 
@@ -148,12 +147,14 @@ def format_table2(rows) -> str:
 
 
 def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostyboy", model_file=None,
-                    plot: bool = True, plot_format: str = "png", overwrite: bool = False, figure_size=None):
+                    plot: bool = True, plot_format: str = "png", overwrite: bool = False, figure_size=None, *,
+                    command: str | None = None):
     """Compare the model with field data and write ``table2.csv`` (and ``table2.png``, or the
     ``plot_format``: png, pdf, svg; at print ``figure_size``: column, page or WxH).
 
     Everything is computed and validated before anything is written; each file is written
-    atomically.
+    atomically.  ``command`` is the command line the folder's manifest records (default: this
+    process's).
 
     Returns
     -------
@@ -166,10 +167,10 @@ def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostybo
     text = f"field data: {data.source}\nmodel: parameter set {parameter_set_name}" + \
         (f" with terrain model {model_file}" if model_file else "") + \
         f" (d = {tp.peak_exponent_d:g}, torque balance '{tp.torque_balance}')\n" + format_table2(rows)
-    with output_folder(out_dir, overwrite) as out:
+    with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows)]
         if plot:
-            from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
+            from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
             paths.append(plotting.write_figure(out / "table2.png", plotting.plot_table2, rows, fmt=plot_format,
                                                size=figure_size))
     return rows, text, relocate(paths, out, out_dir)
@@ -241,7 +242,7 @@ def terrain_curves(xts, seg, tp: TerrainParams, n_points: int = 1001) -> Terrain
         up = np.nonzero((net[m, :-1] < 0) & (net[m, 1:] >= 0))[0]
         if up.size:
             j = int(up[0])
-            zc[m] = brentq(lambda s: float(_net_per_wheel_N(s, xt[m], F_n, tp)), i[j], i[j + 1], xtol=1e-12)
+            zc[m] = brentq(lambda s, x=xt[m]: float(_net_per_wheel_N(s, x, F_n, tp)), i[j], i[j + 1], xtol=1e-12)
     return TerrainCurves(i, xt, float(F_n), Ft, Ftr, net, zc)
 
 
@@ -272,11 +273,12 @@ def format_zero_crossings(c: TerrainCurves) -> str:
     return "\n".join(lines)
 
 
-def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", model_file=None, plot: bool = True,
+def run_terrain_curves(xts, out_dir, *, parameter_set_name: str = "frostyboy", model_file=None, plot: bool = True,
                        n_points: int = 1001, plot_format: str = "png", overwrite: bool = False,
-                       figure_size=None):
+                       figure_size=None, command: str | None = None):
     """Compute Figure 3's curves and write ``terrain_curves.csv`` (and ``terrain_curves.png``, or
-    the ``plot_format``: png, pdf, svg; at print ``figure_size``: column, page or WxH).
+    the ``plot_format``: png, pdf, svg; at print ``figure_size``: column, page or WxH); ``command``:
+    the command line the folder's manifest records (default: this process's).
 
     Returns
     -------
@@ -284,10 +286,10 @@ def run_terrain_curves(xts, out_dir, parameter_set_name: str = "frostyboy", mode
     """
     seg, tp = vehicle_model(parameter_set_name, model_file)
     c = terrain_curves(xts, seg, tp, n_points)
-    with output_folder(out_dir, overwrite) as out:
+    with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "terrain_curves.csv", CURVE_COLUMNS, _curve_rows(c))]
         if plot:
-            from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
+            from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
             paths.append(plotting.write_figure(out / "terrain_curves.png", plotting.plot_terrain_curves, c,
                                                fmt=plot_format, size=figure_size))
     return c, format_zero_crossings(c), relocate(paths, out, out_dir)

@@ -16,7 +16,8 @@ Inching (short simulations, seconds per cell)
     ``inch_min_speed_mps`` or more.  Speed and energy per metre are those of the run (from
     rest, so they include the start-up of the first phase).  Eqs. 4-6 alone would say whether
     each phase can start but not how fast the gait goes nor what it costs, hence simulation.
-    A solver failure marks the cell as not inching (the message is kept in the CSV).
+    A solver failure marks the cell as not inching (the message is kept in the CSV).  The runs
+    are :mod:`snoworm.studies.inching`.
 
 Which cells are simulated
     By default only the cells where the chain does *not* roll: a rolling cell's region is
@@ -43,25 +44,22 @@ simulated second (0.25-0.9 s for an 8 s run of six segments, longer at higher X_
 from __future__ import annotations
 
 import json
-import math
 import time
 
 import numpy as np
 
 from .. import steady
-from ..simulation.driver import SolverError, simulate
-from ..results.energy import energy_metrics
-from ..infra.folders import check_output_folder, output_folder, relocate
-from ..infra.pool import ProcessExecutor
-from ..config.scenario import SimulationConfig, TerrainConfig, TowConfig, load_scenario, scenario_from_dict
-from ..modes import InchwormMode, SupervisorConfig
-from ..config.schema import ScenarioError, check_field, dump, quote
-from .gradeability import grade_text, gradeability
-from .sweep.spec import RANGE, parse_spec
+from ..config.scenario import SimulationConfig, TerrainConfig, TowConfig, load_scenario
+from ..config.schema import ScenarioError, check_field, quote
 from ..infra.csvwriter import CellFormat, csv_text, write_csv
+from ..infra.folders import check_output_folder, output_folder, relocate
+from ..modes import SupervisorConfig
+from .gradeability import grade_text, gradeability
+from .inching import InchingRuns, fill_inching, gait_label
+from .sweep.spec import RANGE, parse_spec
 
-__all__ = ["parse_grid", "parse_list", "parse_gait", "gait_label", "rolling_cell", "inching_scenario", "mobility_map", "map_csv",
-           "rolling_speed_of", "gradeability", "REGIONS"]
+__all__ = ["parse_grid", "parse_list", "parse_gait", "rolling_cell", "mobility_map", "map_csv", "rolling_speed_of",
+           "gradeability", "REGIONS"]
 
 #: Region labels of the map, in plotting order.
 REGIONS = ("immobile", "inching only", "rolling")
@@ -119,17 +117,6 @@ def rolling_speed_of(sc) -> float:
     return float(v)
 
 
-def _inching_mode_raw(sc) -> dict:
-    raw = sc.mode.inching_settings()
-    if raw is None:
-        raise ScenarioError(f"mode.type: the mobility map takes the inching gait from the scenario's mode, and mode "
-                            f"{sc.mode.type!r} does not inch (a 'supervisor' or 'inchworm' mode does). "
-                            "Use --no-inching for rolling only.")
-    raw = dump(raw)
-    raw.update({"type": InchwormMode.name, "start_time_s": 0.0})
-    return raw
-
-
 def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float, grade_deg: float = 0.0) -> dict:
     """Steady rolling of the scenario's vehicle on uniform X_t and grade with a tow (one map cell).
 
@@ -159,143 +146,6 @@ def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float, grade_deg:
     return out
 
 
-def inching_scenario(sc, xt: float, tow_N: float, duration_s: float, grade_deg: float = 0.0, gait=None) -> dict:
-    """Raw scenario mapping of a short inchworm run on uniform X_t and grade with a tow (one map cell);
-    ``gait`` (a gait name or list of phases) replaces the scenario's gait."""
-    raw = sc.to_dict()
-    raw["name"] = f"{sc.name}_inch_xt{xt:g}_tow{tow_N:g}" + (f"_grade{grade_deg:g}" if grade_deg else "")
-    raw["terrain"] = {"xt": float(xt), "model": raw["terrain"]["model"]}
-    if grade_deg:
-        raw["terrain"]["grade_deg"] = float(grade_deg)
-    raw["tow"] = {"force_N": float(tow_N)}
-    raw["mode"] = _inching_mode_raw(sc)
-    if gait is not None:
-        raw["mode"]["gait"] = gait
-    raw["simulation"]["duration_s"] = float(duration_s)
-    return raw
-
-
-def _inch_run(args):
-    raw, min_speed = args
-    try:
-        res = simulate(scenario_from_dict(raw))
-    except SolverError as exc:
-        return {"inching": False, "inching_speed_mps": 0.0, "inching_energy_per_metre_J_per_m": None,
-                "inching_note": f"solver failure: {exc}"[:200]}
-    e = energy_metrics(res)
-    dur = float(res.t[-1] - res.t[0])
-    speed = e["distance_m"] / dur
-    ok = speed >= min_speed
-    return {"inching": bool(ok), "inching_speed_mps": speed,
-            "inching_energy_per_metre_J_per_m": e["energy_per_metre_J_per_m"] if ok else None,
-            "inching_note": ""}
-
-
-def _indexed_inch_run(item):
-    j, task = item
-    return j, _inch_run(task)
-
-
-def _inch_all(tasks, pool, cost=None, report=None):
-    """The inching runs' outcomes, in the order of ``tasks`` (in ``pool``, a :class:`ProcessExecutor`, or
-    here when None).
-
-    ``cost`` (one number per task, optional): the pool starts the costliest tasks first, so that
-    no long run starts last while the other workers idle; the outcomes do not depend on the order.
-    ``report()`` is called after each run.
-    """
-    outs = [None] * len(tasks)
-    if pool is not None:
-        order = range(len(tasks)) if cost is None else sorted(range(len(tasks)), key=lambda j: -cost[j])
-        for j, o in pool.map_unordered(_indexed_inch_run, ((j, tasks[j]) for j in order)):
-            outs[j] = o
-            if report is not None:
-                report()
-        return outs
-    for j, tk in enumerate(tasks):
-        outs[j] = _inch_run(tk)
-        if report is not None:
-            report()
-    return outs
-
-
-_INFERRED = {True: "not simulated: climbs a steeper grade (bisection over the grades)",
-             False: "not simulated: fails on a gentler grade (bisection over the grades)"}
-
-
-def _inch_cells(sc, rows, grades, every_cell, duration_s, min_speed, pool, progress, gait=None):
-    """Fill the inching columns of ``rows``: every cell that does not roll (every cell with
-    ``every_cell``), bisected over the grades of each X_t and tow (module docstring)."""
-    todo = [r for r in rows if every_cell or not r["rolling"]]
-    chains = {}
-    for r in todo:
-        chains.setdefault((r["xt"], r["tow_N"]), []).append(r)
-    chains = [sorted(c, key=lambda r: r["grade_deg"]) for c in chains.values()]
-    bounds = [[0, len(c)] for c in chains]         # cells below lo climb, cells from hi on fail
-    every = every_cell or len(grades) == 1
-    total = len(todo) if every else sum(int(np.ceil(np.log2(len(c) + 1))) for c in chains)
-    done = [0]
-
-    def report():
-        done[0] += 1
-        if progress is not None:
-            progress(done[0], max(total, done[0]))
-    while True:
-        if every:
-            picks = [(c, b, j) for c, b in zip(chains, bounds) for j in range(b[0], b[1])]
-        else:
-            picks = [(c, b, (b[0] + b[1]) // 2) for c, b in zip(chains, bounds) if b[0] < b[1]]
-        if not picks:
-            break
-        tasks = [(inching_scenario(sc, c[j]["xt"], c[j]["tow_N"], duration_s, c[j]["grade_deg"], gait), min_speed)
-                 for c, _, j in picks]
-        for (c, b, j), o in zip(picks, _inch_all(tasks, pool, [c[j]["xt"] for c, _, j in picks], report)):
-            c[j].update(o)
-            if every:
-                b[0] = b[1]
-            elif o["inching"]:
-                b[0] = j + 1
-            else:
-                b[1] = j
-    for c, (lo, _) in zip(chains, bounds):
-        for j, r in enumerate(c):
-            if "inching" not in r:
-                r.update(inching=j < lo, inching_speed_mps=None, inching_energy_per_metre_J_per_m=None,
-                         inching_note=_INFERRED[j < lo])
-
-
-_INCH_KEYS = ("inching", "inching_speed_mps", "inching_energy_per_metre_J_per_m", "inching_note")
-
-
-def gait_label(gait) -> str:
-    """A gait's name, or its phases written as a compact list (``[[0],[1]]``)."""
-    if isinstance(gait, str):
-        return gait
-    return "[" + ",".join("[" + ",".join(str(int(k)) for k in ph) + "]" for ph in gait) + "]"
-
-
-def _inch_gaits(sc, rows, grades, every_cell, duration_s, min_speed, pool, progress, gaits):
-    """The inching cells of every gait (:func:`_inch_cells` each); one gait fills ``rows`` directly."""
-    if gaits == [None]:
-        _inch_cells(sc, rows, grades, every_cell, duration_s, min_speed, pool, progress)
-        return
-    per, base = {}, [0]
-    for i, g in enumerate(gaits):
-        sub = [{k: r[k] for k in ("xt", "tow_N", "grade_deg", "rolling")} for r in rows]
-        prog = None if progress is None else (lambda d, t, i=i: progress(base[0] + d, base[0] + t * (len(gaits) - i)))
-        _inch_cells(sc, sub, grades, every_cell, duration_s, min_speed, pool, prog, g)
-        base[0] += sum(1 for c in sub if c.get("inching_speed_mps") is not None or c.get("inching_note", "")[:6] == "solver")
-        per[gait_label(g)] = sub
-    for j, r in enumerate(rows):
-        cells = {lab: {k: sub[j][k] for k in _INCH_KEYS} for lab, sub in per.items() if "inching" in sub[j]}
-        if not cells:
-            continue
-        moved = [lab for lab, c in cells.items() if c["inching"]]
-        cost = lambda lab: cells[lab]["inching_energy_per_metre_J_per_m"] or math.inf
-        best = min(moved, key=cost) if moved else next(iter(cells))
-        r.update(cells[best], inching_gait=best if moved else "", inching_by_gait=cells)
-
-
 def _classify(rows, inching):
     """Each cell's region (rolling, inching only, immobile) and whether inching costs less energy per metre."""
     for r in rows:
@@ -306,8 +156,23 @@ def _classify(rows, inching):
                                 else bool(er is not None and ei is not None and ei < er))
 
 
-def _steady_limits(sc, xts, tows, wheel_speed_mps):
-    """Per tow: the level rolling limit X_t (None above 1) and, per X_t, the steepest rolling grade."""
+def _checked_grid(xts, tows, grades) -> dict:
+    """``xts``, ``tows`` and ``grades`` as lists of floats, each value checked against the domain of
+    the scenario field it stands for (``--xt``, ``--tow``, ``--grade``)."""
+    return {"xts": [check_field(TerrainConfig, "xt", x, "--xt") for x in xts],
+            "tows": [check_field(TowConfig, "force_N", f, "--tow") for f in tows],
+            "grades": [check_field(TerrainConfig, "grade_deg", g, "--grade") for g in grades]}
+
+
+def _rolling_rows(sc, grid, wheel_speed_mps) -> list:
+    """One row per cell of the grid (tows, then grades, then X_t) with its steady rolling columns."""
+    return [{"xt": x, "tow_N": f, "grade_deg": g, **rolling_cell(sc, x, f, wheel_speed_mps, g)}
+            for f in grid["tows"] for g in grid["grades"] for x in grid["xts"]]
+
+
+def _steady_limits(sc, xts, tows, wheel_speed_mps) -> dict:
+    """``rolling_limit_xt``: per tow, the level rolling limit X_t (None above 1);
+    ``rolling_max_grade_deg``: per tow and X_t, the steepest rolling grade."""
     seg = sc.vehicle.segment_params()[0]
     tp = sc.terrain.model.params()
     limits, max_grade = {}, {}
@@ -318,7 +183,7 @@ def _steady_limits(sc, xts, tows, wheel_speed_mps):
         except ValueError:
             limits[f] = None
         max_grade[f] = {x: steady.max_grade_deg(x, seg, tp, wheel_speed_mps, f / sc.vehicle.segments) for x in xts}
-    return limits, max_grade
+    return {"rolling_limit_xt": limits, "rolling_max_grade_deg": max_grade}
 
 
 def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, grades=(0.0,), inching: bool = True,
@@ -365,34 +230,21 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, grades=(0.0,), inchin
         ``wall_time_s``, and the settings.
     """
     wall0 = time.perf_counter()
-    xts = [check_field(TerrainConfig, "xt", x, "--xt") for x in xts]
-    tows = [check_field(TowConfig, "force_N", f, "--tow") for f in tows]
-    grades = [check_field(TerrainConfig, "grade_deg", g, "--grade") for g in grades]
-    wheel_speed_mps = check_field(SupervisorConfig, "rolling_speed_mps", wheel_speed_mps, "--rolling-speed")
+    grid = _checked_grid(xts, tows, grades)
+    v = check_field(SupervisorConfig, "rolling_speed_mps", wheel_speed_mps, "--rolling-speed")
     if inching:
         check_field(SimulationConfig, "duration_s", inch_duration_s, "--inch-duration")
-    rows = [{"xt": x, "tow_N": f, "grade_deg": g, **rolling_cell(sc, x, f, wheel_speed_mps, g)}
-            for f in tows for g in grades for x in xts]
+    rows = _rolling_rows(sc, grid, v)
     labels = [None] if not gaits else list(gaits)
-    if inching:
-        for g in labels:      # check every gait here (a one-line error), not inside a worker
-            scenario_from_dict(inching_scenario(sc, xts[0], tows[0], inch_duration_s, grades[0], g))
-        if jobs > 1:
-            with ProcessExecutor(jobs) as pool:
-                _inch_gaits(sc, rows, grades, every_cell, inch_duration_s, inch_min_speed_mps, pool, progress, labels)
-        else:
-            _inch_gaits(sc, rows, grades, every_cell, inch_duration_s, inch_min_speed_mps, None, progress, labels)
-        for r in rows:
-            if "inching" not in r:
-                r.update(inching=None, inching_speed_mps=None, inching_energy_per_metre_J_per_m=None,
-                         inching_note="")
+    if inching:             # the inching runs (snoworm.studies.inching)
+        runs = InchingRuns(sc, grid["grades"], every_cell, inch_duration_s, inch_min_speed_mps)
+        fill_inching(runs, rows, labels, jobs=jobs, progress=progress)
     _classify(rows, inching)
-    limits, max_grade = _steady_limits(sc, xts, tows, wheel_speed_mps)
-    res = {"rows": rows, "xts": xts, "tows": tows, "grades": grades, "regions": REGIONS, "rolling_limit_xt": limits,
-           "gait_labels": [gait_label(g) for g in labels] if len(labels) > 1 else None,
-           "rolling_max_grade_deg": max_grade, "inching": inching, "every_cell": bool(every_cell),
-           "inch_duration_s": inch_duration_s, "wheel_speed_mps": wheel_speed_mps, "scenario": sc.name}
-    res["gradeability"] = {f: gradeability(res, f) for f in tows}
+    res = {"rows": rows, **grid, "regions": REGIONS, **_steady_limits(sc, grid["xts"], grid["tows"], v)}
+    res["gait_labels"] = [gait_label(g) for g in labels] if len(labels) > 1 else None
+    res.update(inching=inching, every_cell=bool(every_cell), inch_duration_s=inch_duration_s)
+    res.update(wheel_speed_mps=v, scenario=sc.name)
+    res["gradeability"] = {f: gradeability(res, f) for f in grid["tows"]}
     res["wall_time_s"] = time.perf_counter() - wall0
     return res
 
@@ -414,13 +266,14 @@ def map_csv(result: dict) -> str:
 
 def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, rolling_speed_mps=None,
                      inching=True, inch_duration_s=8.0, jobs=1, every_cell=False, plot=True, plot_format="png", overwrite=False,
-                     progress=None, grade_spec="0", gaits=None, figure_size=None):
+                     progress=None, grade_spec="0", gaits=None, figure_size=None, command=None):
     """Load a scenario, compute its map, write ``mobility_map.csv`` (and the plot, a ``plot_format`` file:
     png, pdf or svg, at print ``figure_size``: column, page or WxH; with several grades also
     ``gradeability``); return (map, text, paths).
 
     The output folder is checked before the map is computed and written all or nothing
-    (:func:`snoworm.infra.folders.output_folder`).
+    (:func:`snoworm.infra.folders.output_folder`; ``command``: the command line its manifest
+    records, default this process's).
     """
     sc = load_scenario(scenario_path, sets)
     v = rolling_speed_of(sc) if rolling_speed_mps is None else float(rolling_speed_mps)
@@ -431,18 +284,22 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
                        inch_duration_s=inch_duration_s, jobs=jobs, every_cell=every_cell, progress=progress,
                        gaits=[parse_gait(g) for g in gaits] if gaits else None)
     columns = MAP_COLUMNS + (("inching_gait",) if res["gait_labels"] else ())
-    with output_folder(out_dir, overwrite) as out:
+    with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "mobility_map.csv", columns, res["rows"], MAP_FORMAT)]
         if plot:
-            from .. import plotting   # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
+            from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
             paths.append(plotting.write_figure(out / "mobility_map.png", plotting.plot_mobility_map, res, fmt=plot_format,
                                                size=figure_size))
             if len(res["grades"]) > 1:
                 paths.append(plotting.write_figure(out / "gradeability.png", plotting.plot_gradeability, res,
                                                    fmt=plot_format, size=figure_size))
     paths = relocate(paths, out, out_dir)
-    if len(res["grades"]) > 1:
-        return res, grade_text(sc.name, res, inching, every_cell), paths
+    text = grade_text(sc.name, res, inching, every_cell) if len(res["grades"]) > 1 else _map_text(sc, res)
+    return res, text, paths
+
+
+def _map_text(sc, res) -> str:
+    """The report of a map on one grade: per tow, where the chain rolls, inches, fails."""
     lines = [f"{sc.name}: mobility map, {len(res['xts'])} X_t x {len(res['tows'])} tow values, "
              f"{res['wall_time_s']:.1f} s"]
     for f in res["tows"]:
@@ -459,6 +316,6 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
             lines.append(f"  inching run failed (solver) at X_t = {', '.join(f'{x:g}' for x in failed)}; see inching_note")
         if cheap:
             lines.append(f"  inching cheaper per metre than rolling at X_t = {', '.join(f'{x:g}' for x in cheap)}")
-    if inching and not every_cell and any(r["rolling"] for r in res["rows"]):
+    if res["inching"] and not res["every_cell"] and any(r["rolling"] for r in res["rows"]):
         lines.append("inching not simulated where the chain rolls (--every-cell compares its energy with rolling's)")
-    return res, "\n".join(lines), paths
+    return "\n".join(lines)

@@ -32,14 +32,51 @@ Modules, each importing only those above it in this list (and lower layers of sn
 """
 from __future__ import annotations
 
-from .claims import (QUICK_INCHWORM_DURATION_S, SCENARIO_DIR, STEADY_WINDOW_S, Claim, Context, Section, Variant,
-                     find_claim, make_claim, start_time_s, steady_mean)
+from .claims import (
+                     QUICK_INCHWORM_DURATION_S,
+                     SCENARIO_DIR,
+                     STEADY_WINDOW_S,
+                     Claim,
+                     Context,
+                     Section,
+                     Variant,
+                     find_claim,
+                     make_claim,
+                     start_time_s,
+                     steady_mean,
+)
 from .fig3_table2 import TABLE2_CASES, check_fig3, check_table2, item_fig3, item_table2, table2_model
-from .fig5 import (FIG5_LATE_EVERY_MAX, FIG5_LATE_FRACTION_MAX, FIG5_MOVE_MIN_M, FIG5_NONPAIR_RMS_MIN,
-                   FIG5_PAIR_RMS_MAX, FIG5_PAIRS, FIG5_PEAK_EARLY_FRACTION, FIG5_XT_HIGH, SLIDING_FRACTION,
-                   backward_sliding_timing, check_fig5, fig5_runs, item_fig5, pair_overlap)
-from .fig6_11 import (FC_TOL_N, FIG6_TOL_N, PAPER_TOW_N, check_fig6, check_fig7, check_fig8, check_fig9, check_fig11,
-                      item_fig6, item_fig7, item_fig8, item_fig9, item_fig11)
+from .fig5 import (
+                     FIG5_LATE_EVERY_MAX,
+                     FIG5_LATE_FRACTION_MAX,
+                     FIG5_MOVE_MIN_M,
+                     FIG5_NONPAIR_RMS_MIN,
+                     FIG5_PAIR_RMS_MAX,
+                     FIG5_PAIRS,
+                     FIG5_PEAK_EARLY_FRACTION,
+                     FIG5_XT_HIGH,
+                     SLIDING_FRACTION,
+                     backward_sliding_timing,
+                     check_fig5,
+                     fig5_runs,
+                     item_fig5,
+                     pair_overlap,
+)
+from .fig6_11 import (
+                     FC_TOL_N,
+                     FIG6_TOL_N,
+                     PAPER_TOW_N,
+                     check_fig6,
+                     check_fig7,
+                     check_fig8,
+                     check_fig9,
+                     check_fig11,
+                     item_fig6,
+                     item_fig7,
+                     item_fig8,
+                     item_fig9,
+                     item_fig11,
+)
 from .readings import item_readings
 from .render import render_html, render_markdown
 from .report import ITEMS, PaperReport, default_jobs, evaluate, run_paper

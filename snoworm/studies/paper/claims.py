@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ...config.scenario import load_scenario
 from ...simulation.driver import simulate
 from ..groundtruth import vehicle_model
-from ...config.scenario import load_scenario
 
 __all__ = ["Claim", "Variant", "Section", "Context", "SCENARIO_DIR", "QUICK_INCHWORM_DURATION_S",
            "STEADY_WINDOW_S", "make_claim", "find_claim", "start_time_s", "steady_mean"]
@@ -154,7 +154,7 @@ class Context:
         self.figure_size = figure_size
         self._runs = {}
 
-    def child(self, model=None, plot=False) -> "Context":
+    def child(self, model=None, plot=False) -> Context:
         """A context with extra terrain-model overrides (alternative readings), sharing nothing."""
         m = dict(self.model)
         m.update(model or {})

@@ -16,11 +16,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..._version import __version__
-from ...simulation.driver import SolverError
+from ...config.schema import ScenarioError
 from ...infra.folders import atomic_write_text, output_folder, relocate
 from ...infra.pool import ProcessExecutor
 from ...plotting import PLOT_FORMATS
-from ...config.schema import ScenarioError
+from ...simulation.driver import SolverError
 from .claims import Context, Section, make_claim
 from .fig3_table2 import item_fig3, item_table2
 from .fig5 import fig5_runs, item_fig5
@@ -136,7 +136,7 @@ def _evaluate_pooled(ctx, keys, jobs, done):
     return out
 
 
-def evaluate(items=None, quick=False, model=None, scenario_overrides=None, out_dir=None, progress=None,
+def evaluate(items=None, quick=False, *, model=None, scenario_overrides=None, out_dir=None, progress=None,
              jobs=1, plot_format="png", figure_size=None) -> list:
     """Run report items and return their :class:`Section` objects.
 
@@ -183,7 +183,7 @@ def evaluate(items=None, quick=False, model=None, scenario_overrides=None, out_d
 
 
 def run_paper(out_dir, quick=False, progress=None, overwrite=False, jobs=1, plot_format="png",
-              figure_size=None) -> PaperReport:
+              figure_size=None, *, command: str | None = None) -> PaperReport:
     """Run every item, write the figures, ``report.md``, ``report.html`` and ``claims.json`` into ``out_dir``.
 
     ``jobs`` worker processes run the items (:func:`evaluate`; 1: serial, in this process).
@@ -191,13 +191,14 @@ def run_paper(out_dir, quick=False, progress=None, overwrite=False, jobs=1, plot
     inline and links PDF figures.  ``figure_size``: their print size (column, page or WxH).
 
     All or nothing (:func:`snoworm.infra.folders.output_folder`): the figures and the report go to a
-    temporary sibling folder that replaces ``out_dir`` when everything is written.
+    temporary sibling folder that replaces ``out_dir`` when everything is written; ``command`` is
+    the command line its manifest records (default: this process's).
 
     Returns
     -------
     PaperReport
     """
-    with output_folder(out_dir, overwrite) as out:
+    with output_folder(out_dir, overwrite, command) as out:
         rep = _run_into(out, quick, progress, jobs, plot_format, figure_size)
     rep.paths = relocate(rep.paths, out, out_dir)
     for sec in rep.sections:

@@ -23,7 +23,7 @@ Modules, in data-flow order
     Every case's time series in one netCDF file (``series="netcdf"``).
 :mod:`.run`
     :func:`run_sweep`: every case validated up front (invalid ones are recorded, not run) ->
-    tasks (small plain dicts: the overridden scenario mapping, never a big object) -> an
+    tasks (:class:`SweepTask`, small: the overridden scenario mapping, never a big object) -> an
     executor -> one row per case, appended to ``summary.csv`` as it finishes -> the table,
     sorted by case id, and a plot.
 
@@ -56,14 +56,24 @@ order (and ``close()``); pass it to :func:`run_sweep` as ``executor=``.
 from ...infra.pool import ProcessExecutor
 from .cases import SweepCase, build_cases
 from .executors import BatchExecutor, DaskExecutor, SerialExecutor, SweepExecutionError, run_chunk
-from .metrics import (IMMOBILISED_SIGN_FACTOR, IMMOBILISED_SPEED_MPS, LATE_FRACTION, METRIC_COLUMNS, SLIP_FRACTION,
-                      STATUSES, case_metrics, run_case)
+from .metrics import (
+                      IMMOBILISED_SIGN_FACTOR,
+                      IMMOBILISED_SPEED_MPS,
+                      LATE_FRACTION,
+                      METRIC_COLUMNS,
+                      SLIP_FRACTION,
+                      STATUSES,
+                      SweepTask,
+                      case_metrics,
+                      run_case,
+)
 from .run import run_sweep
-from .spec import Axis, parse_spec, parse_sweep_option
 from .series import SERIES_FORMATS, combine_series, load_series
+from .spec import Axis, parse_spec, parse_sweep_option
 from .summary import SweepTable, load_sweep
 
-__all__ = ["Axis", "SweepCase", "SweepTable", "SweepExecutionError", "parse_spec", "parse_sweep_option", "build_cases",
+__all__ = ["Axis", "SweepCase", "SweepTask", "SweepTable", "SweepExecutionError", "parse_spec", "parse_sweep_option",
+           "build_cases",
            "case_metrics", "run_case", "run_sweep", "SerialExecutor", "ProcessExecutor", "DaskExecutor",
            "BatchExecutor", "run_chunk", "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR", "LATE_FRACTION",
            "SLIP_FRACTION", "METRIC_COLUMNS", "STATUSES", "load_sweep", "load_series", "combine_series", "SERIES_FORMATS"]

@@ -7,8 +7,8 @@ import math
 from dataclasses import dataclass
 
 from ...config.schema import ScenarioError
-from .spec import MAX_CASES
 from ...infra.csvwriter import canonical_json
+from .spec import MAX_CASES
 
 __all__ = ["SweepCase", "build_cases"]
 

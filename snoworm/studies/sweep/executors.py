@@ -14,12 +14,11 @@ import itertools
 import threading
 import time
 
-from ...simulation.driver import batch_key, simulate_batch
-from ...infra.pool import ProcessExecutor
-from ...config.scenario import scenario_from_dict
 from ...config.schema import ScenarioError, quote
-from .series import save_series
+from ...infra.pool import ProcessExecutor
+from ...simulation.driver import batch_key, simulate_batch
 from .metrics import case_metrics
+from .series import save_series
 
 __all__ = ["SweepExecutionError", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "BatchExecutor",
            "run_chunk"]
@@ -90,7 +89,7 @@ class DaskExecutor:
 
     def __init__(self, address):
         try:
-            from distributed import Client   # optional dependency (snoworm[dask]): imported only when used
+            from distributed import Client  # optional dependency (snoworm[dask]): imported only when used
         except ImportError:
             raise ScenarioError(f"--scheduler {address}: Dask is not installed. Install it with "
                                 "pip install 'snoworm[dask]' (or pip install 'dask[distributed]').") from None
@@ -99,7 +98,7 @@ class DaskExecutor:
         self._own = not hasattr(address, "submit")
 
     def map_unordered(self, fn, tasks):
-        from distributed import as_completed   # optional dependency, see __init__
+        from distributed import as_completed  # optional dependency, see __init__
         n_workers = max(len(self.client.scheduler_info().get("workers", {})), 1)
         window = 4 * n_workers
         it = iter(tasks)
@@ -128,13 +127,13 @@ def _run_group(tasks, scs, fallback, metrics):
     out = []
     for task, mem in zip(tasks, members):
         if mem.status != "ok":
-            out.append({"index": task["index"], "status": mem.status, "error": mem.error, "wall_time_s": wall})
+            out.append({"index": task.index, "status": mem.status, "error": mem.error, "wall_time_s": wall})
             continue
-        row = {"index": task["index"], "status": "ok", "error": ""}
+        row = {"index": task.index, "status": "ok", "error": ""}
         try:
             row.update(metrics(mem.result))
-            if task.get("save_dir"):
-                save_series(mem.result, task["save_dir"])
+            if task.save_dir:
+                save_series(mem.result, task.save_dir)
         except Exception:  # noqa: BLE001 - let the one-by-one path report the case's error
             row = fallback(task)
         row.setdefault("wall_time_s", wall)
@@ -147,10 +146,9 @@ def run_chunk(tasks, fn, metrics, max_group=None) -> list:
     groups, results = {}, []
     for task in tasks:
         try:
-            sc = task.get("scenario") or scenario_from_dict(task["raw"], task.get("source", "scenario"),
-                                                            base_dir=task.get("base_dir"))
+            sc = task.validated()
             key = batch_key(sc)
-            task = {**task, "scenario": sc}          # validated once: fn (run_case) reuses it
+            task = task.with_scenario(sc)            # validated once: fn (run_case) reuses it
         except (ScenarioError, ValueError):
             key = None
         if key is None:

@@ -49,7 +49,7 @@ def plot_table(table, metric=None, *, size=None, ax=None, fig=None):
     against the swept value for one varying key or a zip (immobilised cases crossed, failed ones
     dotted), or a heat map of ``metric`` (default ``mean_speed_mps``) over a two-key grid.
     ``size``, ``ax``, ``fig``: as for every plotting function.  Returns the Figure."""
-    from ... import plotting   # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
+    from ... import plotting  # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
     kind, keys = _layout(table)
     ok = [r["status"] == "ok" for r in table.rows]
     if kind == "line":
@@ -82,7 +82,7 @@ def write_plot(table, out, plot_format="png", size=None):
     """Write the sweep's standard figure (headless) as ``sweep.<fmt>`` (line) or
     ``heatmap.<fmt>`` (grid of two keys) in ``out``; nothing for a grid of more keys.
     Returns the path or None."""
-    from ... import plotting   # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
+    from ... import plotting  # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
     try:
         kind, _ = _layout(table)
     except ValueError:

@@ -10,20 +10,22 @@ is the regularisation's creep, not rolling.
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 import traceback
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ...simulation.driver import SolverError, simulate
+from ...config.scenario import Scenario, scenario_from_dict
+from ...config.schema import ScenarioError
 from ...modes.codeload import allow_code
 from ...modes.controller import ControllerError
-from ...config.scenario import scenario_from_dict
-from ...config.schema import ScenarioError
+from ...simulation.driver import SolverError, simulate
 from .series import save_series
 
-__all__ = ["case_metrics", "run_case", "one_line", "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR",
+__all__ = ["SweepTask", "case_metrics", "run_case", "one_line", "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR",
            "LATE_FRACTION", "SLIP_FRACTION", "METRIC_COLUMNS", "STATUSES", "MAX_ERROR_CHARS"]
 
 #: Absolute floor of the immobilised speed threshold [m/s].
@@ -116,17 +118,58 @@ def one_line(text: str) -> str:
     return text if len(text) <= MAX_ERROR_CHARS else text[:MAX_ERROR_CHARS - 3] + "..."
 
 
-def run_case(task: dict) -> dict:
+@dataclass(frozen=True)
+class SweepTask:
+    """One case of a sweep as an executor hands it to :func:`run_case` (small; pickles to a worker).
+
+    Attributes
+    ----------
+    index : int
+        The case's index in the sweep.
+    raw : dict or None
+        The scenario mapping with the case's overrides applied, validated where the case runs;
+        None if ``scenario`` is given.
+    scenario : Scenario or None
+        The case's scenario, validated already (by the sweep's plan, or the batched executor's
+        grouping).
+    source : str
+        The scenario's name in messages.
+    base_dir : str or None
+        The folder relative file paths of ``raw`` are taken from (the scenario file's).
+    save_dir : Path or None
+        Where to write the case's time series (a folder or a ``.npz`` file, see
+        :func:`~snoworm.studies.sweep.series.save_series`); None: not written.
+    allow_code : tuple of str
+        Resolved paths whose controller code may run besides the scenario's folder
+        (``run_sweep(allow_code=...)``).
+    """
+
+    index: int
+    raw: dict | None = None
+    scenario: Scenario | None = None
+    source: str = "scenario"
+    base_dir: str | None = None
+    save_dir: Path | None = None
+    allow_code: tuple = ()
+
+    def validated(self) -> Scenario:
+        """The case's scenario (``scenario``, or ``raw`` validated; ScenarioError if invalid)."""
+        if self.scenario is not None:
+            return self.scenario
+        return scenario_from_dict(self.raw, self.source, base_dir=self.base_dir)
+
+    def with_scenario(self, sc: Scenario) -> SweepTask:
+        """This task with its scenario validated (so :func:`run_case` does not validate it again)."""
+        return dataclasses.replace(self, scenario=sc)
+
+
+def run_case(task: SweepTask) -> dict:
     """Run one case (the function executors call; top-level so it pickles).
 
     Parameters
     ----------
-    task : dict
-        ``index``, ``source``, ``base_dir``, ``save_dir`` (None, or where to write the time series:
-        a folder or a ``.npz`` file, see :func:`~snoworm.studies.sweep.series.save_series`) and either
-        ``scenario``, the case's :class:`~snoworm.config.scenario.Scenario` already validated (by the
-        sweep's plan, or the batched executor's grouping), or ``raw``, the scenario mapping with
-        the case's overrides applied, validated here.
+    task : SweepTask
+        The case.
 
     Returns
     -------
@@ -135,15 +178,13 @@ def run_case(task: dict) -> dict:
         ``wall_time_s``.  Never raises for a failing case; the time series stay in the worker.
     """
     wall0 = time.perf_counter()
-    out = {"index": task["index"], "status": "ok", "error": ""}
+    out = {"index": task.index, "status": "ok", "error": ""}
     try:
-        sc = task.get("scenario") or scenario_from_dict(task["raw"], task.get("source", "scenario"),
-                                                        base_dir=task.get("base_dir"))
-        with allow_code(task.get("allow_code", ())):
-            res = simulate(sc)
+        with allow_code(task.allow_code):
+            res = simulate(task.validated())
         out.update(case_metrics(res))
-        if task.get("save_dir"):
-            save_series(res, task["save_dir"])
+        if task.save_dir:
+            save_series(res, task.save_dir)
         del res
     except ScenarioError as exc:
         out.update(status="invalid", error=one_line(exc))

@@ -1,39 +1,32 @@
 """Running a sweep: :func:`run_sweep` and its steps.
 
 Data flow: the axes -> :func:`~snoworm.studies.sweep.cases.build_cases` -> every case validated up front
-(invalid ones are recorded, not run) -> tasks (small plain dicts: the overridden scenario
+(invalid ones are recorded, not run) -> tasks (:class:`~snoworm.studies.sweep.metrics.SweepTask`, small: the overridden scenario
 mapping, never a big object) -> an executor running :func:`~snoworm.studies.sweep.metrics.run_case` ->
 one row per case, appended to ``summary.csv`` as it finishes -> a :class:`SweepTable` sorted
 by case id (and a plot).
 """
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import sys
 from contextlib import ExitStack
-from dataclasses import dataclass, field as dc_field
+from dataclasses import dataclass
 from pathlib import Path
 
-from ..._version import __version__
-from ...results.frames import require_xarray
-from ...results.result import LINK_COLUMNS, SEGMENT_COLUMNS
-from ...config.scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
-from ...modes.codeload import allow_code as allowed_code
-from ...modes.controller import trust_problem_of
+from ...config.scenario import apply_overrides
+from ...config.schema import ScenarioError
 from ...infra.folders import OutputError, check_output_folder, folder_lock, os_error_message, write_manifest
 from ...infra.progress import Progress
-from ...config.schema import ScenarioError
-from ...infra.csvwriter import canonical_json
-from .cases import build_cases
-from .figures import write_plot
+from ...results.frames import require_xarray
+from ...results.result import LINK_COLUMNS, SEGMENT_COLUMNS
 from .executors import BatchExecutor, DaskExecutor, ProcessExecutor, SerialExecutor, SweepExecutionError
-from .metrics import METRIC_COLUMNS, case_metrics, one_line, run_case
+from .figures import write_plot
+from .metrics import METRIC_COLUMNS, SweepTask, case_metrics, one_line, run_case
+from .plan import SweepPlan, plan_sweep
 from .series import SERIES_FORMATS, case_series_path, combine_series
-from .inputs import input_hashes
-from .spec import as_axes
-from .summary import SweepTable, prepare_dir, summary_columns
+from .summary import SweepTable, prepare_dir
 
 __all__ = ["run_sweep"]
 
@@ -64,33 +57,11 @@ class _Progress:
 
 
 # ---------------------------------------------------------------------------------- driver
-def _base(scenario):
-    """(raw mapping, source name, base_dir) of a path or a Scenario object."""
-    if isinstance(scenario, Scenario):
-        bd = scenario.__dict__.get("_base_dir")
-        return scenario.to_dict(), scenario.name, (str(bd) if bd is not None else None)
-    if isinstance(scenario, dict):
-        return scenario, "scenario", None
-    raw, path = read_scenario_yaml(scenario)
-    return raw, str(path), str(path.resolve().parent)
-
-
-def _definition(raw, axes, zip_, base_dir=None):
-    """The resume key: the scenario mapping, the axes, the snoworm version and the contents of
-    every file they name (:mod:`snoworm.studies.sweep.inputs`)."""
-    return json.loads(json.dumps({
-        "scenario_sha256": hashlib.sha256(canonical_json(raw).encode()).hexdigest(),
-        "axes": [{"key": a.key, "values": list(a.values)} for a in axes],
-        "zip": bool(zip_),
-        "snoworm_version": __version__,
-        "inputs": input_hashes(raw, axes, base_dir),
-    }, default=str))
-
-
-def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_: bool = False,
+def run_sweep(scenario, sets, out_dir=None, *, jobs: int = 1, scheduler=None, zip_: bool = False,
               save_cases: bool = False, progress=None, plot: bool = True, executor=None,
               batch: int = 0, series: str = "folders", plot_format: str = "png",
-              overwrite: bool = False, allow_code=(), restart: bool = False, figure_size=None) -> SweepTable:
+              overwrite: bool = False, allow_code=(), restart: bool = False, figure_size=None,
+              command: str | None = None) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
     Parameters
@@ -101,22 +72,20 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         Axes: ``"KEY=SPEC"`` strings (see :func:`parse_spec`), ``(key, spec)`` pairs or
         :class:`Axis` objects.  Several axes form a full grid (first axis slowest).
     out_dir : str or Path, optional
-        Where ``sweep.json``, ``summary.csv`` and the plot go.  A re-run with the same
-        definition resumes; with another definition it is refused (unless ``overwrite``).  None:
-        nothing is written.  The folder is locked while the sweep runs (a second sweep into it
-        raises :class:`snoworm.infra.folders.FolderLocked` naming the process holding it).
+        Where ``sweep.json``, ``summary.csv`` and the plot go (None: nothing is written); locked while
+        the sweep runs (:class:`snoworm.infra.folders.FolderLocked` names the holder).  A re-run with
+        the same definition resumes; with another it is refused (unless ``overwrite``).
     jobs : int
         Local worker processes (1: run in this process).
     scheduler : str or distributed.Client, optional
         Address of a Dask scheduler (``tcp://host:port``); overrides ``jobs``.
     zip_ : bool
         Pair the axes element by element (equal lengths) instead of a grid.
-    save_cases : bool
-        Keep each case's time series (needs ``out_dir``), as ``series`` says.
-    series : {"folders", "netcdf"}
-        ``folders``: a run folder per case, ``out_dir/cases/<case_id>/``; ``netcdf``: every case in
-        one file ``out_dir/series.nc`` (dims: swept keys x time x segment/link, see
-        :mod:`snoworm.studies.sweep.series`; needs xarray).  ``netcdf`` implies ``save_cases``.
+    save_cases, series : bool, {"folders", "netcdf"}
+        Keep each case's time series (needs ``out_dir``): ``folders``, a run folder per case,
+        ``out_dir/cases/<case_id>/``; ``netcdf`` (implies ``save_cases``), every case in one file
+        ``out_dir/series.nc`` (dims: swept keys x time x segment/link, see
+        :mod:`snoworm.studies.sweep.series`; needs xarray).
     progress : bool, optional
         Progress on stderr (default True): a bar on a terminal, one line per ~10 % otherwise.
     plot : bool
@@ -139,6 +108,8 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
         Paths whose controller code may run outside the scenario's folder (:func:`snoworm.simulate`).
     restart : bool
         Start afresh (removing its rows) over a sweep in ``out_dir`` run from other inputs.
+    command : str, optional
+        The command line recorded in the folder's manifest (default: this process's).
 
     Returns
     -------
@@ -148,19 +119,25 @@ def run_sweep(scenario, sets, out_dir=None, jobs: int = 1, scheduler=None, zip_:
     Raises
     ------
     ScenarioError
-        A malformed SPEC, unequal zip lengths, every case invalid, or an output directory
-        holding another sweep.
+        A malformed SPEC, unequal zip lengths, every case invalid, or an output directory holding another sweep.
     """
     save_cases = _check_series(series) or save_cases
     local = executor is None and scheduler is None     # this process or its own pool: pass scenarios on
-    plan = _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=local, allow_code=allow_code)
+    plan = plan_sweep(scenario, sets, zip_, save_cases, out_dir, jobs, keep=local, allow_code=allow_code)
     out = _new_output_folder(out_dir, overwrite)
+    opts = _Options(progress, plot, zip_, save_cases and series, overwrite or restart, plot_format, figure_size,
+                    command)
+    return _on_executor(plan, out, executor, (scheduler, batch, jobs), opts)
+
+
+def _on_executor(plan, out, executor, how, opts) -> SweepTable:
+    """Run the planned sweep on ``executor`` (None: a new one for ``how`` = (scheduler, batch, jobs),
+    closed at the end); an I/O failure becomes :class:`OutputError`."""
     own = executor is None
     if own:                         # before anything is written: an unreachable scheduler writes nothing
-        executor = _make_executor(scheduler, batch, jobs)
+        executor = _make_executor(*how)
     try:
-        return _in_folder(plan, out, executor, own, progress, plot, zip_, save_cases and series,
-                          overwrite or restart, (plot_format, figure_size))
+        return _in_folder(plan, out, executor, own, opts)
     except OSError as exc:            # writing sweep.json, the manifest or the plot
         raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
 
@@ -190,9 +167,22 @@ def _check_series(series: str) -> bool:
     return False
 
 
-def _in_folder(plan, out, executor, own, progress, plot, zip_, keep_series, overwrite, plot_opts) -> SweepTable:
-    """Run the sweep with ``out`` (or None) locked and prepared; ``keep_series``: False or the series format;
-    ``plot_opts``: (file format, figure size)."""
+@dataclass(frozen=True)
+class _Options:
+    """How a sweep reports and what it writes besides the table (:func:`run_sweep`'s options)."""
+
+    progress: object          # None/True: progress on stderr; False: none
+    plot: bool
+    zip_: bool
+    keep_series: object       # False, or the series format ("folders" or "netcdf")
+    overwrite: bool
+    plot_format: str
+    figure_size: object       # print size of the plot (None: page width)
+    command: str | None       # the command line the manifest records (None: this process's)
+
+
+def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
+    """Run the sweep with ``out`` (or None) locked and prepared."""
     with ExitStack() as stack:
         done = {}
         if out is not None:
@@ -200,15 +190,15 @@ def _in_folder(plan, out, executor, own, progress, plot, zip_, keep_series, over
                 _mkdir(out)
                 stack.enter_context(folder_lock(out))
                 done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source,
-                                   overwrite=overwrite)
-                write_manifest(out, status="running")
+                                   overwrite=opts.overwrite)
+                write_manifest(out, opts.command, status="running")
             except BaseException:
                 if own:
                     executor.close()
                 raise
-        table = _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_opts)
+        table = _run(plan, done, out, executor, own, opts)
         if out is not None:
-            write_manifest(out, status="complete")
+            write_manifest(out, opts.command, status="complete")
         return table
 
 
@@ -219,92 +209,19 @@ def _mkdir(out: Path):
         raise OutputError(f"cannot write results: {os_error_message(exc, out)}") from None
 
 
-def _run(plan, done, out, executor, own, progress, plot, zip_, keep_series, plot_opts) -> SweepTable:
-    bar = _Progress(len(plan.cases), len(done), sys.stderr, progress is None or bool(progress))
+def _run(plan, done, out, executor, own, opts: _Options) -> SweepTable:
+    bar = _Progress(len(plan.cases), len(done), sys.stderr, opts.progress is None or bool(opts.progress))
+    keep_series = opts.keep_series
     rows = dict(done)
     todo = [c for c in plan.cases if c.index not in done]
     _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, keep_series)
     table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys, out_dir=out)
     if keep_series == "netcdf":
-        combine_series(out, plan.axes, plan.cases, zip_, {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS},
+        combine_series(out, plan.axes, plan.cases, opts.zip_, {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS},
                        {"scenario": plan.source, "sweep_definition": json.dumps(plan.definition)})
-    if out is not None and plot:
-        write_plot(table, out, *plot_opts)
+    if out is not None and opts.plot:
+        write_plot(table, out, opts.plot_format, opts.figure_size)
     return table
-
-
-@dataclass
-class _Plan:
-    """A sweep's cases, validated, and what its files record."""
-
-    axes: list
-    raw: dict
-    source: str
-    base_dir: str | None
-    cases: list
-    invalid: dict          # case index -> one-line error of the cases whose scenario is rejected
-    n_links: int
-    columns: list
-    definition: dict
-    #: case index -> its validated Scenario, kept for local executors (see _plan)
-    scenarios: dict = dc_field(default_factory=dict)
-    #: resolved paths whose controller code may run (run_sweep's allow_code), handed to every task
-    allow_code: list = dc_field(default_factory=list)
-
-    @property
-    def keys(self):
-        return [a.key for a in self.axes]
-
-
-#: Most validated scenarios a sweep keeps for its local executor (about 5 KiB each; a worker
-#: process receives them pickled, ~0.05 ms against ~0.6 ms to validate again), so that a case is
-#: not validated twice; larger sweeps validate again in the executor to bound memory.
-KEEP_VALIDATED_MAX = 20_000
-
-
-def _plan(scenario, sets, zip_, save_cases, out_dir, jobs, keep=False, allow_code=()) -> _Plan:
-    """Parse the axes, build the cases and validate each one (about 2 ms a case).
-
-    ``keep``: the cases run in this process or its own worker pool; keep their validated
-    scenarios (up to :data:`KEEP_VALIDATED_MAX` cases) for the tasks.  ``allow_code``: see
-    :func:`run_sweep` (a controller that may not run refuses the whole sweep here)."""
-    allow = [os.path.realpath(os.path.expanduser(str(p))) for p in (allow_code or ())]
-    with allowed_code(allow):
-        plan = _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep)
-    plan.allow_code = allow
-    return plan
-
-
-def _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep) -> _Plan:
-    axes = as_axes(sets)
-    raw, source, base_dir = _base(scenario)
-    if not isinstance(raw, dict):
-        raise ScenarioError(f"{source}: a scenario must be a YAML mapping.")
-    cases = build_cases(axes, zip_)
-    if save_cases and out_dir is None:
-        raise ScenarioError("--save-cases needs --out: the time series are written under DIR/cases/.")
-    if int(jobs) < 1:
-        raise ScenarioError(f"-j/--jobs must be at least 1, got {jobs}.")
-    invalid, n_links, kept = {}, 0, {}
-    keep = keep and len(cases) <= KEEP_VALIDATED_MAX
-    for c in cases:
-        try:
-            sc = scenario_from_dict(apply_overrides(raw, c.overrides(axes)), source, base_dir=base_dir)
-        except ScenarioError as exc:
-            invalid[c.index] = one_line(exc)
-            continue
-        why = trust_problem_of(sc.mode) if sc.mode.type == "controller" else None
-        if why is not None:                 # refused for the whole sweep, before anything runs
-            raise ScenarioError(f"case {c.case_id}: {why}")
-        n_links = max(n_links, sc.vehicle.segments - 1)
-        if keep:
-            kept[c.index] = sc
-    if len(invalid) == len(cases):
-        first = invalid[cases[0].index]
-        raise ScenarioError(f"every case of the sweep is invalid, e.g. case {cases[0].case_id} "
-                            f"({', '.join(f'{a.key}={v}' for a, v in zip(axes, cases[0].values))}): {first}")
-    return _Plan(axes, raw, source, base_dir, cases, invalid, n_links, summary_columns(axes, n_links),
-                 _definition(raw, axes, zip_, base_dir), kept)
 
 
 def _make_executor(scheduler, batch, jobs):
@@ -323,7 +240,7 @@ class _Recorder:
     """Turns each case's result into a row: kept in ``rows``, appended to ``summary.csv`` (one
     ``write`` and ``fsync`` per case) and counted on the progress line."""
 
-    def __init__(self, plan: _Plan, rows: dict, out, bar):
+    def __init__(self, plan: SweepPlan, rows: dict, out, bar):
         self.plan, self.rows, self.bar = plan, rows, bar
         self.table = SweepTable(plan.columns, [], plan.keys)
         self.path = out / "summary.csv" if out is not None else None
@@ -359,25 +276,21 @@ class _Recorder:
         self.bar.update(row["status"] != "ok")
 
 
-def _tasks(plan: _Plan, todo, out, keep_series):
-    """The tasks of the cases still to run (small plain dicts, made one at a time).
+def _tasks(plan: SweepPlan, todo, out, keep_series):
+    """The tasks of the cases still to run (:class:`SweepTask`, made one at a time).
 
     ``keep_series``: False, or where the cases' series go ("folders" or "netcdf")."""
     for c in todo:
         if c.index in plan.invalid:
             continue
         save = case_series_path(out, c.case_id, keep_series) if keep_series else None
-        task = {"index": c.index, "source": plan.source, "base_dir": plan.base_dir, "save_dir": save,
-                "allow_code": plan.allow_code}
         sc = plan.scenarios.pop(c.index, None)        # validated by _plan: not again
-        if sc is not None:
-            task["scenario"] = sc
-        else:
-            task["raw"] = apply_overrides(plan.raw, c.overrides(plan.axes))
-        yield task
+        raw = apply_overrides(plan.raw, c.overrides(plan.axes)) if sc is None else None
+        yield SweepTask(c.index, raw=raw, scenario=sc, source=plan.source, base_dir=plan.base_dir, save_dir=save,
+                        allow_code=tuple(plan.allow_code))
 
 
-def _execute(plan: _Plan, todo, executor, rec: _Recorder, own: bool, out, keep_series):
+def _execute(plan: SweepPlan, todo, executor, rec: _Recorder, own: bool, out, keep_series):
     """Record the invalid cases, run the others on ``executor``, record each as it finishes; then
     close the progress line, the executor (if the sweep made it) and ``summary.csv``."""
     try:
@@ -391,7 +304,7 @@ def _execute(plan: _Plan, todo, executor, rec: _Recorder, own: bool, out, keep_s
         rec.close()
 
 
-def _run_cases(plan: _Plan, todo, executor, rec: _Recorder, out, keep_series):
+def _run_cases(plan: SweepPlan, todo, executor, rec: _Recorder, out, keep_series):
     by_index = {c.index: c for c in plan.cases}
     try:
         for c in todo:

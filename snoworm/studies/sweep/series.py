@@ -121,7 +121,10 @@ def _from_old(path: Path, n_cases: int) -> dict:
     out = {}
     with xr.open_dataset(path, engine=_engine(path)) as ds:
         ds = ds.load()
-    flat = lambda v: np.asarray(ds[v].values).reshape((n_cases,) + ds[v].shape[ds["ok"].ndim:])
+
+    def flat(v):
+        return np.asarray(ds[v].values).reshape((n_cases,) + ds[v].shape[ds["ok"].ndim:])
+
     ok, nt, ns = flat("ok"), flat("n_time"), flat("n_segments")
     names = [v for v in ds.data_vars if "time" in ds[v].dims and v != "t_s"]
     for i in np.nonzero(ok)[0]:
@@ -167,7 +170,7 @@ def _stack(per_case, n_cases, columns):
             data[name] = (np.full((n_cases, T, width), np.nan), dim, col, kind)
     for i, a in per_case.items():
         t[i, :nt[i]] = a["t_s"]
-        for name, (arr, _, col, kind) in data.items():
+        for arr, _, col, kind in data.values():
             v = a[f"{kind}/{col}"]
             arr[i, :v.shape[0], :v.shape[1]] = v
     return t, data, nt, ns

@@ -174,7 +174,7 @@ def _number(text):
     except ValueError:
         v = float(text)
         if not math.isfinite(v):
-            raise ValueError(text)
+            raise ValueError(text) from None
         return v
 
 

@@ -17,12 +17,12 @@ from pathlib import Path
 import yaml
 
 from ..._version import __version__
-from ...results.frames import require_pandas
-from ...results.result import ResultFileError, read_back
-from ...infra.folders import MANIFEST, atomic_write_text, folder_state, remove_listed
-from ...infra.manifest import STAGE, ManifestProblem, read_small_file
 from ...config.schema import ScenarioError, quote
 from ...infra.csvwriter import FULL, csv_line, csv_text, write_csv
+from ...infra.folders import MANIFEST, atomic_write_text, folder_state, remove_listed
+from ...infra.manifest import STAGE, ManifestProblem, read_small_file
+from ...results.frames import require_pandas
+from ...results.result import ResultFileError, read_back
 from .figures import plot_table
 from .inputs import changed_inputs
 from .metrics import METRIC_COLUMNS
