@@ -1,5 +1,4 @@
 """Figures of one run (snoworm.plotting.runs): panels, styles, legends, own axes, file formats."""
-import dataclasses
 
 import numpy as np
 import pytest
@@ -113,16 +112,6 @@ def test_draws_on_the_users_axes(uniform):
     assert runs.plot_positions(uniform, ax=one) is one.figure and len(one.get_lines()) >= 6
     with pytest.raises(ValueError, match="panel"):
         runs.plot_forces(uniform, ax=one)
-
-
-def test_force_diagram_never_prints_minus_zero(uniform):
-    links = dict(uniform.links, force_N=np.full_like(uniform.links["force_N"], -1e-3))
-    segments = dict(uniform.segments, net_force_N=np.full_like(uniform.segments["net_force_N"], -0.02))
-    res = dataclasses.replace(uniform, links=links, segments=segments)
-    fig = runs.plot_force_diagram(res)
-    texts = [t.get_text() for t in fig.axes[0].texts]
-    assert any("0.0 N" in t for t in texts)
-    assert not [t for t in texts if "-0.0" in t or "\u22120.0" in t]
 
 
 @pytest.mark.parametrize("fmt, magic", [("svg", b"<?xml"), ("pdf", b"%PDF-")])

@@ -7,8 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .runs import title
-from .style import figure_function, legend_outside, new_figure, series_style
+from .style import figure_function, legend_outside, new_figure, series_style, title
 
 __all__ = ["compare", "COMPARE_KINDS"]
 

@@ -9,8 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .phases import gait_spans, shade_phases
-from .runs import seg_label, title
-from .style import figure_function, legend_outside, new_figure, series_style
+from .style import figure_function, legend_outside, new_figure, seg_label, series_style, title
 
 __all__ = ["plot_slip", "plot_motor", "plot_energy", "per_segment"]
 

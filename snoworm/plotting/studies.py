@@ -235,6 +235,13 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     if tows.size == 1:
         a1.set_yticks([tows[0]])
     a1.set_title(wrap_title(f"{mmap['scenario']}: which modes move the vehicle", fig.get_figwidth() / (2 - narrow)))
+    _energy_panel(a2, mmap, fig.get_figwidth() / (2 - narrow))
+    return fig
+
+
+def _energy_panel(a2, mmap, panel_width):
+    """The mobility map's right panel: electrical energy per metre against X_t, rolling and inching, a
+    colour per tow."""
     for j, f in enumerate(mmap["tows"]):
         rs = sorted((r for r in mmap["rows"] if r["tow_N"] == f), key=lambda r: r["xt"])
         xr = [r["xt"] for r in rs if r["rolling"]]
@@ -253,8 +260,7 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     if a2.get_legend_handles_labels()[0]:
         legend_outside(a2)
     a2.set_title(wrap_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)",
-                            fig.get_figwidth() / (2 - narrow)))
-    return fig
+                            panel_width))
 
 
 _REGION_COLOURS = ["#d9d9d9", COLOURS[1], COLOURS[5]]

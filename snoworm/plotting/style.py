@@ -337,3 +337,17 @@ def wrap_title(text: str, width_in: float, size_key: str = "axes.titlesize") -> 
     pt = matplotlib.rcParams[size_key]
     pt = float(pt) if isinstance(pt, (int, float)) else float(matplotlib.rcParams["font.size"])
     return textwrap.fill(text, width=max(16, int(0.95 * width_in * 72 / (0.6 * pt))))
+
+
+def seg_label(k):
+    """A segment's name in legends: the leader (segment 0) or a follower."""
+    return "leader 0" if k == 0 else f"follower {k}"
+
+
+def title(fig, axes, text, own):
+    """A title on the figure (our own figure) or on the first panel (the user's axes/figure),
+    wrapped to the figure's width."""
+    if own:
+        fig.suptitle(wrap_title(text, fig.get_figwidth(), "figure.titlesize"))
+    else:
+        axes.flat[0].set_title(wrap_title(text, axes.flat[0].get_position().width * fig.get_figwidth()))

@@ -55,10 +55,10 @@ def handle_errors(fn):
     each with a clear message; SIGTERM is handled like Ctrl-C."""
     @functools.wraps(fn)
     def wrapper(*a, **kw):
-        from .config.schema import ScenarioError  # lazy: start-up
-        from .infra.folders import OutputError  # lazy: start-up
-        from .modes.controller import ControllerError  # lazy: start-up
-        from .simulation.guard import SolverError  # lazy: start-up
+        from ..config.schema import ScenarioError  # lazy: start-up
+        from ..infra.folders import OutputError  # lazy: start-up
+        from ..modes.controller import ControllerError  # lazy: start-up
+        from ..simulation.guard import SolverError  # lazy: start-up
         old = _catch_sigterm()
         try:
             return fn(*a, **kw)
@@ -110,7 +110,7 @@ def _check_out(ctx, param, value):
     if value is not None and not str(value).strip():
         raise click.BadParameter("must name a directory, got an empty path (it would write into the current "
                                  "folder). Give e.g. --out results/.")
-    from .infra.folders import earlier_output_note  # lazy: start-up
+    from ..infra.folders import earlier_output_note  # lazy: start-up
     note = earlier_output_note(value, resumes=ctx.command.name == "sweep") if value is not None else None
     if note:                               # re-running into the same --out: say so, in one line
         click.echo(note, err=True)
@@ -139,7 +139,7 @@ overwrite_option = click.option("--overwrite", is_flag=True,
 
 def progress_bar(total, desc, unit):
     """A :class:`~snoworm.infra.progress.Progress` bar on stderr (imported on first use)."""
-    from .infra.progress import Progress  # lazy: start-up
+    from ..infra.progress import Progress  # lazy: start-up
     return Progress(total, desc, unit)
 
 
@@ -154,7 +154,7 @@ plot_format_option = click.option("--plot-format", type=click.Choice(["png", "pd
 def _check_size(ctx, param, value):
     """``--figure-size`` must be column, page or WxH (checked by :func:`snoworm.plotting.style.parse_size`)."""
     if value is not None:
-        from .plotting.style import parse_size  # lazy: matplotlib, only when a size is given
+        from ..plotting.style import parse_size  # lazy: matplotlib, only when a size is given
         try:
             parse_size(value)
         except ValueError as exc:
@@ -176,7 +176,7 @@ allow_code_option = click.option(
 def code_check(sc, allow_code, verb=None):
     """Refuse (exit 2) a controller that may not run; with ``verb``, say on stderr which code runs."""
     if getattr(sc.mode, "type", None) == "controller":
-        from .modes.controller import code_notice  # lazy: start-up (only controller scenarios)
+        from ..modes.controller import code_notice  # lazy: start-up (only controller scenarios)
         notice = code_notice(sc, allow_code)
         if verb:
             click.echo(f"snoworm: {verb} {notice}", err=True)
@@ -203,7 +203,7 @@ model_file_option = click.option("--model-file", type=click.Path(dir_okay=False)
 
 def echo_scenarios():
     """The shipped scenarios, one line each: name and description."""
-    from .config.scenario import shipped_scenarios  # lazy: start-up
+    from ..config.scenario import shipped_scenarios  # lazy: start-up
     items = shipped_scenarios()
     width = max(map(len, items), default=0)
     for name, (_, desc) in items.items():

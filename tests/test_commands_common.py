@@ -1,4 +1,4 @@
-"""What the commands share (snoworm.cli_common): exit statuses, error handling, shared options.
+"""What the commands share (snoworm.commands.common): exit statuses, error handling, shared options.
 
 Each command of tests/test_cli.py goes through these; here they are checked on a bare command
 so that each mapping (exception -> message and exit status) is seen on its own.
@@ -13,7 +13,7 @@ import click
 import pytest
 from click.testing import CliRunner
 
-from snoworm.cli_common import (
+from snoworm.commands.common import (
     EXIT_INPUT,
     EXIT_SOLVER,
     CommandGroup,
@@ -106,15 +106,15 @@ def test_logging_is_configured_once_at_the_chosen_level():
 def test_no_library_module_is_imported_at_import_time():
     """Like the CLI, the shared helpers import snoworm's modules only when a command runs (the
     package itself imports only its version string)."""
-    code = ("import sys, snoworm.cli_common; print(sorted(m for m in sys.modules if m.startswith('snoworm.') "
-            "and m not in ('snoworm.cli_common', 'snoworm._version')))")
+    code = ("import sys, snoworm.commands.common; print(sorted(m for m in sys.modules if m.startswith('snoworm.') "
+            "and m not in ('snoworm.commands', 'snoworm.commands.common', 'snoworm._version')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          env={**os.environ, "PYTHONWARNINGS": "ignore"}).stdout
     assert out.strip() == "[]"
 
 
 def test_echo_scenarios_and_echo_written(capsys):
-    from snoworm.cli_common import echo_scenarios, echo_written
+    from snoworm.commands.common import echo_scenarios, echo_written
     from snoworm.config.scenario import shipped_scenarios
     echo_scenarios()
     lines = capsys.readouterr().out.splitlines()
