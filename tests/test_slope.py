@@ -259,7 +259,9 @@ def test_eq6_with_gravity_is_eq4_plus_eq5(F_c, Ft_f, Ftr_f, Ftr_r, G_f, G_r):
     assert best["eq5_N"] == pytest.approx(0.0, abs=1e-9)
     assert best["eq4_N"] == pytest.approx(pc["eq6_N"], abs=1e-9)
     if pc["progress"]:
-        assert pc["eq6_N"] > 0
+        # Eq. 6 = Eq. 4 + Eq. 5 > 0, up to the rounding of sums of forces below 3 000 N (~1e-12 N): with
+        # Eq. 4 a hair above 0 and Eq. 5 exactly 0, Eq. 6 summed in another order may round to <= 0
+        assert pc["eq6_N"] > -1e-9
 
 
 @settings(max_examples=200, deadline=None)
