@@ -135,3 +135,19 @@ def test_observation_keeps_the_state_it_was_made_from(fixed6):
     obs = observe(fixed6, y, ctl, 0.5)
     y[:] = 0.0                                   # the caller's array changes afterwards
     np.testing.assert_array_equal(obs.v_mps, expected)
+
+
+def test_batched_commands_give_the_stacked_controls(fixed6):
+    from snoworm.model.inputs import Controls
+    rng = np.random.default_rng(0)
+    speeds = rng.uniform(0, 3, (4, 6))
+    batched = CommandState(fixed6, batch=4).apply({"wheel_speed_mps": speeds})
+    alone = []
+    for b in range(4):
+        alone.append(CommandState(fixed6).apply({"wheel_speed_mps": speeds[b]}))
+    stacked = Controls.stack(alone)
+    for name in Controls.__dataclass_fields__:
+        np.testing.assert_array_equal(np.broadcast_to(getattr(batched, name), np.shape(getattr(stacked, name))),
+                                      getattr(stacked, name), err_msg=name)
+    with pytest.raises(ValueError, match=r"shape \(6,\) \(batch 4\)"):
+        CommandState(fixed6, batch=4).apply({"wheel_speed_mps": speeds[0]})

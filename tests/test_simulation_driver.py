@@ -121,9 +121,8 @@ def test_vode_carries_its_history_across_simulator_steps(scenario_path):
     for cont in (True, False):
         sim = Simulator(sc)
         sim.reset()
-        sim._opts["continue"] = cont
         for k in range(300):
-            sim.step({"wheel_speed_mps": [1.8] * 6} if k == 50 else None, 0.01)
+            sim.step({"wheel_speed_mps": [1.8] * 6} if k == 50 else None, 0.01, restart=not cont)
         runs[cont] = sim.result()
     assert runs[True].stats["nfev"] < runs[False].stats["nfev"] / 3
     assert runs[True].stats.get("retries", 0) == 0

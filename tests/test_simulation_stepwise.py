@@ -187,3 +187,20 @@ def test_record_false_keeps_snoworms_memory_flat_and_record_true_is_bounded(tow6
         for _ in range(10_000):
             rec.step(None, 0.5)
     assert rec.result().t[-1] == pytest.approx(rec.t_s)
+
+
+def test_record_false_steps_start_at_their_start_and_state_is_a_copy(tow6):
+    kept, light = Simulator(tow6), Simulator(tow6, record=False)
+    for sim in (kept, light):
+        sim.reset()
+        for _ in range(3):
+            t0 = sim.t_s
+            y0 = sim.state
+            sim.step({"wheel_speed_mps": [1.8] * 6}, 0.1)
+    ts, ys, _ = light.last_step                                          # y0, t0: light's last step start
+    assert ts[0] == t0                                                   # the step's start is its first sample
+    np.testing.assert_allclose(ys[0], y0, rtol=1e-12, atol=1e-12)       # (solve_ivp's interpolant at its node)
+    assert kept.last_step[0][0] > t0                                     # the Result has the start already
+    np.testing.assert_array_equal(light.state, kept.state)               # the same solve either way
+    light.state[0] = 99.0                                                # a copy: the simulator is untouched
+    assert light.state[0] != 99.0

@@ -135,11 +135,17 @@ class CommandState:
     ----------
     model : ChainModel
         The chain the commands drive.
+    batch : int, optional
+        Hold the commands of ``batch`` copies of the chain at once (the vector environment,
+        :mod:`snoworm.env.vector`): every command array then has shape ``(batch, length)`` and the
+        controls a leading batch axis, as :meth:`Controls.stack` gives for the members of
+        :meth:`ChainModel.stack`.
     """
 
-    def __init__(self, model):
+    def __init__(self, model, batch=None):
         self.model = model
         n = model.n
+        self._lead = () if batch is None else (int(batch),)
         self.source = np.zeros(n, int)        # 0 motors off, 1 speed, 2 torque
         self.speed = np.zeros(n)
         self.torque = np.zeros(n)
@@ -167,9 +173,9 @@ class CommandState:
                 arr = np.asarray(value, bool if key == "wheel_lock" else float)
             except (TypeError, ValueError):
                 raise ValueError(f"command key {key!r}: expected {size} numbers, got {value!r}") from None
-            if arr.shape != (size,):
+            if arr.shape != self._lead + (size,):
                 raise ValueError(f"command key {key!r}: expected {size} values ({COMMAND_KEYS[key]}), "
-                                 f"got shape {arr.shape}")
+                                 f"got shape {arr.shape}" + (f" (batch {self._lead[0]})" if self._lead else ""))
             if key == "wheel_lock" and not all(isinstance(v, (bool, np.bool_)) or v in (0, 1)
                                                for v in np.asarray(value, object).reshape(-1)):
                 raise ValueError(f"command key {key!r}: expected true/false values, got {value!r}")

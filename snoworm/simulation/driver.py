@@ -97,8 +97,11 @@ def _vode_interval(model, ctl, t, t1, y, events, t_eval, opts):
     st = opts.get("VODE stepper")
     if st is None:
         o = opts["VODE"]
-        st = opts["VODE stepper"] = VodeStepper(model.rhs, model.jacobian_banded, model.n_states, rtol=o["rtol"],
-                                                atol=o["atol"], lband=o["lband"], uband=o["uband"],
+        # B stacked members (opts["vode_stack"]): tolerances / sqrt(B), so that VODE's RMS error norm
+        # over the stack <= 1 implies each member's own RMS norm <= 1 (what it has alone)
+        k = 1.0 / np.sqrt(model.n_batch)
+        st = opts["VODE stepper"] = VodeStepper(model.rhs, model.jacobian_banded, model.n_states, rtol=o["rtol"] * k,
+                                                atol=o["atol"] * k, lband=o["lband"], uband=o["uband"],
                                                 max_step=o.get("max_step"))
     before = (st.nfev, st.njev, st.nlu)
     events = [_with_controls(ev, ctl) for ev in events or ()]
@@ -140,7 +143,7 @@ def _solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opt
     """
     sol, failures = None, []
     for method in _fallbacks(sim.method):
-        if method == "VODE" and model.n_batch > 1:
+        if method == "VODE" and model.n_batch > 1 and not opts.get("vode_stack"):
             continue                # stacked members: LSODA's max-norm error test (see simulate_batch)
         if method not in opts:
             opts[method] = solver_options(model, sim, method)
@@ -220,7 +223,10 @@ def solve_interval(model, ctl, t, t1, y, events, sim, t_eval, stats, label, opts
     label : str
         The interval's name for error messages.
     opts : dict
-        Cache of :func:`solver_options` per method, shared over one run.
+        Cache of :func:`solver_options` per method, shared over one run.  Flags: ``"continue"``
+        (VODE carries its history on from where the last interval ended), ``"vode_stack"`` (a
+        stacked model may run on VODE, with its tolerances divided by sqrt(B) so that each member
+        keeps the tolerance it has alone; without it a stack skips VODE for LSODA).
 
     Returns
     -------

@@ -46,8 +46,8 @@ class Simulator:
         Keep every step's output samples for :meth:`result` (default).  The record is bounded like
         a scenario's output (:data:`~snoworm.config.sections.MAX_OUTPUT_SAMPLES` times x segments): a step
         past it raises ValueError (call :meth:`reset`).  ``False``: memory stays flat however long
-        you step (only :attr:`last_step` is kept; :meth:`result` is unavailable), e.g. for
-        reinforcement learning.
+        you step (only :attr:`last_step` is kept, its samples then always starting at the step's
+        start; :meth:`result` is unavailable), e.g. for reinforcement learning.
 
     Attributes
     ----------
@@ -75,11 +75,16 @@ class Simulator:
         self.last_step = None
         return self.observation()
 
+    @property
+    def state(self) -> np.ndarray:
+        """The flat state at :attr:`t_s` (a copy)."""
+        return self._y.copy()
+
     def observation(self) -> Observation:
         """The :class:`Observation` at the time reached (under the command held up to it)."""
         return observe(self.model, self._y, self.commands.controls, self.t_s)
 
-    def step(self, command, dt) -> Observation:
+    def step(self, command, dt, restart=False) -> Observation:
         """Hold ``command`` for ``dt`` seconds and return the observation at the end.
 
         Parameters
@@ -89,6 +94,12 @@ class Simulator:
         dt : float
             Step length [s], > 0.  The solver chooses its own steps inside it with the
             scenario's tolerances, whatever ``dt`` is.
+        restart : bool
+            Restart VODE's history at this step (the ``solve_ivp`` methods restart at every
+            step anyway).  By default VODE carries it on across the change of command, which
+            pays while commands change little; after a large jump a restart costs fewer
+            evaluations (measured on tow6, dt 0.1 s: 104 against 124 per step with random
+            wheel-speed set-points; 4 against 10 with a held command).
 
         Raises
         ------
@@ -103,7 +114,8 @@ class Simulator:
         ctl = self.commands.apply(command)
         t, t1 = self.t_s, self.t_s + float(dt)
         sim = self.scenario.simulation
-        t_eval = output_grid(t, t1, sim.output_dt_s, include_start=not self._phases)
+        t_eval = output_grid(t, t1, sim.output_dt_s, include_start=not (self._phases and self.record))
+        self._opts["continue"] = not restart
         try:
             ts, ys, t_next, y_next, _ = solve_interval(self.model, ctl, t, t1, self._y, [], sim, t_eval,
                                                        self._stats, "step", self._opts)

@@ -1,0 +1,178 @@
+"""What the single and the vector environment share (:mod:`snoworm.env`): options, spaces, the
+map from normalised actions to commands, the normalised observation and the motors' energy."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from gymnasium import spaces
+
+from ..config.scenario import Scenario, load_scenario
+
+__all__ = ["ENV_ID", "EnvCore", "OBSERVATION_FIELDS", "OBSERVATION_SCALES", "OBS_LIMIT", "default_reward",
+           "table_fields"]
+
+#: The registered id (``gymnasium.make(ENV_ID, scenario=...)``).
+ENV_ID = "snoworm/Snoworm-v0"
+
+#: Observation arrays in the order they fill the observation vector (then ``t_s / duration_s``).
+OBSERVATION_FIELDS = ("x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt", "grade_deg",
+                      "link_force_N", "link_length_m", "joint_extension_m")
+
+#: The scale each field is divided by (names of :meth:`EnvCore.scales`): ``distance`` = the fastest
+#: no-load wheel speed times ``duration_s``, ``speed`` = the fastest no-load wheel speed R_w w_nl,
+#: ``torque`` = each motor's torque limit, ``weight`` = the chain's weight, ``spacing`` = each link's
+#: rest spacing, ``stroke`` = each joint's largest stroke (1 m for fixed links), ``right_angle`` =
+#: 90 deg (a grade maps into [-1, 1]), ``one`` = 1.
+OBSERVATION_SCALES = {"x_m": "distance", "v_mps": "speed", "wheel_speed_mps": "speed", "slip": "one",
+                      "motor_torque_Nm": "torque", "xt": "one", "grade_deg": "right_angle",
+                      "link_force_N": "weight", "link_length_m": "spacing", "joint_extension_m": "stroke"}
+
+#: Bound of every normalised observation value (values beyond are clipped).
+OBS_LIMIT = 10.0
+
+_PAIRS = (("wheel_speed_mps", "wheel_torque_Nm"), ("joint_force_N", "joint_length_m"))
+
+
+def default_reward(prev_obs, obs, info, energy_weight=1e-3) -> float:
+    """Progress of the chain's mean position [m] minus ``energy_weight`` times the motors' energy [J]."""
+    return float(np.mean(obs.x_m) - np.mean(prev_obs.x_m)) - energy_weight * info["motor_energy_J"]
+
+
+def _resolve(scenario):
+    """A Scenario from a Scenario, a shipped scenario's name or a path."""
+    if isinstance(scenario, Scenario):
+        return scenario
+    if isinstance(scenario, str) or hasattr(scenario, "__fspath__"):
+        return load_scenario(scenario)
+    raise ValueError(f"scenario: expected a Scenario, a shipped scenario's name or a path, got {scenario!r}")
+
+
+def _number(name, value, rule, ok):
+    """``value`` as a float if finite and ``ok(value)``; else ValueError naming ``name`` and ``rule``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(value) or not ok(value):
+        raise ValueError(f"{name}: must be {rule}, got {value!r}")
+    return float(value)
+
+
+class EnvCore:
+    """What the single and the vector environment share: options, spaces, action and observation maps.
+
+    Parameters
+    ----------
+    scenario : Scenario, str or path
+        The scenario (a shipped name such as ``"tow6_uniform"``, or a YAML path); its mode gives
+        only the initial state.
+    dt_s : float
+        How long each action is held [s], > 0.
+    action_keys : sequence of str
+        Command keys that make up the action (not both keys of a pair such as
+        ``wheel_speed_mps`` and ``wheel_torque_Nm``).
+    energy_weight : float
+        Weight of the motors' electrical energy in the default reward [1/J per m], >= 0.
+    stall_speed_mps, stall_time_s : float
+        Immobilisation test: mean speed below ``stall_speed_mps`` (>= 0) for ``stall_time_s`` (> 0).
+    """
+
+    def __init__(self, scenario, dt_s=0.1, action_keys=("wheel_speed_mps",), energy_weight=1e-3,
+                 stall_speed_mps=0.01, stall_time_s=2.0):
+        self.scenario = _resolve(scenario)
+        self.dt_s = _number("dt_s", dt_s, "a positive number of seconds", lambda v: v > 0)
+        self.energy_weight = _number("energy_weight", energy_weight, "a finite number >= 0", lambda v: v >= 0)
+        self.stall_speed_mps = _number("stall_speed_mps", stall_speed_mps, "a finite speed >= 0 [m/s]",
+                                       lambda v: v >= 0)
+        self.stall_time_s = _number("stall_time_s", stall_time_s, "a positive number of seconds", lambda v: v > 0)
+        if isinstance(action_keys, str):
+            action_keys = (action_keys,)
+        self.action_keys = tuple(action_keys)
+        self.model = self.scenario.chain_model
+        self.duration_s = float(self.scenario.simulation.duration_s)
+        #: steps until truncation: the first step whose end reaches ``simulation.duration_s``
+        self.max_episode_steps = max(1, math.ceil(self.duration_s / self.dt_s - 1e-9))
+        self.low, self.high, self.sizes = self._action_bounds()
+        self.scale = self._observation_scale()
+        n_act, n_obs = self.low.size, self.scale.size + 1
+        self.single_action_space = spaces.Box(-1.0, 1.0, shape=(n_act,), dtype=np.float32)
+        self.single_observation_space = spaces.Box(-OBS_LIMIT, OBS_LIMIT, shape=(n_obs,), dtype=np.float32)
+
+    def _action_bounds(self):
+        model = self.model
+        seg, links, n = model.seg, model.links, model.n
+        bounds = {"wheel_speed_mps": (np.zeros(n), seg.no_load_speed_radps * seg.wheel_radius_m),
+                  "wheel_torque_Nm": (-seg.torque_limit_Nm, seg.torque_limit_Nm),
+                  "joint_force_N": (-links.force_max_N, links.force_max_N),
+                  "joint_length_m": (links.stroke_min_m, links.stroke_max_m)}
+        if not self.action_keys:
+            raise ValueError(f"action_keys: give at least one of {', '.join(bounds)}")
+        for key in self.action_keys:
+            if key not in bounds:
+                raise ValueError(f"action_keys: {key!r} cannot be an action; choose among {', '.join(bounds)}")
+            if key.startswith("joint_") and not model.has_joints:
+                raise ValueError(f"action_keys: {key!r} needs a vehicle with prismatic joints")
+        if len(set(self.action_keys)) != len(self.action_keys):
+            raise ValueError(f"action_keys: {self.action_keys!r} names a key twice")
+        for a, b in _PAIRS:
+            if a in self.action_keys and b in self.action_keys:
+                raise ValueError(f"action_keys: {a!r} and {b!r} command the same actuator; give one of them")
+        lo = [np.asarray(bounds[k][0], float) for k in self.action_keys]
+        hi = [np.asarray(bounds[k][1], float) for k in self.action_keys]
+        return np.concatenate(lo), np.concatenate(hi), [a.size for a in lo]
+
+    def scales(self) -> dict:
+        """The physical scales of :data:`OBSERVATION_SCALES` (arrays per segment or link, or floats)."""
+        seg, links = self.model.seg, self.model.links
+        vnl = float(np.max(seg.no_load_speed_radps * seg.wheel_radius_m))
+        stroke = np.maximum(np.abs(links.stroke_min_m), np.abs(links.stroke_max_m))
+        return {"distance": vnl * self.duration_s, "speed": vnl, "torque": np.asarray(seg.torque_limit_Nm, float),
+                "weight": float(np.sum(seg.mass_kg * seg.gravity_mps2)), "one": 1.0, "right_angle": 90.0,
+                "spacing": np.asarray(links.rest_spacing_m, float),
+                "stroke": np.where(links.prismatic > 0, np.where(stroke > 0, stroke, 1.0), 1.0)}
+
+    def _observation_scale(self):
+        sc, n = self.scales(), self.model.n
+        sizes = {f: (n - 1 if f.startswith(("link_", "joint_")) else n) for f in OBSERVATION_FIELDS}
+        return np.concatenate([np.broadcast_to(sc[OBSERVATION_SCALES[f]], (sizes[f],)) for f in OBSERVATION_FIELDS])
+
+    def physical_action(self, action, batch=None):
+        """The command mapping of normalised actions (shape ``(n,)``, or ``(batch, n)``), clipped to [-1, 1].
+
+        Raises ValueError for a wrong shape (a scalar is not broadcast) or a non-finite value.
+        """
+        shape = self.single_action_space.shape if batch is None else (batch,) + self.single_action_space.shape
+        a = np.asarray(action, dtype=float)
+        if a.shape != shape:
+            raise ValueError(f"action: expected an array of shape {shape} in [-1, 1], got shape {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError("action: every value must be finite (NaN or inf given)")
+        phys = self.low + (np.clip(a, -1.0, 1.0) + 1.0) * 0.5 * (self.high - self.low)
+        cmd, j = {}, 0
+        for key, size in zip(self.action_keys, self.sizes):
+            cmd[key] = phys[..., j:j + size]
+            j += size
+        return cmd
+
+    def normalised(self, fields, t_s):
+        """The float32 observation vector(s) of ``fields`` (name -> array ``(..., N)`` or ``(..., N-1)``
+        for each of :data:`OBSERVATION_FIELDS`, e.g. :func:`table_fields`) at time(s) ``t_s``."""
+        v = np.concatenate([fields[f] for f in OBSERVATION_FIELDS], axis=-1) / self.scale
+        t = np.broadcast_to(np.asarray(t_s, float) / self.duration_s, v.shape[:-1])[..., None]
+        return np.clip(np.concatenate([v, t], axis=-1), -OBS_LIMIT, OBS_LIMIT).astype(np.float32)
+
+    def energy_J(self, ts, seg):
+        """Motors' electrical energy over a step [J]: trapezoid rule on the samples ``ts`` (per member)."""
+        p = seg["motor_electrical_power_W"].sum(-1)
+        dt = np.diff(ts).reshape((-1,) + (1,) * (p.ndim - 1))
+        return np.sum(0.5 * (p[1:] + p[:-1]) * dt, axis=0)
+
+
+#: Observation field -> the column of output_series' tables where the names differ.
+_TABLE_NAME = {"link_force_N": "force_N", "link_length_m": "length_m", "joint_extension_m": "extension_m"}
+
+
+def table_fields(seg, lk, row=-1) -> dict:
+    """The :data:`OBSERVATION_FIELDS` arrays at sample ``row`` of output tables ``seg, lk``
+    (:func:`snoworm.model.quantities.output_series`)."""
+    return {f: (seg if f in seg else lk)[_TABLE_NAME.get(f, f)][row] for f in OBSERVATION_FIELDS}
+
+

@@ -1,0 +1,116 @@
+"""The single environment :class:`SnowormEnv` (registered as ``snoworm/Snoworm-v0``, see :mod:`snoworm.env`)."""
+from __future__ import annotations
+
+import gymnasium
+import numpy as np
+from gymnasium.error import ResetNeeded
+
+from ..model.quantities import output_series
+from ..modes.command import Observation
+from ..simulation.stepwise import Simulator
+from .core import OBSERVATION_FIELDS, EnvCore, table_fields
+
+__all__ = ["SnowormEnv", "make_env"]
+
+
+class SnowormEnv(gymnasium.Env):
+    """A scenario's chain as a Gymnasium environment (see the module docstring for spaces and reward).
+
+    Parameters
+    ----------
+    scenario : Scenario, str or path
+        The scenario, a shipped scenario's name or a YAML path (default ``"tow6_uniform"``).
+    reward : callable, optional
+        ``reward(prev_obs, obs, info) -> float`` with physical Observations; default
+        :func:`default_reward` with ``energy_weight``.
+    dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s
+        As :class:`EnvCore`.
+    method : str or None
+        Solver for the control periods (default ``"VODE"``: history kept across periods);
+        None: the scenario's ``simulation.method``.  Tolerances are the scenario's.
+    record : bool
+        Keep every step for ``env.sim.result()`` (memory grows with the episode); default False.
+    render_mode : None
+        No rendering (accepted for ``gymnasium.make``).
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, scenario="tow6_uniform", reward=None, dt_s=0.1, action_keys=("wheel_speed_mps",),
+                 energy_weight=1e-3, stall_speed_mps=0.01, stall_time_s=2.0, method="VODE", record=False,
+                 render_mode=None):
+        if render_mode is not None:
+            raise ValueError(f"render_mode: the environment does not render; got {render_mode!r}, use None")
+        if reward is not None and not callable(reward):
+            raise ValueError(f"reward: expected a callable reward(prev_obs, obs, info), got {reward!r}")
+        self.core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s)
+        sc = self.core.scenario
+        if method is not None and method != sc.simulation.method:
+            sc = sc.with_({"simulation.method": method})
+        self.scenario, self.dt_s, self.reward_fn = sc, self.core.dt_s, reward
+        self.action_keys = self.core.action_keys
+        self.max_episode_steps = self.core.max_episode_steps
+        self.sim = Simulator(sc, record=record)
+        self.action_space = self.core.single_action_space
+        self.observation_space = self.core.single_observation_space
+        self.render_mode = None
+        self.observation = None
+        self._stalled_s, self._done, self._command = 0.0, None, None
+
+    def reset(self, *, seed=None, options=None):
+        """Back to t = 0: ``(obs, info)``.  ``seed`` seeds ``np_random`` and the action space's
+        sampling (the chain itself is deterministic)."""
+        super().reset(seed=seed)
+        if seed is not None:
+            self.action_space.seed(seed)
+        self.observation = obs = self.sim.reset()
+        self._stalled_s, self._done, self._command = 0.0, False, None
+        return self.core.normalised({f: getattr(obs, f) for f in OBSERVATION_FIELDS}, 0.0), {"t_s": 0.0}
+
+    def step(self, action):
+        """Hold ``action`` for ``dt_s``: ``(obs, reward, terminated, truncated, info)``; ``info`` has
+        ``t_s`` and ``motor_energy_J``, the motors' electrical energy in the step [J].
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            Before the first :meth:`reset`, or after the episode terminated or was truncated.
+        ValueError
+            A wrong action shape or a non-finite action (nothing changes).
+        SolverError
+            If every solver method fails (the environment stays at the start of the step).
+        """
+        if self._done is None:
+            raise ResetNeeded("SnowormEnv.step: call reset() before the first step")
+        if self._done:
+            raise ResetNeeded("SnowormEnv.step: the episode has ended (terminated or truncated); call reset()")
+        prev, t0, y0 = self.observation, self.sim.t_s, self.sim.state
+        command = self.core.physical_action(action)
+        held = self._command is not None and all(np.array_equal(command[k], self._command[k]) for k in command)
+        obs_t = self.sim.step(command, self.dt_s, restart=not held).t_s
+        self._command = command
+        ts, ys, ctl = self.sim.last_step
+        if ts[0] > t0:          # record=True: the step's samples leave out its start (the Result has it)
+            ts, ys = np.append(t0, ts), np.vstack([y0, ys])
+        seg, lk = output_series(self.sim.model, ys, ctl)
+        energy = float(self.core.energy_J(ts, seg))
+        info = {"t_s": obs_t, "motor_energy_J": energy}
+        fields = table_fields(seg, lk)
+        obs = Observation(obs_t, **fields)
+        if self.reward_fn is None:
+            reward = float(np.mean(obs.x_m) - np.mean(prev.x_m)) - self.core.energy_weight * energy
+        else:
+            reward = self.reward_fn(prev, obs, info)
+        moving = float(np.mean(obs.v_mps)) >= self.core.stall_speed_mps or not np.any(self.sim.commands.source > 0)
+        self._stalled_s = 0.0 if moving else self._stalled_s + self.dt_s
+        terminated = self._stalled_s >= self.core.stall_time_s - 1e-9
+        truncated = obs_t >= self.core.duration_s - 1e-9
+        self.observation, self._done = obs, bool(terminated or truncated)
+        return self.core.normalised(fields, obs_t), float(reward), bool(terminated), bool(truncated), info
+
+
+def make_env(**kwargs):
+    """The registered entry point: :class:`SnowormEnv` ``(**kwargs)`` in a ``TimeLimit`` of its
+    ``max_episode_steps`` (so ``env.spec.max_episode_steps`` follows the scenario's duration)."""
+    env = SnowormEnv(**kwargs)
+    return gymnasium.wrappers.TimeLimit(env, env.max_episode_steps)

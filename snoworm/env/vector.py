@@ -1,0 +1,246 @@
+"""The native Gymnasium vector environment: B copies of a chain stepped as ONE stacked solve.
+
+::
+
+    import gymnasium, snoworm.env
+    envs = gymnasium.make_vec("snoworm/Snoworm-v0", num_envs=64, vectorization_mode="vector_entry_point")
+    obs, info = envs.reset(seed=0)                            # obs: (64, n_obs) float32
+    obs, rewards, terminated, truncated, info = envs.step(envs.action_space.sample())
+
+The members share the scenario and the options of :class:`snoworm.env.single.SnowormEnv` (spaces,
+action map, observation normalisation, default reward, termination and truncation: one
+:class:`~snoworm.env.core.EnvCore`).  A control period has no gait events, so every member's interval
+ends at the same time: the B chains are stacked (:meth:`ChainModel.stack`, the kernel with one
+more leading axis) and integrated over the period by the driver's interval solve
+(:func:`snoworm.simulation.driver.solve_interval`), on VODE restarted at every period with its tolerances
+divided by sqrt(B): VODE's error test is a weighted RMS norm over the whole stack, and with
+those tolerances a stack that passes it has every member within the RMS norm it has alone.
+(LSODA, which a batched sweep uses for its max-norm test, took ~585 evaluations a period for
+B = 64 against VODE's ~290, and scipy 1.17.1's LSODA keeps ~90 kB of every solver it creates:
+memory would grow with every period.)  The model does not depend on time, so members at
+different times of their episodes share one period.
+
+* **Autoreset** (Gymnasium 1.x ``AutoresetMode.NEXT_STEP``, ``metadata["autoreset_mode"]``): a
+  member whose episode terminated or was truncated in a step is reset in the next ``step`` call,
+  which returns its first observation with reward 0, not terminated, not truncated, and ignores its
+  action.  ``reset(options={"reset_mask": mask})`` resets only the masked members.
+* **Per-member status**: when the stacked solve fails, each member's period is solved alone from
+  the same start; a member that fails alone (or whose speed leaves the physics,
+  :data:`snoworm.simulation.guard.SPEED_SANITY_FACTOR`) keeps its start state, gets reward 0 and
+  ``truncated`` true, ``info["solver_failure"]`` true and the message in ``info["solver_error"]``,
+  and is reset at the next step; the other members go on.
+* **info**: ``t_s``, ``motor_energy_J`` and ``solver_failure`` per member (each with its ``_key``
+  mask, as Gymnasium's vector infos).
+* A ``reward`` callable is not taken (wrap the vector environment instead).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from gymnasium.error import ResetNeeded
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from ..dynamics import ChainModel
+from ..model.quantities import output_series
+from ..modes.command import CommandState
+from ..simulation.driver import assemble, output_grid, solve_interval
+from ..simulation.guard import SPEED_SANITY_FACTOR, SolverError
+from .core import EnvCore, table_fields
+
+__all__ = ["SnowormVectorEnv"]
+
+
+class SnowormVectorEnv(VectorEnv):
+    """``num_envs`` copies of a scenario's chain, stepped together (see the module docstring).
+
+    Parameters
+    ----------
+    num_envs : int
+        Number of members B (>= 1).
+    scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s
+        As :class:`snoworm.env.single.SnowormEnv`.
+    max_episode_steps : int, optional
+        Truncate an episode after this many steps if that comes before ``simulation.duration_s``.
+    method : str or None
+        Solver of the stacked periods: ``"VODE"`` (default; its tolerances divided by sqrt(B),
+        restarted at every period), another ``simulation.method`` (a stack of several members
+        then runs on LSODA, as a batched sweep), or None: the scenario's.
+    render_mode : None
+        No rendering.
+    """
+
+    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def __init__(self, num_envs=1, scenario="tow6_uniform", dt_s=0.1, action_keys=("wheel_speed_mps",),
+                 energy_weight=1e-3, stall_speed_mps=0.01, stall_time_s=2.0, max_episode_steps=None,
+                 method="VODE", render_mode=None):
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+            raise ValueError(f"num_envs: must be a whole number >= 1, got {num_envs!r}")
+        if render_mode is not None:
+            raise ValueError(f"render_mode: the environment does not render; got {render_mode!r}, use None")
+        self.core = core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s)
+        self.num_envs = B = int(num_envs)
+        self.max_episode_steps = core.max_episode_steps
+        if max_episode_steps is not None:
+            if isinstance(max_episode_steps, bool) or not isinstance(max_episode_steps, (int, np.integer)) \
+                    or max_episode_steps < 1:
+                raise ValueError(f"max_episode_steps: must be a whole number >= 1, got {max_episode_steps!r}")
+            self.max_episode_steps = min(self.max_episode_steps, int(max_episode_steps))
+        sc = core.scenario
+        if method is not None and method != sc.simulation.method:
+            sc = sc.with_({"simulation.method": method})
+        self.scenario, self.dt_s, self.render_mode = sc, core.dt_s, None
+        #: solver options kept over the periods; VODE on the stack, restarted at every period
+        self._opts = {"vode_stack": True, "continue": False}
+        self.single_action_space = core.single_action_space
+        self.single_observation_space = core.single_observation_space
+        self.action_space = batch_space(self.single_action_space, B)
+        self.observation_space = batch_space(self.single_observation_space, B)
+        self.model = core.model
+        self.stacked = ChainModel.stack([self.model] * B) if B > 1 else self.model
+        self._y0 = np.asarray(assemble(core.scenario).mode.initial_state(), float)
+        seg, lk = output_series(self.model, self._y0[None, :], CommandState(self.model).controls)
+        fields0 = table_fields(seg, lk)
+        self._obs0 = core.normalised(fields0, 0.0)
+        self._xmean0 = float(np.mean(fields0["x_m"]))
+        self._vmax = SPEED_SANITY_FACTOR * float(np.max(self.model.seg.no_load_speed_radps
+                                                        * self.model.seg.wheel_radius_m))
+        self._grid = output_grid(0.0, core.dt_s, core.scenario.simulation.output_dt_s, include_start=True)
+        self.stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "member_solves": 0, "solver_failures": 0}
+        self._started = False
+
+    # ------------------------------------------------------------------ reset
+    def reset(self, *, seed=None, options=None):
+        """Reset every member (or those of ``options["reset_mask"]``): ``(obs, info)``.
+
+        ``seed`` (an int) seeds ``np_random`` and the action spaces' sampling."""
+        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))):
+            raise ValueError(f"seed: expected an int or None, got {seed!r}")
+        super().reset(seed=seed)
+        if seed is not None:
+            self.action_space.seed(int(seed))
+            self.single_action_space.seed(int(seed))
+        B = self.num_envs
+        mask = np.ones(B, bool)
+        if options and "reset_mask" in options:
+            mask = np.asarray(options["reset_mask"])
+            if mask.shape != (B,) or mask.dtype != bool:
+                raise ValueError(f"options['reset_mask']: expected {B} booleans, got {options['reset_mask']!r}")
+        if not self._started:
+            if not mask.all():
+                raise ResetNeeded("SnowormVectorEnv.reset: the first reset must reset every member (no reset_mask)")
+            n_s = self._y0.size
+            self._y, self._obs = np.empty((B, n_s)), np.empty((B,) + self.single_observation_space.shape, np.float32)
+            self._t, self._steps, self._stalled = np.zeros(B), np.zeros(B, int), np.zeros(B)
+            self._xmean, self._autoreset = np.zeros(B), np.zeros(B, bool)
+            self._cmd = CommandState(self.model, batch=B)
+            self._T, self._started = 0.0, True
+        self._reset_members(mask)
+        return self._obs.copy(), {"t_s": self._t.copy(), "_t_s": np.ones(B, bool)}
+
+    def _reset_members(self, mask):
+        self._y[mask] = self._y0
+        self._t[mask], self._steps[mask], self._stalled[mask] = 0.0, 0, 0.0
+        self._xmean[mask], self._obs[mask], self._autoreset[mask] = self._xmean0, self._obs0, False
+
+    # ------------------------------------------------------------------ step
+    def step(self, actions):
+        """One control period of every member: ``(obs, rewards, terminated, truncated, info)``.
+
+        Raises ResetNeeded before the first :meth:`reset`; ValueError for a wrong action shape or a
+        non-finite action (nothing changes)."""
+        if not self._started:
+            raise ResetNeeded("SnowormVectorEnv.step: call reset() before the first step")
+        core, B = self.core, self.num_envs
+        ctl = self._cmd.apply(core.physical_action(actions, batch=B))
+        restart = self._autoreset.copy()
+        if restart.any():           # NEXT_STEP autoreset: these members start again; their action is ignored
+            self._reset_members(restart)
+        ts, ys, failed, errors = self._solve(ctl)
+        failed &= ~restart
+        seg, lk = output_series(self.model, ys, ctl)             # (n_t, B, ...): one kernel call
+        fields = table_fields(seg, lk)
+        energy = core.energy_J(ts - ts[0], seg)
+        t_new = self._t + self.dt_s
+        obs = core.normalised(fields, t_new)
+        xmean = np.mean(fields["x_m"], axis=-1)
+        rewards = (xmean - self._xmean) - core.energy_weight * energy
+        moving = (np.mean(fields["v_mps"], axis=-1) >= core.stall_speed_mps) | (not np.any(self._cmd.source > 0))
+        stalled = np.where(moving, 0.0, self._stalled + self.dt_s)
+        steps = self._steps + 1
+        terminated = stalled >= core.stall_time_s - 1e-9
+        truncated = (t_new >= core.duration_s - 1e-9) | (steps >= self.max_episode_steps)
+        ok = ~failed & ~restart     # the restarted members' periods are discarded (they stay at their start)
+        self._y[ok], self._t[ok], self._steps[ok], self._stalled[ok] = ys[-1][ok], t_new[ok], steps[ok], stalled[ok]
+        self._xmean[ok], self._obs[ok] = xmean[ok], obs[ok]
+        rewards, energy = np.where(failed, 0.0, rewards), np.where(failed, 0.0, energy)
+        terminated, truncated = terminated & ok, truncated | failed
+        rewards[restart], energy[restart], terminated[restart], truncated[restart] = 0.0, 0.0, False, False
+        self._autoreset = terminated | truncated
+        self._T += self.dt_s
+        info = self._info(energy, failed, errors)
+        return self._obs.copy(), rewards.astype(float), terminated, truncated, info
+
+    def _info(self, energy, failed, errors):
+        B = self.num_envs
+        every = np.ones(B, bool)
+        info = {"t_s": self._t.copy(), "_t_s": every, "motor_energy_J": energy, "_motor_energy_J": every,
+                "solver_failure": failed.copy(), "_solver_failure": every}
+        if failed.any():
+            info["solver_error"] = np.array([errors.get(b, "") for b in range(B)], dtype=object)
+            info["_solver_error"] = failed.copy()
+        return info
+
+    def _solve(self, ctl):
+        """One period of the stack: ``(ts, ys (n_t, B, n_states), failed (B,), errors {b: message})``.
+
+        Members are solved alone (and failures isolated) only if the stacked solve fails."""
+        B, n_s = self.num_envs, self._y0.size
+        sim, t0 = self.scenario.simulation, self._T
+        t_eval = t0 + self._grid
+        try:
+            ts, ys, _, _, _ = solve_interval(self.stacked, ctl, t0, t0 + self.dt_s, self._y.reshape(-1), [], sim,
+                                             t_eval, self.stats, "step", self._opts)
+            ys = ys.reshape(ts.size, B, n_s)
+            bad = self._insane(ys)
+            if not bad.any():
+                return ts, ys, bad, {}
+        except SolverError:
+            pass
+        return self._solve_members(ctl, t_eval)
+
+    def _solve_members(self, ctl, t_eval):
+        """Each member's period alone (the fallback of :meth:`_solve`)."""
+        B, n_s = self.num_envs, self._y0.size
+        sim, t0 = self.scenario.simulation, self._T
+        ys = np.repeat(self._y[None, :, :], t_eval.size, axis=0)
+        failed, errors = np.zeros(B, bool), {}
+        for b in range(B):
+            self.stats["member_solves"] += 1
+            try:
+                tb, yb, _, _, _ = solve_interval(self.model, _member(ctl, b), t0, t0 + self.dt_s, self._y[b], [],
+                                                 sim, t_eval, self.stats, "step", {})
+            except SolverError as exc:
+                failed[b], errors[b] = True, str(exc)
+                continue
+            if tb.size != t_eval.size or self._insane(yb[:, None, :])[0]:
+                failed[b], errors[b] = True, "the member's state left the physics (non-finite or runaway speed)"
+                continue
+            ys[:, b, :] = yb
+        self.stats["solver_failures"] += int(failed.sum())
+        return t_eval, ys, failed, errors
+
+    def _insane(self, ys):
+        """Per member: a non-finite state or a speed beyond the sanity limit in ``ys`` (n_t, B, n_states)."""
+        lay = self.model.layout
+        Y = ys.reshape(ys.shape[:2] + (lay.n, lay.n_s))
+        finite = np.all(np.isfinite(Y), axis=(0, 2, 3))
+        v = np.max(np.abs(np.nan_to_num(Y[..., lay.v], nan=np.inf)), axis=(0, 2))
+        return ~finite | (v > self._vmax)
+
+
+def _member(ctl, b):
+    """Member ``b``'s controls out of stacked controls (arrays with a batch axis have two dimensions)."""
+    return replace(ctl, **{k: getattr(ctl, k)[b] for k in ctl.__dataclass_fields__ if np.ndim(getattr(ctl, k)) == 2})

@@ -1,0 +1,184 @@
+"""The native vector environment (snoworm.env.vector): one stacked solve per control period, checked
+against gymnasium's own SyncVectorEnv of single environments, Gymnasium 1.x NEXT_STEP autoreset,
+per-member solver failures."""
+import numpy as np
+import pytest
+
+from snoworm import load_scenario
+from tests.conftest import SCENARIOS
+
+gymnasium = pytest.importorskip("gymnasium")
+from gymnasium.error import ResetNeeded  # noqa: E402
+from gymnasium.vector import AutoresetMode  # noqa: E402
+
+from snoworm.env import ENV_ID, SnowormEnv  # noqa: E402
+from snoworm.env.vector import SnowormVectorEnv  # noqa: E402
+
+#: Tolerance on the normalised observations (values of order 1) and the rewards of one member
+#: against the single environment: 100 x the scenarios' rtol (1e-5).  Both solve each period to
+#: that rtol, but with their own step sequences (the stack takes those of its most demanding
+#: member; the single environment runs VODE by default), so each carries its own local errors of
+#: order rtol per step over ~80-150 steps a period.  Measured over 30 random steps: 2e-4 at most
+#: against the single environment on LSODA, 6e-4 on VODE (the motor torques, which the wheel-speed
+#: PI's gain makes the most sensitive output).
+TOL = 100 * 1e-5
+
+
+@pytest.fixture
+def short6():
+    return load_scenario(SCENARIOS / "tow6_uniform.yaml").with_({"simulation.duration_s": 1.0})
+
+
+def test_make_vec_gives_the_native_vector_env(short6):
+    envs = gymnasium.make_vec(ENV_ID, num_envs=4, scenario=short6, vectorization_mode="vector_entry_point")
+    assert isinstance(envs.unwrapped, SnowormVectorEnv) and isinstance(envs, gymnasium.vector.VectorEnv)
+    assert envs.metadata["autoreset_mode"] is AutoresetMode.NEXT_STEP
+    assert envs.action_space.shape == (4, 6) and envs.action_space.dtype == np.float32
+    obs, info = envs.reset(seed=0)
+    assert obs.shape == (4, 58) and obs.dtype == np.float32 and envs.observation_space.contains(obs)
+    obs, rew, term, trunc, info = envs.step(envs.action_space.sample())
+    assert rew.shape == (4,) and term.dtype == bool and np.all(info["t_s"] == pytest.approx(0.1))
+    assert envs.observation_space.contains(obs) and not info["solver_failure"].any()
+
+
+def test_members_match_gymnasiums_sync_vector_env_of_single_envs(short6):
+    """Same seed and actions: the stacked members against gymnasium's SyncVectorEnv of single envs
+    (LSODA, as the stack), through truncation at 1 s, both with NEXT_STEP autoreset."""
+    B, steps = 3, 14
+    native = gymnasium.make_vec(ENV_ID, num_envs=B, scenario=short6, vectorization_mode="vector_entry_point")
+    sync = gymnasium.make_vec(ENV_ID, num_envs=B, scenario=short6, method="LSODA", vectorization_mode="sync")
+    rng = np.random.default_rng(5)
+    truncations = 0
+    o1, _ = native.reset(seed=2)
+    o2, _ = sync.reset(seed=2)
+    np.testing.assert_array_equal(o1, o2)
+    for k in range(steps):
+        a = rng.uniform(-1, 1, (B, 6)).astype(np.float32)
+        o1, r1, te1, tr1, i1 = native.step(a)
+        o2, r2, te2, tr2, i2 = sync.step(a)
+        np.testing.assert_allclose(o1, o2, rtol=0, atol=TOL, err_msg=f"step {k}")
+        np.testing.assert_allclose(r1, r2, rtol=TOL, atol=TOL, err_msg=f"step {k}")
+        np.testing.assert_array_equal(te1, te2)
+        np.testing.assert_array_equal(tr1, tr2)
+        truncations += int(tr1.sum())
+    assert truncations == B                 # every member truncated at 1 s (step 10), then reset and went on
+
+
+def test_a_member_matches_the_single_env_with_the_same_seed_and_actions(short6):
+    sc = short6.with_({"simulation.duration_s": 3.0})
+    vec = SnowormVectorEnv(4, sc)
+    rng = np.random.default_rng(1)
+    acts = rng.uniform(-1, 1, (30, 4, 6)).astype(np.float32)
+    vo = [vec.reset(seed=0)[0]]
+    vr = []
+    for a in acts:
+        o, r, *_ = vec.step(a)
+        vo.append(o)
+        vr.append(r)
+    vo, vr = np.array(vo), np.array(vr)
+    for b, method in ((0, "VODE"), (3, "VODE"), (1, "LSODA")):
+        env = SnowormEnv(sc, method=method)
+        so = [env.reset(seed=0)[0]]
+        sr = [None]
+        for a in acts[:, b]:
+            o, r, *_ = env.step(a)
+            so.append(o)
+            sr.append(r)
+        np.testing.assert_allclose(np.array(so), vo[:, b], rtol=0, atol=TOL)
+        np.testing.assert_allclose(np.array(sr[1:]), vr[:, b], rtol=TOL, atol=TOL)
+
+
+def test_next_step_autoreset_is_per_member(short6):
+    sc = short6.with_({"simulation.duration_s": 5.0})
+    vec = SnowormVectorEnv(3, sc, stall_time_s=0.3)
+    obs0, _ = vec.reset(seed=0)
+    go = np.array([-1.0, 0.4, 0.4], np.float32)             # member 0: wheels held at zero speed: it stalls
+    for k in range(3):
+        obs, rew, term, trunc, info = vec.step(np.tile(go[:, None], 6))
+    assert term.tolist() == [True, False, False] and not trunc.any()
+    obs, rew, term, trunc, info = vec.step(np.tile(go[:, None], 6))
+    np.testing.assert_array_equal(obs[0], obs0[0])          # member 0 starts again, its action ignored
+    assert rew[0] == 0.0 and not term[0] and not trunc[0] and info["t_s"].tolist() == pytest.approx([0.0, 0.4, 0.4])
+    obs, rew, term, trunc, info = vec.step(np.tile(go[:, None], 6))
+    assert info["t_s"].tolist() == pytest.approx([0.1, 0.5, 0.5])
+
+
+def test_truncation_by_max_episode_steps_and_reset_mask(short6):
+    vec = SnowormVectorEnv(2, short6, max_episode_steps=2)
+    obs0, _ = vec.reset(seed=0)
+    a = np.zeros((2, 6), np.float32)
+    assert not vec.step(a)[3].any() and vec.step(a)[3].all()
+    vec.reset(options={"reset_mask": np.array([True, False])})
+    assert vec._t.tolist() == pytest.approx([0.0, 0.2])
+    with pytest.raises(ValueError, match="reset_mask"):
+        vec.reset(options={"reset_mask": [1, 0]})
+
+
+def test_a_failing_member_is_reported_and_reset_while_the_others_go_on(short6):
+    sc = short6.with_({"simulation.duration_s": 5.0})
+    vec = SnowormVectorEnv(3, sc)
+    vec.reset(seed=0)
+    a = np.full((3, 6), 0.3, np.float32)
+    vec.step(a)
+    t_before = vec._t.copy()
+    vec._y[1, 1] = np.nan                           # member 1's state is broken: its solve must fail
+    obs, rew, term, trunc, info = vec.step(a)
+    assert info["solver_failure"].tolist() == [False, True, False] and info["_solver_error"].tolist() == [0, 1, 0]
+    assert "member" in info["solver_error"][1] or "failed" in info["solver_error"][1]
+    assert trunc.tolist() == [False, True, False] and rew[1] == 0.0
+    assert info["t_s"].tolist() == pytest.approx([t_before[0] + 0.1, t_before[1], t_before[2] + 0.1])
+    assert np.all(np.isfinite(obs[[0, 2]]))
+    obs, rew, term, trunc, info = vec.step(a)       # NEXT_STEP: member 1 starts again
+    assert info["t_s"].tolist() == pytest.approx([0.3, 0.0, 0.3]) and not info["solver_failure"].any()
+    assert vec.stats["solver_failures"] == 1 and vec.stats["member_solves"] == 3
+
+
+def test_errors_and_seeding(short6):
+    vec = SnowormVectorEnv(2, short6)
+    with pytest.raises(ResetNeeded):
+        vec.step(np.zeros((2, 6), np.float32))
+    vec.reset(seed=4)
+    s1 = vec.action_space.sample()
+    vec.reset(seed=4)
+    np.testing.assert_array_equal(vec.action_space.sample(), s1)
+    for bad in (np.zeros(6), np.zeros((2, 5)), np.full((2, 6), np.nan)):
+        with pytest.raises(ValueError, match="action"):
+            vec.step(bad)
+    for kw, msg in (({"num_envs": 0}, "num_envs"), ({"max_episode_steps": 0}, "max_episode_steps"),
+                    ({"dt_s": -1.0}, "dt_s")):
+        with pytest.raises(ValueError, match=msg):
+            SnowormVectorEnv(**({"num_envs": 2, "scenario": short6} | kw))
+
+
+def test_memory_stays_bounded_over_many_periods(short6):
+    """300 periods of 4 members (autoresets included): traced memory grows by less than 128 kB."""
+    import tracemalloc
+    vec = SnowormVectorEnv(4, short6)
+    vec.reset(seed=0)
+    a = np.full((4, 6), 0.3, np.float32)
+    for _ in range(20):
+        vec.step(a)
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        for _ in range(300):
+            vec.step(a)
+        grown = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert grown < 128_000, f"memory grew by {grown} bytes over 300 periods"
+
+
+def test_members_on_a_grade_match_the_single_env(short6):
+    """The stacked members carry the scenario's grade (and elevation) as the single environment does."""
+    sc = short6.with_({"terrain.grade_deg": 4.0})
+    vec = SnowormVectorEnv(2, sc)
+    single = SnowormEnv(sc)
+    o1, _ = vec.reset(seed=0)
+    o2, _ = single.reset(seed=0)
+    a = np.full((2, 6), 0.4, np.float32)
+    for _ in range(5):
+        o1, *_ = vec.step(a)
+        o2, *_ = single.step(a[0])
+    np.testing.assert_allclose(o1[0], o2, rtol=0, atol=TOL)
+    np.testing.assert_allclose(o1[1], o2, rtol=0, atol=TOL)
