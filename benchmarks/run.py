@@ -296,6 +296,56 @@ def bench_controllers(repeats, report):
     return out
 
 
+# ---------------------------------------------------------------- reinforcement learning (issue 27)
+RL_TARGETS = {
+    "rl_single_speedup": (">=", 3.0, "SnowormEnv random actions / main's env (steps/s, dt 0.1 s)"),
+    "rl_vector64_speedup": (">=", 15.0, "vector env B = 64 / SnowormEnv (env-steps/s)"),
+}
+TARGETS.update(RL_TARGETS)
+
+
+def _rl_rate(env, steps, vector=False):
+    """Env-steps per second of ``steps`` random-action steps (episodes restarted as they end)."""
+    env.reset(seed=0)
+    n = getattr(env, "num_envs", 1)
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        out = env.step(env.action_space.sample())
+        if not vector and (out[2] or out[3]):
+            env.reset()
+    return n * steps / (time.perf_counter() - t0)
+
+
+def bench_rl(repeats, report, steps=200, batch=64):
+    """Issue 27: random-action env-steps/s on tow6_uniform at dt 0.1 s, all interleaved (one run of
+    each per round, best of ``repeats`` rounds): main's environment (benchmarks/env_baseline.py,
+    default solver), the new SnowormEnv (default: VODE restarted when the command changes; and on
+    LSODA), and the vector environment with B = ``batch`` (``steps / 4`` periods; default VODE with
+    its tolerances / sqrt(B), and on LSODA)."""
+    import warnings
+    warnings.filterwarnings("ignore", module="gymnasium")     # the baseline's unnormalised spaces
+    from benchmarks.env_baseline import SnowormEnv as BaselineEnv
+    from snoworm.env import SnowormEnv, SnowormVectorEnv
+    sc = load_scenario(SC / "tow6_uniform.yaml")
+    envs = {"main's SnowormEnv (LSODA, restarted every period)": (BaselineEnv(sc, dt_s=0.1), False),
+            "SnowormEnv (VODE, default)": (SnowormEnv(sc, dt_s=0.1), False),
+            "SnowormEnv (method LSODA)": (SnowormEnv(sc, dt_s=0.1, method="LSODA"), False),
+            f"SnowormVectorEnv B = {batch}": (SnowormVectorEnv(batch, sc, dt_s=0.1), True),
+            f"SnowormVectorEnv B = {batch} (method LSODA)": (SnowormVectorEnv(batch, sc, dt_s=0.1, method="LSODA"), True)}
+    best = dict.fromkeys(envs, 0.0)
+    for _ in range(repeats):
+        for label, (env, vector) in envs.items():
+            best[label] = max(best[label], _rl_rate(env, steps // 4 if vector else steps, vector))
+    for label, rate in best.items():
+        report(f"  {label:52s} {rate:8.1f} env-steps/s")
+    labels = list(envs)
+    out = {"rates": best, "batch": batch, "steps": steps,
+           "single_speedup": best[labels[1]] / best[labels[0]], "vector_speedup": best[labels[3]] / best[labels[1]]}
+    report(f"  SnowormEnv / main's env: {out['single_speedup']:.2f}x; vector B = {batch} / SnowormEnv: "
+           f"{out['vector_speedup']:.2f}x (vector / main's env: {best[labels[3]] / best[labels[0]]:.1f}x)")
+    return out
+
+
 # ---------------------------------------------------------------- start-up (issue 16): whole processes
 #: whole-process ratio targets: command / its import floor, both timed in the same run
 STARTUP_TARGETS = {
@@ -364,7 +414,10 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smaller sweeps (40 cases, 1,000 for memory), fewer repeats")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results.json"), help="JSON output file")
+    ap.add_argument("--only", choices=["rl"], help="run only this section (rl: the Gymnasium environments)")
     args = ap.parse_args(argv)
+    if args.only == "rl":
+        return main_rl(args)
     lines = []
 
     def report(s):
@@ -394,6 +447,8 @@ def main(argv=None):
     report("Start-up (issue 16: whole processes against their import floors, interleaved, best of "
            f"{repeats + 2} rounds):")
     res["startup"] = bench_startup(repeats + 2, report)
+    report(f"Gymnasium environments (issue 27: tow6_uniform, dt 0.1 s, random actions, interleaved, best of {repeats} rounds):")
+    res["rl"] = bench_rl(repeats, report)
 
     sc = res["scenarios"]
     values = {
@@ -412,6 +467,7 @@ def main(argv=None):
         "simulator_step_rtf": res["controllers"]["simulator_step"]["rtf"],
     }
     values.update(startup_values(res["startup"]))
+    values.update(rl_values(res["rl"]))
     if res["memory"]["cases"] < 10_000:
         report(f"  (memory measured on {res['memory']['cases']} cases; rows are ~1 kB each, so 10,000 cases add "
                f"~{(10_000 - res['memory']['cases']) * 1e-3:.0f} MB at most to the figure below)")
@@ -426,6 +482,24 @@ def main(argv=None):
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(res, indent=2, default=float) + "\n")
     print(f"wrote {args.out}")
+
+
+def main_rl(args):
+    """``--only rl``: the Gymnasium rows alone (written to ``--out``)."""
+    res = {"cores": os.cpu_count(), "python": platform.python_version(), "numpy": np.__version__}
+    print("Gymnasium environments (issue 27: tow6_uniform, dt 0.1 s, random actions, interleaved, best of "
+          f"{2 if args.quick else 3} rounds):", flush=True)
+    res["rl"] = bench_rl(2 if args.quick else 3, lambda s: print(s, flush=True))
+    for key, val in rl_values(res["rl"]).items():
+        v, t = verdict(key, val)
+        print(f"  {v}  {TARGETS[key][2]:60s} {val:8.3g}  (target {t})")
+    Path(args.out).write_text(json.dumps(res, indent=2, default=float) + "\n")
+    print(f"wrote {args.out}")
+
+
+def rl_values(rows):
+    """The RL ratios for the target table."""
+    return {"rl_single_speedup": rows["single_speedup"], "rl_vector64_speedup": rows["vector_speedup"]}
 
 
 if __name__ == "__main__":

@@ -15,7 +15,8 @@ run_sweep(scenario, sets, ...)      -> SweepTable (``.to_pandas()``); load_sweep
 Mode, ModeConfig, register_mode     -> add a mobility mode of your own
 Simulator(scenario)                 -> reset() / step(command, dt) -> Observation; result() -> Result
 mode: {type: controller, ...}       -> your own discrete-time controller (docs/controllers.md)
-snoworm.env.SnowormEnv              -> a Gymnasium environment (extra: gym)
+import snoworm.env                  -> registers the Gymnasium env "snoworm/Snoworm-v0" and its vector
+                                       env (extra: gym; ``import snoworm`` never imports gymnasium)
 
 The layers and their modules are described in docs/architecture.md.
 """
