@@ -14,7 +14,7 @@ __all__ = ["SnowormEnv", "make_env"]
 
 
 class SnowormEnv(gymnasium.Env):
-    """A scenario's chain as a Gymnasium environment (see the module docstring for spaces and reward).
+    """A scenario's chain as a Gymnasium environment (spaces, reward and solver: :mod:`snoworm.env`).
 
     Parameters
     ----------
@@ -22,12 +22,13 @@ class SnowormEnv(gymnasium.Env):
         The scenario, a shipped scenario's name or a YAML path (default ``"tow6_uniform"``).
     reward : callable, optional
         ``reward(prev_obs, obs, info) -> float`` with physical Observations; default
-        :func:`default_reward` with ``energy_weight``.
+        :func:`snoworm.env.core.default_reward` with ``energy_weight``.
     dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s
-        As :class:`EnvCore`.
+        As :class:`snoworm.env.core.EnvCore`.
     method : str or None
-        Solver for the control periods (default ``"VODE"``: history kept across periods);
-        None: the scenario's ``simulation.method``.  Tolerances are the scenario's.
+        Solver for the control periods (default ``"VODE"``: restarted at a step whose command
+        changed, carried on across a held one); None: the scenario's ``simulation.method``.
+        Tolerances are the scenario's.
     record : bool
         Keep every step for ``env.sim.result()`` (memory grows with the episode); default False.
     render_mode : None

@@ -12,9 +12,11 @@ action map, observation normalisation, default reward, termination and truncatio
 :class:`~snoworm.env.core.EnvCore`).  A control period has no gait events, so every member's interval
 ends at the same time: the B chains are stacked (:meth:`ChainModel.stack`, the kernel with one
 more leading axis) and integrated over the period by the driver's interval solve
-(:func:`snoworm.simulation.driver.solve_interval`), on VODE restarted at every period with its tolerances
-divided by sqrt(B): VODE's error test is a weighted RMS norm over the whole stack, and with
-those tolerances a stack that passes it has every member within the RMS norm it has alone.
+(:func:`snoworm.simulation.driver.solve_interval`), on VODE with its tolerances divided by
+sqrt(B), restarted at a period whose command changed and carried on while every member holds its
+command (as the single environment): VODE's error test is a weighted RMS norm over the whole
+stack, and with those tolerances a stack that passes it has every member within the RMS norm it
+has alone.
 (LSODA, which a batched sweep uses for its max-norm test, took ~585 evaluations a period for
 B = 64 against VODE's ~290, and scipy 1.17.1's LSODA keeps ~90 kB of every solver it creates:
 memory would grow with every period.)  The model does not depend on time, so members at
@@ -92,8 +94,8 @@ class SnowormVectorEnv(VectorEnv):
         if method is not None and method != sc.simulation.method:
             sc = sc.with_({"simulation.method": method})
         self.scenario, self.dt_s, self.render_mode = sc, core.dt_s, None
-        #: solver options kept over the periods; VODE on the stack, restarted at every period
-        self._opts = {"vode_stack": True, "continue": False}
+        #: solver options kept over the periods: VODE on the stack (see :meth:`step`)
+        self._opts, self._command = {"vode_stack": True, "continue": False}, None
         self.single_action_space = core.single_action_space
         self.single_observation_space = core.single_observation_space
         self.action_space = batch_space(self.single_action_space, B)
@@ -154,7 +156,12 @@ class SnowormVectorEnv(VectorEnv):
         if not self._started:
             raise ResetNeeded("SnowormVectorEnv.step: call reset() before the first step")
         core, B = self.core, self.num_envs
-        ctl = self._cmd.apply(core.physical_action(actions, batch=B))
+        command = core.physical_action(actions, batch=B)
+        held = self._command is not None and all(np.array_equal(command[k], self._command[k]) for k in command)
+        # VODE: restarted at every period, but carried on while every member holds its command (a
+        # member reset in between changes the state, and the stepper then restarts by itself)
+        self._opts["continue"], self._command = held, command
+        ctl = self._cmd.apply(command)
         restart = self._autoreset.copy()
         if restart.any():           # NEXT_STEP autoreset: these members start again; their action is ignored
             self._reset_members(restart)
