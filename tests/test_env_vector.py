@@ -93,7 +93,7 @@ def test_next_step_autoreset_is_per_member(short6):
     vec = SnowormVectorEnv(3, sc, stall_time_s=0.3)
     obs0, _ = vec.reset(seed=0)
     go = np.array([-1.0, 0.4, 0.4], np.float32)             # member 0: wheels held at zero speed: it stalls
-    for k in range(3):
+    for _ in range(3):
         obs, rew, term, trunc, info = vec.step(np.tile(go[:, None], 6))
     assert term.tolist() == [True, False, False] and not trunc.any()
     obs, rew, term, trunc, info = vec.step(np.tile(go[:, None], 6))

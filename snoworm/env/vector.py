@@ -220,7 +220,7 @@ class SnowormVectorEnv(VectorEnv):
 
     def _solve_members(self, ctl, t_eval):
         """Each member's period alone (the fallback of :meth:`_solve`)."""
-        B, n_s = self.num_envs, self._y0.size
+        B = self.num_envs
         sim, t0 = self.scenario.simulation, self._T
         ys = np.repeat(self._y[None, :, :], t_eval.size, axis=0)
         failed, errors = np.zeros(B, bool), {}
