@@ -40,7 +40,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import drivetrain, feedback, links as link_law, terrain
-from .model import jacobian
+from .model import floatkernel, jacobian
 from .model.arrays import LinkArrays, SegmentArrays, StateLayout
 from .model.inputs import Controls
 from .slope import ElevationProfile
@@ -125,6 +125,9 @@ class ChainModel:
         self._m = seg.mass_kg.astype(float)
         self._bands = self._fd = None
         self._prepare_kernel()
+        #: the float kernel of a single short chain (None: batches and long chains use :meth:`evaluate`)
+        self.float_kernel = (floatkernel.FloatKernel(self) if not self.batch_shape and self.n <= floatkernel.MAX_SEGMENTS
+                             else None)
 
     def _prepare_kernel(self):
         """Derived constants of the kernel, computed once (micro-optimisations, same arithmetic).
@@ -167,25 +170,36 @@ class ChainModel:
         cached, d = self._ctl_cache
         if cached is ctl:
             return d
-        on = np.asarray(ctl.motor_on, float)[..., None]       # on_mask None: all on, no masking (same result)
-        d = {"on": on, "w_ref": (ctl.speed_sp_mps / self.seg.wheel_radius_m)[..., None],
-             "on_mask": None if np.all(on == 1.0) else on,
-             "torque": (np.asarray(ctl.torque_active) > 0)[..., None] if np.any(ctl.torque_active) else None,
-             "torque_cmd": np.asarray(ctl.torque_cmd_Nm, float)[..., None]}
-        if self.has_joints and self.n > 1:
-            d["neg_dir"] = -ctl.joint_dir
-            d["neg_vt"] = -ctl.joint_vtarget_mps
-            d["length_mode"] = ctl.joint_length_mode > 0
-            d["active"] = ctl.joint_active * self.links.prismatic
-            # which parts of the joint law this interval needs (constant within the interval,
-            # so skipping the others changes no result; see _joint_rate)
-            moving = d["active"] != 0
-            d["any_active"] = bool(np.any(moving))
-            d["any_length"] = bool(np.any(d["length_mode"] & moving))
-            d["any_force"] = bool(np.any(~d["length_mode"] & moving))
-            d["any_kv"] = bool(np.any(np.asarray(ctl.joint_kv) != 0))
-            d["any_ka"] = bool(np.any(np.asarray(ctl.joint_ka) != 0))
+        d = self.control_arrays(ctl, self.control_flags(ctl))
         self._ctl_cache = (ctl, d)
+        return d
+
+    def control_flags(self, ctl: Controls) -> dict:
+        """Which parts of the laws act in an interval (constant within it, so skipping the others
+        changes no result): the kernel's branches on the controls, from their values."""
+        f = {"all_on": bool(np.all(np.asarray(ctl.motor_on, float) == 1.0)),
+             "torque": (np.asarray(ctl.torque_active) > 0)[..., None] if np.any(ctl.torque_active) else None}
+        if self.has_joints and self.n > 1:
+            f["length_mode"] = np.asarray(ctl.joint_length_mode) > 0
+            moving = np.asarray(ctl.joint_active, float) * self.links.prismatic != 0
+            f["moving"] = moving
+            f["any_active"] = bool(np.any(moving))
+            f["any_length"] = bool(np.any(f["length_mode"] & moving))
+            f["any_force"] = bool(np.any(~f["length_mode"] & moving))
+            f["any_kv"] = bool(np.any(np.asarray(ctl.joint_kv) != 0))
+            f["any_ka"] = bool(np.any(np.asarray(ctl.joint_ka) != 0))
+        return f
+
+    def control_arrays(self, ctl: Controls, flags: dict) -> dict:
+        """The arrays the kernel takes from the controls, with the ``flags`` of :meth:`control_flags`
+        (arithmetic only: the float kernel, :mod:`snoworm.model.floatkernel`, traces it on symbols)."""
+        on = _as_float(ctl.motor_on)[..., None]       # on_mask None: all on, no masking (same result)
+        d = dict(flags, on=on, w_ref=(_as_float(ctl.speed_sp_mps) / self.seg.wheel_radius_m)[..., None],
+                 on_mask=None if flags["all_on"] else on, torque_cmd=_as_float(ctl.torque_cmd_Nm)[..., None])
+        if self.has_joints and self.n > 1:
+            d["neg_dir"] = -_as_float(ctl.joint_dir)
+            d["neg_vt"] = -_as_float(ctl.joint_vtarget_mps)
+            d["active"] = _as_float(ctl.joint_active) * self.links.prismatic
         return d
 
     @classmethod
@@ -280,7 +294,7 @@ class ChainModel:
         return jacobian.to_sparse(self.jacobian_banded(t, y, ctl), *self.bandwidths())
 
     # ------------------------------------------------------------------ kernel
-    def evaluate(self, Y, ctl: Controls, outputs: bool = False):
+    def evaluate(self, Y, ctl: Controls, outputs: bool = False, cd: dict | None = None):
         """All forces and derivatives for unpacked states ``Y`` of shape ``(..., N, n_s)``.
 
         Returns
@@ -290,12 +304,14 @@ class ChainModel:
         out : dict or None
             With ``outputs=True``: named intermediate quantities (per axle arrays have a
             trailing axis of 2: front, rear), used for results after the solve.
+
+        ``cd``: the arrays of :meth:`control_arrays` for ``ctl`` (default: computed and cached).
         """
         tp, L = self._tpk, self.layout
         x, v = Y[..., L.x], Y[..., L.v]
         w, integ = Y[..., L.omega], Y[..., L.integral]
         R = self._R
-        cd = self._controls(ctl)
+        cd = self._controls(ctl) if cd is None else cd
         V = v[..., None]
         # normal load per wheel and gravity along the track: constant on level ground (G None) or a constant grade
         Fn, G = (self._Fn_k, self._G_const) if self.elevation is None or self._G_const is not None else self.grade_terms(x)[2:]
@@ -324,7 +340,7 @@ class ChainModel:
         # chassis: the net link force on segment k is T_{k-1} - T_k (T_{-1} = 0, T_{N-1} = tow)
         net = Ft - Ftr
         wheel_net = self.wheels_per_axle * (net[..., 0] + net[..., 1])
-        Tpad = np.empty(T.shape[:-1] + (self.n + 1,))
+        Tpad = np.empty_like(T, shape=T.shape[:-1] + (self.n + 1,))
         Tpad[..., 0] = 0.0
         Tpad[..., 1:-1] = T
         Tpad[..., -1] = self.tow_force_N
@@ -422,6 +438,19 @@ class ChainModel:
         return rate * cd["active"]
 
     def rhs(self, t, y, ctl: Controls):
-        """``dy/dt`` for :func:`scipy.integrate.solve_ivp` (pure: records nothing)."""
+        """``dy/dt`` for :func:`scipy.integrate.solve_ivp` (pure: records nothing).
+
+        A single chain of at most :data:`~snoworm.model.floatkernel.MAX_SEGMENTS` segments runs on
+        the float kernel generated from :meth:`evaluate` (:attr:`float_kernel`); others on
+        :meth:`evaluate` itself.
+        """
+        fk = self.float_kernel
+        if fk is not None:
+            return fk(y, ctl)
         dY, _ = self.evaluate(y.reshape(self.layout.shape), ctl)
         return dY.reshape(-1)
+
+
+def _as_float(a):
+    """A control array as floats; symbolic arrays of the float kernel's trace as they are."""
+    return a if getattr(a, "dtype", None) == object else np.asarray(a, float)

@@ -1,0 +1,172 @@
+"""The float kernel (snoworm.model.floatkernel) against the NumPy kernel it is generated from.
+
+Both evaluate the same law code: the float kernel is traced from ``ChainModel.evaluate``.  They
+differ only by rounding (the float kernel uses :mod:`math` where NumPy uses its own elementwise
+functions), so they are compared to 1e-10 relative: each derivative against the largest
+magnitude of the same field over the chain and the states compared (a wheel's acceleration
+that cancels to ~1e-7 rad/s^2 at a steady state, from torques of tens of newton-metres, is
+compared at the scale of wheel accelerations, not at its own).
+"""
+import functools
+
+import numpy as np
+import pytest
+
+from snoworm import load_scenario, simulate
+from snoworm.dynamics import ChainModel, Controls
+from snoworm.model import floatkernel
+from snoworm.model.floatkernel import FloatKernel, MAX_SEGMENTS
+from tests.conftest import SCENARIOS, busy_controls, model_for, random_state
+
+SHIPPED = sorted(p.stem for p in SCENARIOS.glob("*.yaml"))
+REL = 1e-10
+
+
+def numpy_rhs(m, y, ctl):
+    return m.evaluate(m.unpack(y), ctl)[0].reshape(-1)
+
+
+def scaled_difference(m, a, b):
+    """max |a - b| / (largest |b| of the same field over the chain and the states), over every derivative.
+
+    ``a``, ``b``: one flat derivative each, or a list of them (states compared together)."""
+    A = np.stack([m.unpack(x) for x in (a if isinstance(a, list) else [a])])
+    B = np.stack([m.unpack(x) for x in (b if isinstance(b, list) else [b])])
+    scale = np.maximum(np.max(np.abs(B), axis=(0, 1), keepdims=True), 1e-300)
+    return float(np.max(np.abs(A - B) / scale))
+
+
+@functools.lru_cache(maxsize=None)
+def recorded(name):
+    """The controls a shipped scenario's run used (each distinct object once) and states met on the way."""
+    sc = load_scenario(SCENARIOS / f"{name}.yaml")
+    seen, states, calls = {}, [], [0]
+    call = FloatKernel.__call__
+
+    def spy(self, y, ctl):
+        seen.setdefault(id(ctl), ctl)
+        calls[0] += 1
+        if calls[0] % 23 == 1 and len(states) < 400:
+            states.append(np.array(y))
+        return call(self, y, ctl)
+    FloatKernel.__call__ = spy
+    try:
+        simulate(sc)
+    finally:
+        FloatKernel.__call__ = call
+    return sc, list(seen.values()), states
+
+
+def states_along_track(m, rng, k):
+    """``k`` random states; with an X_t profile the chain is moved along the whole table."""
+    prof = m.profile
+    out = []
+    for _ in range(k):
+        y = random_state(m, rng)
+        Y = m.unpack(y)
+        if not prof.is_constant:
+            Y[:, m.layout.x] += rng.uniform(prof.positions_m[0] - 5.0, prof.positions_m[-1] + 5.0)
+        out.append(y)
+    return out
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_float_kernel_equals_the_numpy_kernel_on_every_shipped_scenario(name):
+    sc, controls, states = recorded(name)
+    m = sc.chain_model
+    assert m.float_kernel is not None and controls and states
+    rng = np.random.default_rng(11)
+    fk = FloatKernel(m)
+    got, want = [], []
+    for j, ctl in enumerate(controls[:: max(1, len(controls) // 25)]):
+        ys = [states[(7 * j + i) % len(states)] for i in range(3)] + states_along_track(m, rng, 3)
+        got += [fk(y, ctl) for y in ys]
+        want += [numpy_rhs(m, y, ctl) for y in ys]
+    worst = scaled_difference(m, got, want)
+    assert worst <= REL, f"{name}: float kernel {worst:.2e} from the NumPy kernel"
+    assert fk.generated >= 1
+
+
+def test_every_branch_of_the_kernel_on_busy_controls():
+    """Force loops, free joints in force and length command, direct torques, motors off: both paths agree."""
+    rng = np.random.default_rng(5)
+    for overrides in ([("vehicle.links.type", "prismatic")], []):
+        m = model_for(SCENARIOS / "tow6_uniform.yaml", overrides, force_loop=True)
+        for k in range(20):
+            ctl = busy_controls(m, rng)
+            n = m.n
+            if k % 2:
+                ctl = ctl.with_(joint_length_mode=rng.integers(0, 2, n - 1).astype(float),
+                                joint_sref_m=rng.uniform(0.0, 0.3, n - 1), joint_ka=np.full(n - 1, 800.0),
+                                joint_anchor=np.arange(1, n))
+            if k % 3 == 0:
+                ctl = ctl.with_(torque_active=rng.integers(0, 2, n).astype(float), torque_cmd_Nm=rng.uniform(-30, 30, n),
+                                motor_on=rng.integers(0, 2, n).astype(float))
+            y = random_state(m, rng)
+            assert scaled_difference(m, m.float_kernel(y, ctl), numpy_rhs(m, y, ctl)) <= REL
+
+
+def test_one_generated_function_per_structure_of_controls():
+    m = model_for(SCENARIOS / "tow6_uniform.yaml")
+    rng = np.random.default_rng(2)
+    y = random_state(m, rng)
+    for _ in range(5):                   # new set-points, same structure: no new code
+        ctl = Controls.rolling(m.n, np.ones(m.n), rng.uniform(0, 2, m.n))
+        assert scaled_difference(m, m.float_kernel(y, ctl), numpy_rhs(m, y, ctl)) <= REL
+    assert m.float_kernel.generated == 1
+    off = Controls.rolling(m.n, np.r_[0.0, np.ones(m.n - 1)], np.ones(m.n))
+    m.float_kernel(y, off)
+    assert m.float_kernel.generated == 2
+
+
+def test_a_changed_law_reaches_both_paths(monkeypatch):
+    """Change a law function and a law constant: the NumPy kernel and the float kernel both move, together."""
+    from snoworm import feedback, terrain
+    m0 = model_for(SCENARIOS / "inchworm6.yaml")
+    rng = np.random.default_rng(4)
+    y = random_state(m0, rng)
+    ctl = busy_controls(m0, rng)
+    smooth = terrain.smooth_sign
+    monkeypatch.setattr(terrain, "smooth_sign", lambda u, scale: smooth(u, 3.0 * scale))
+    monkeypatch.setattr(feedback, "K_LENGTH", 7.0)
+    ctl = ctl.with_(joint_length_mode=np.ones(m0.n - 1), joint_sref_m=np.full(m0.n - 1, 0.05))
+    m = ChainModel(m0.seg, m0.links, m0.tp, m0.profile, m0.tow_force_N)
+    new_np, new_float = numpy_rhs(m, y, ctl), m.float_kernel(y, ctl)
+    monkeypatch.undo()
+    m_old = ChainModel(m0.seg, m0.links, m0.tp, m0.profile, m0.tow_force_N)
+    old_np, old_float = numpy_rhs(m_old, y, ctl), m_old.float_kernel(y, ctl)
+    assert scaled_difference(m, new_float, new_np) <= REL
+    assert scaled_difference(m, old_float, old_np) <= REL
+    assert scaled_difference(m, new_np, old_np) > 1e-3        # the change moved the NumPy kernel ...
+    assert scaled_difference(m, new_float, old_float) > 1e-3  # ... and the float kernel
+    s = m.layout.s
+    assert not np.allclose(m.unpack(new_float)[:-1, s], m.unpack(old_float)[:-1, s])   # K_LENGTH: the joints
+
+
+def test_long_chains_and_stacks_keep_the_numpy_kernel():
+    m = model_for(SCENARIOS / "tow6_uniform.yaml", [("vehicle.segments", MAX_SEGMENTS + 1)])
+    assert m.float_kernel is None
+    short = model_for(SCENARIOS / "tow6_uniform.yaml")
+    assert ChainModel.stack([short, short]).float_kernel is None
+
+
+def test_interp_is_numpys_interp():
+    xp, fp = (0.0, 1.0, 2.5, 4.0), (0.9, 0.3, 0.3, 0.7)
+    sl = tuple((fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) for j in range(3))
+    for x in np.r_[np.linspace(-1, 5, 61), xp]:
+        assert floatkernel.interp(float(x), xp, fp, sl) == pytest.approx(np.interp(x, xp, fp), rel=1e-15, abs=1e-15)
+
+
+def test_a_branch_on_a_state_cannot_be_traced():
+    """The trace refuses kernel code it cannot turn into float code (instead of freezing one branch)."""
+    m = model_for(SCENARIOS / "tow6_uniform.yaml")
+    ctl = Controls.rolling(m.n, np.ones(m.n), np.ones(m.n))
+    orig = m.evaluate
+
+    def branching(Y, c, outputs=False, cd=None):
+        if np.any(Y[..., 0] > 0):
+            pass
+        return orig(Y, c, outputs, cd)
+    m.evaluate = branching
+    with pytest.raises(TypeError):
+        floatkernel.generate(m, ctl)
