@@ -123,3 +123,16 @@ def test_output_samples_are_capped():
     raw["simulation"]["output_dt_s"] = 1e-9
     with pytest.raises(ScenarioError, match=r"^simulation\.output_dt_s: .* output samples .*, over the 150000 allowed"):
         scenario_from_dict(raw)
+
+
+def test_atol_scale_fields_names_a_state_field_and_a_positive_factor():
+    raw = _base(xt=0.5)
+    raw["simulation"]["atol_scale_fields"] = {"omega_frnt": 10}
+    with pytest.raises(ScenarioError, match=r"^simulation\.atol_scale_fields\.omega_frnt: not a state field; use one of "
+                                            r"x_m, .*Did you mean 'omega_front'"):
+        scenario_from_dict(raw)
+    raw["simulation"]["atol_scale_fields"] = {"omega_front": 0}
+    with pytest.raises(ScenarioError, match=r"^simulation\.atol_scale_fields\.omega_front: must be greater than 0"):
+        scenario_from_dict(raw)
+    raw["simulation"]["atol_scale_fields"] = {"omega_front": 10}
+    assert scenario_from_dict(raw).simulation.atol_scale_fields == {"omega_front": 10.0}

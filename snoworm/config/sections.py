@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model.arrays import LinkArrays, SegmentArrays
+from ..model.arrays import STATE_FIELDS, LinkArrays, SegmentArrays
 from ..slope import ElevationProfile, grade_patch_profile
 from ..terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
 from .routes import GRADE_DOMAIN, GradePatchConfig, check_grade_inputs, read_route
@@ -344,8 +344,18 @@ class SimulationConfig(Config):
     rtol: float = field(1e-5, gt=0, lt=1, doc="relative tolerance")
     atol_scale: float = field(1.0, gt=0, le=1e3, why="At 1e3 the position tolerance is already 1 mm.",
                               doc="multiplies the per-component absolute tolerances")
+    atol_scale_fields: dict[str, float] = field(
+        default_factory=dict, gt=0, le=1e3, why="At 1e3 a wheel speed's tolerance is already 1e-2 rad/s.",
+        doc="per state field (x_m, v_mps, omega_front, omega_rear, integral_front_Nm, integral_rear_Nm, q_mps, "
+            "s_m): a further factor on that field's absolute tolerance (e.g. {omega_front: 10, omega_rear: 10})")
     max_step_s: float | None = field(None, gt=0, le=BIG_TIME_S, why=FINITE_WHY, unit="s",
                                         doc="largest solver step (none: unlimited)")
     max_wall_s: float | None = field(None, gt=0, le=1e7, why=FINITE_WHY, unit="s",
                                         doc="wall-clock time after which the run stops with a solver failure "
                                             "(none: no limit)")
+
+    def _check(self, path):
+        for k in self.atol_scale_fields:
+            if k not in STATE_FIELDS:
+                raise ScenarioError(f"{path}.atol_scale_fields.{short_key(k)}: not a state field; use one of "
+                                    f"{', '.join(STATE_FIELDS)}.{suggest(k, STATE_FIELDS)}")

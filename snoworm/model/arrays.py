@@ -11,7 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LinkArrays", "SegmentArrays", "StateLayout"]
+__all__ = ["LinkArrays", "SegmentArrays", "STATE_FIELDS", "StateLayout"]
+
+#: Every field a segment's state block may hold, in block order (``q_mps`` with a force loop,
+#: ``s_m`` with prismatic joints).
+STATE_FIELDS = ("x_m", "v_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm", "q_mps", "s_m")
 
 
 @dataclass(frozen=True)
@@ -88,11 +92,7 @@ class StateLayout:
     """
 
     def __init__(self, n: int, force_loop: bool, joints: bool, batch_shape=()):
-        fields = ["x_m", "v_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm"]
-        if force_loop:
-            fields.append("q_mps")
-        if joints:
-            fields.append("s_m")
+        fields = [f for f in STATE_FIELDS if (f != "q_mps" or force_loop) and (f != "s_m" or joints)]
         self.fields = tuple(fields)
         self.index = {f: j for j, f in enumerate(fields)}
         self.n = int(n)

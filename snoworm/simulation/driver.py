@@ -25,6 +25,7 @@ from .guard import SolverError, check_sane, guarded
 from .vode import VodeStepper
 
 __all__ = ["SolverError", "AssembledRun", "assemble", "simulate", "simulate_batch", "batch_key", "BatchMember", "solver_options", "output_grid", "ATOL",
+           "atol_per_field",
            "solve_interval"]
 
 
@@ -57,7 +58,7 @@ def assemble(sc) -> AssembledRun:
 def solver_options(model: ChainModel, sim, method=None) -> dict:
     """``solve_ivp`` keyword arguments for the model: method, tolerances, Jacobian structure."""
     method = method or sim.method
-    opts = {"method": method, "rtol": sim.rtol, "atol": model.layout.per_state(ATOL) * sim.atol_scale}
+    opts = {"method": method, "rtol": sim.rtol, "atol": model.layout.per_state(atol_per_field(sim))}
     if sim.max_step_s is not None:
         opts["max_step"] = sim.max_step_s
     if method in ("LSODA", "VODE"):
@@ -66,6 +67,13 @@ def solver_options(model: ChainModel, sim, method=None) -> dict:
     elif method in ("BDF", "Radau"):
         opts["jac"] = model.jacobian_sparse
     return opts
+
+
+def atol_per_field(sim) -> dict:
+    """Absolute tolerance of each state field: :data:`ATOL` times ``simulation.atol_scale`` and the
+    field's factor in ``simulation.atol_scale_fields`` (1 where it has none)."""
+    f = sim.atol_scale_fields
+    return {k: v * sim.atol_scale * f.get(k, 1.0) for k, v in ATOL.items()}
 
 
 def output_grid(t0, t1, dt, include_start):
@@ -330,8 +338,8 @@ def batch_key(sc):
     sim = sc.simulation
     profile = "constant" if model.profile.is_constant else model.profile
     return (sig, model.n, model.layout.fields, tuple(model.links.prismatic.tolist()), sim.duration_s,
-            sim.output_dt_s, sim.rtol, sim.atol_scale, sim.method, sim.max_step_s, model.tp, profile,
-            model.elevation)
+            sim.output_dt_s, sim.rtol, sim.atol_scale, tuple(sorted(sim.atol_scale_fields.items())), sim.method,
+            sim.max_step_s, model.tp, profile, model.elevation)
 
 
 @dataclass
