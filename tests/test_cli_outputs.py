@@ -107,8 +107,8 @@ def test_run_shows_progress_in_simulated_time_on_stderr(tmp_path):
 def test_verbose_logs_solver_fallbacks(tmp_path, monkeypatch):
     import logging
 
-    from snoworm.simulation import driver
-    real = driver.solve_ivp
+    from snoworm.simulation import interval
+    real = interval.solve_ivp
     calls = []
 
     def flaky(*a, **kw):
@@ -116,7 +116,7 @@ def test_verbose_logs_solver_fallbacks(tmp_path, monkeypatch):
         if len(calls) == 1:
             raise ValueError("injected failure")
         return real(*a, **kw)
-    monkeypatch.setattr(driver, "solve_ivp", flaky)
+    monkeypatch.setattr(interval, "solve_ivp", flaky)
     try:
         r = run("-v", "run", "frostyboy_case1", "--out", tmp_path / "o", *SHORT, "--no-plot")
     finally:

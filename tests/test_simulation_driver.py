@@ -18,13 +18,14 @@ from tests.conftest import assert_metrics_close, shipped_result
 def test_solver_failure_raises(monkeypatch, scenario_path):
     import importlib
     S = importlib.import_module("snoworm.simulation.driver")
+    interval = importlib.import_module("snoworm.simulation.interval")
 
     class Bad:
         status, message, nfev, njev, nlu = -1, "Required step size is less than spacing between numbers.", 1, 0, 0
         t = np.array([0.0])
         y = np.zeros((36, 1))
         t_events = None
-    monkeypatch.setattr(S, "solve_ivp", lambda *a, **k: Bad())
+    monkeypatch.setattr(interval, "solve_ivp", lambda *a, **k: Bad())
     with pytest.raises(SolverError, match="step size"):
         S.simulate(load_scenario(scenario_path("tow6_uniform")))
 
@@ -35,22 +36,6 @@ def test_solver_failure_raises(monkeypatch, scenario_path):
 #: 10 424 / 290, 6 033 / 210 and 47 792 / 1 191; traverse_patch was 58 961 / 6 271 on LSODA)
 BUDGETS = {"tow6_uniform": (690, 23), "frostyboy_case3": (555, 10), "inchworm6": (10_250, 305), "inchworm2": (5_900, 190),
            "traverse_patch": (50_000, 1_325)}
-
-
-def test_atol_per_field_scales_only_the_named_fields(scenario_path):
-    from snoworm.simulation.driver import ATOL, atol_per_field, solver_options
-    sc = load_scenario(scenario_path("inchworm6"), [("simulation.atol_scale_fields", {"omega_rear": 7.0})])
-    sim = sc.simulation
-    got = atol_per_field(sim)
-    scale = sim.atol_scale * np.array([sim.atol_scale_fields.get(k, 1.0) for k in ATOL])
-    # the same products (in another order of multiplication: to rounding)
-    np.testing.assert_allclose(list(got.values()), np.array(list(ATOL.values())) * scale, rtol=1e-15)
-    assert got["omega_rear"] == pytest.approx(ATOL["omega_rear"] * sim.atol_scale * 7.0, rel=1e-15)
-    assert got["omega_front"] == ATOL["omega_front"] * sim.atol_scale    # no factor: unchanged
-    m = sc.chain_model
-    atol = solver_options(m, sim)["atol"]
-    assert atol[m.layout.flat_index(3, "omega_rear")] == got["omega_rear"]
-    assert atol[m.layout.flat_index(3, "s_m")] == got["s_m"]
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "traverse_patch" else n
@@ -95,11 +80,11 @@ def test_vode_matches_lsoda_within_tolerance(scenario_path):
 def test_vode_failure_falls_back_per_interval(monkeypatch, scenario_path):
     calls = []
 
-    def fail_every_other(self, t1, events=(), t_eval=None):
+    def fail_every_other(self, t1, events=(), t_eval=None, on_step=None):
         calls.append(self.t)
         if len(calls) % 2:
             raise VodeError(f"VODE failed near t = {self.t:.6g} s (istate -4)")
-        return real(self, t1, events, t_eval)
+        return real(self, t1, events, t_eval, on_step)
     real = VodeStepper.advance
     monkeypatch.setattr(VodeStepper, "advance", fail_every_other)
     res = _short_inchworm(scenario_path, "VODE")
@@ -110,12 +95,12 @@ def test_vode_failure_falls_back_per_interval(monkeypatch, scenario_path):
 
 def test_vode_every_method_failing_raises(monkeypatch, scenario_path):
     import importlib
-    S = importlib.import_module("snoworm.simulation.driver")
+    interval = importlib.import_module("snoworm.simulation.interval")
 
     def boom(*a, **k):
         raise ValueError("no luck")
     monkeypatch.setattr(VodeStepper, "advance", lambda self, *a, **k: boom())
-    monkeypatch.setattr(S, "solve_ivp", boom)
+    monkeypatch.setattr(interval, "solve_ivp", boom)
     with pytest.raises(SolverError, match="VODE: no luck; LSODA: no luck; BDF: no luck; Radau: no luck"):
         _short_inchworm(scenario_path, "VODE")
 
@@ -131,13 +116,14 @@ def test_batched_members_on_vode_are_stacked_on_lsoda(scenario_path):
 
 
 def test_vode_carries_its_history_across_simulator_steps(scenario_path):
-    """Simulator (opts["continue"]) on VODE: no restart per 10 ms step, same states, far less work."""
+    """Simulator (its IntervalSolver carries VODE's history) on VODE: no restart per 10 ms step, same states, far less work."""
     from snoworm.simulation.stepwise import Simulator
     sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.method", "VODE"), ("simulation.duration_s", 3)])
     runs = {}
     for cont in (True, False):
         sim = Simulator(sc)
         sim.reset()
+        sim._solver.carry_history = cont
         for k in range(300):
             sim.step({"wheel_speed_mps": [1.8] * 6} if k == 50 else None, 0.01, restart=not cont)
         runs[cont] = sim.result()
@@ -169,15 +155,15 @@ def test_progress_reports_simulated_time_and_changes_nothing(scenario_path):
 def test_solver_fallbacks_are_logged(monkeypatch, scenario_path, caplog):
     import logging
 
-    from snoworm.simulation import driver
-    real, calls = driver.solve_ivp, []
+    from snoworm.simulation import interval
+    real, calls = interval.solve_ivp, []
 
     def flaky(*a, **kw):
         calls.append(kw["method"])
         if len(calls) == 1:
             raise ValueError("injected")
         return real(*a, **kw)
-    monkeypatch.setattr(driver, "solve_ivp", flaky)
+    monkeypatch.setattr(interval, "solve_ivp", flaky)
     sc = load_scenario(scenario_path("frostyboy_case1")).with_({"simulation.duration_s": 1.0})
     with caplog.at_level(logging.INFO, logger="snoworm"):
         res = simulate(sc)

@@ -4,7 +4,8 @@ import pytest
 
 from snoworm import SolverError, load_scenario, simulate
 from snoworm.simulation import guard
-from snoworm.simulation.driver import assemble, output_grid, solve_interval
+from snoworm.simulation.driver import assemble
+from snoworm.simulation.interval import IntervalSolver, output_grid
 from snoworm.simulation.guard import WORK_BASE_NFEV, WORK_NFEV_PER_S, work_rate
 
 
@@ -55,16 +56,20 @@ def test_singular_matrix_is_a_solver_failure(scenario_path):
         simulate(sc)
 
 
-def test_solve_interval_is_under_the_work_limit_too(scenario_path):
-    """The public interval solve (snoworm.Simulator steps) counts its own budget from its start."""
-    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.max_step_s", 1e-7)])
+@pytest.mark.parametrize("method", ["LSODA", "VODE"])
+def test_interval_solver_is_under_the_work_limit_too(scenario_path, method, monkeypatch):
+    """The interval solve of snoworm.Simulator steps counts its budget from its first interval's
+    start, from the solver's own counter (VODE) or the calls it counts (solve_ivp)."""
+    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.max_step_s", 1e-7), ("simulation.method", method)])
+    monkeypatch.setattr(guard, "WORK_BASE_NFEV", 3_000)
     case = assemble(sc)
     y0 = case.mode.initial_state()
     ctl = case.mode.interval(0.0, y0).controls
-    stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0}
-    with pytest.raises(SolverError, match="work limit"):
-        solve_interval(case.model, ctl, 100.0, 101.0, y0, [], sc.simulation, output_grid(100.0, 101.0, 0.05, True),
-                       stats, "step", {})
+    solver = IntervalSolver(case.model, sc.simulation, "step")
+    with pytest.raises(SolverError, match="work limit: .* by t = 100"):
+        solver.solve(ctl, 100.0, 101.0, y0, (), output_grid(100.0, 101.0, 0.05, True))
+    # stopped within a step's worth of calls of the limit at the time reached (1e-7 s steps: ~3 000)
+    assert 3_000 <= solver.stats["nfev"] <= 3_000 + work_rate(sc.simulation) * 1e-3 + 20
 
 
 def test_progress_within_a_long_interval(monkeypatch):

@@ -107,15 +107,15 @@ def test_joint_force_and_length_commands_through_the_actuator():
 
 
 def test_solver_failure_leaves_the_simulator_at_the_step_start(tow6, monkeypatch):
-    import snoworm.simulation.stepwise as S
     from snoworm.simulation.driver import SolverError
+    from snoworm.simulation.interval import IntervalSolver
     sim = Simulator(tow6)
     sim.step({"wheel_speed_mps": [1.0] * 6}, 0.2)
     before = sim.observation()
 
     def boom(*a, **k):
         raise SolverError("every method failed (test)")
-    monkeypatch.setattr(S, "solve_interval", boom)
+    monkeypatch.setattr(IntervalSolver, "solve", boom)
     with pytest.raises(SolverError):
         sim.step({"wheel_speed_mps": [2.0] * 6}, 0.2)
     assert sim.t_s == before.t_s

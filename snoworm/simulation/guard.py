@@ -1,10 +1,10 @@
 """The guard around every solve: work limit, wall-time limit, solver breakdowns, sane states (issue 15).
 
-Kept apart from the interval driver (:mod:`snoworm.simulation.driver`): :func:`guarded` hands the
-driver a counting proxy of the model (:data:`WORK_BASE_NFEV` + :func:`work_rate` right-hand sides
-per simulated second, ``simulation.max_wall_s``) and turns the solver's own breakdowns into
-:class:`SolverError`; :func:`check_sane` checks a run's states afterwards.  Neither changes a
-number of a run that stays within the limits.
+Kept apart from the interval solve (:mod:`snoworm.simulation.interval`): :class:`WorkMeter` holds a
+run to :data:`WORK_BASE_NFEV` + :func:`work_rate` right-hand sides per simulated second and to
+``simulation.max_wall_s``, read from the solver's own counters; :func:`guarded` turns the solver's
+own breakdowns into :class:`SolverError`; :func:`check_sane` checks a run's states afterwards.
+None of them changes a number of a run that stays within the limits.
 """
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ import warnings
 
 import numpy as np
 
-__all__ = ["SolverError", "WORK_BASE_NFEV", "WORK_NFEV_PER_S", "SPEED_SANITY_FACTOR", "work_rate", "guarded",
-           "check_sane"]
+__all__ = ["SolverError", "WORK_BASE_NFEV", "WORK_NFEV_PER_S", "SPEED_SANITY_FACTOR", "work_rate", "WorkMeter", "PROGRESS_EVERY_S",
+           "guarded", "check_sane"]
 
 
 class SolverError(RuntimeError):
@@ -43,41 +43,64 @@ def work_rate(sim) -> float:
 PROGRESS_EVERY_S = 0.5
 
 
-class _Metered:
-    """The model as the solver sees it: ``rhs`` counts its calls against the work limit
-    (:data:`WORK_BASE_NFEV` + :data:`WORK_NFEV_PER_S` per simulated second reached), checks
-    ``simulation.max_wall_s`` and reports the time reached to ``progress`` within long intervals
-    (every :data:`PROGRESS_EVERY_S` of wall time); every other attribute is the model's own."""
+class WorkMeter:
+    """The work and wall-time limits of one run, read from the solver's own counters.
 
-    def __init__(self, model, sim, name, t0=0.0, progress=None):
-        self._model, self._sim, self._name, self._t0 = model, sim, name, float(t0)
-        self._n, self._t_max, self._wall0 = 0, float(t0), time.perf_counter()
-        self._rate = work_rate(sim)
-        self._progress, self._shown = progress, self._wall0
+    :class:`~snoworm.simulation.interval.IntervalSolver` calls :meth:`check` after every VODE step
+    with VODE's own count of right-hand sides, and counts the calls of the ``solve_ivp`` methods
+    in the one function it hands them (:meth:`counted`).  The limit is :data:`WORK_BASE_NFEV` +
+    :func:`work_rate` per simulated second from the time of the first interval, and
+    ``simulation.max_wall_s`` of wall time from the meter's creation.  ``progress(t_s, duration_s)``
+    hears of the time reached within long intervals, every :data:`PROGRESS_EVERY_S` of wall time.
+    """
 
-    def __getattr__(self, attr):
-        return getattr(self._model, attr)
+    def __init__(self, sim, name, progress=None):
+        self.name, self.rate, self.max_wall_s = name, work_rate(sim), sim.max_wall_s
+        self.duration_s = sim.duration_s
+        self.t0 = None
+        self.wall0 = self._shown = time.perf_counter()
+        self.progress = progress
 
-    def rhs(self, t, y, *args):
-        """The model's right-hand side, counted."""
-        self._n += 1
-        self._t_max = max(self._t_max, float(t))
-        if self._n > WORK_BASE_NFEV + self._rate * (self._t_max - self._t0):
+    def start(self, t):
+        """Count simulated time from ``t`` (the first interval's start; later calls keep it)."""
+        if self.t0 is None:
+            self.t0 = float(t)
+
+    def check(self, nfev, t):
+        """Raise :class:`SolverError` if ``nfev`` right-hand sides by time ``t`` exceed the limits."""
+        if nfev > WORK_BASE_NFEV + self.rate * (t - self.t0):
             raise SolverError(
-                f"work limit: {self._n} right-hand-side evaluations by t = {self._t_max:.6g} s of {self._name!r} "
-                f"(limit {WORK_BASE_NFEV} + {self._rate:.0f} per simulated second). The system is too stiff or "
+                f"work limit: {nfev} right-hand-side evaluations by t = {t:.6g} s of {self.name!r} "
+                f"(limit {WORK_BASE_NFEV} + {self.rate:.0f} per simulated second). The system is too stiff or "
                 "too fast to integrate: lower the large gains, stiffnesses, forces or speeds of the scenario, or "
                 "raise simulation.max_step_s / atol_scale if they are tiny.")
-        if self._sim.max_wall_s is not None and self._n % 256 == 0:
-            wall = time.perf_counter() - self._wall0
-            if wall > self._sim.max_wall_s:
-                raise SolverError(f"simulation.max_wall_s: {wall:.1f} s of wall time spent by t = {self._t_max:.6g} s "
-                                  f"of {self._name!r} (limit {self._sim.max_wall_s:g} s). Shorten the run, relax "
+        if self.max_wall_s is not None:
+            wall = time.perf_counter() - self.wall0
+            if wall > self.max_wall_s:
+                raise SolverError(f"simulation.max_wall_s: {wall:.1f} s of wall time spent by t = {t:.6g} s "
+                                  f"of {self.name!r} (limit {self.max_wall_s:g} s). Shorten the run, relax "
                                   "simulation.rtol or raise max_wall_s.")
-        if self._progress is not None and self._n % 64 == 0 and time.perf_counter() - self._shown >= PROGRESS_EVERY_S:
+        if self.progress is not None and time.perf_counter() - self._shown >= PROGRESS_EVERY_S:
             self._shown = time.perf_counter()
-            self._progress(min(self._t_max, self._sim.duration_s), self._sim.duration_s)
-        return self._model.rhs(t, y, *args)
+            self.progress(min(t, self.duration_s), self.duration_s)
+
+    def counted(self, fun, nfev0):
+        """``fun(t, y, *args)`` counting its calls from ``nfev0`` against the limits (for ``solve_ivp``);
+        the count so far is the returned function's ``calls[0]``."""
+        calls, t_max = [nfev0], [self.t0]
+        check, rate, t0 = self.check, self.rate, self.t0
+        wall = self.max_wall_s is not None or self.progress is not None
+        base = WORK_BASE_NFEV
+
+        def f(t, y, *args):
+            n = calls[0] = calls[0] + 1
+            if t > t_max[0]:
+                t_max[0] = t
+            if n > base + rate * (t_max[0] - t0) or (wall and n & 63 == 0):
+                check(n, t_max[0])
+            return fun(t, y, *args)
+        f.calls = calls
+        return f
 
 
 def check_sane(model, pieces, name):
@@ -102,14 +125,13 @@ def check_sane(model, pieces, name):
                                   "the chain has run away. Check forces, gains and speeds for extreme values.")
 
 
-def guarded(fn, model, sim, name, t0=0.0, progress=None):
-    """``fn(metered model)`` under the work limit from ``t0``, with numpy/scipy warnings kept quiet
-    and the solver's own breakdowns (singular matrices, ...) as :class:`SolverError`; ``progress`` hears of
-    the time reached within long intervals."""
+def guarded(fn, name):
+    """``fn()`` with numpy/scipy warnings kept quiet and the solver's own breakdowns (singular
+    matrices, ...) as :class:`SolverError`."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            return fn(_Metered(model, sim, name, t0, progress))
+            return fn()
         except (RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
             if type(exc) not in (RuntimeError, ArithmeticError, ZeroDivisionError, OverflowError,
                                  np.linalg.LinAlgError):

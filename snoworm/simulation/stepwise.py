@@ -10,7 +10,7 @@
 The chain, its initial state, the solver, its tolerances and the output grid are those of
 :func:`snoworm.simulate` for the same scenario (the scenario's ``mode`` only gives the initial
 state; the commands replace its control).  Each step is one interval of the driver's solver
-(:func:`snoworm.simulation.driver.solve_interval`); the ``controller`` mode
+(:meth:`snoworm.simulation.interval.IntervalSolver.solve`, one solver per reset); the ``controller`` mode
 (:mod:`snoworm.modes.controller`) runs the same intervals with the same observations and
 commands (:mod:`snoworm.modes.command`), so a controller gives the same result either way.
 """
@@ -21,7 +21,8 @@ import time
 
 import numpy as np
 
-from .driver import assemble, output_grid, solve_interval
+from .driver import assemble
+from .interval import IntervalSolver, output_grid
 from ..modes import Mode
 from ..modes.command import COMMAND_KEYS, CommandState, Observation, observe
 from ..results.result import Result
@@ -70,8 +71,10 @@ class Simulator:
         self._y = self._y0.copy()
         self.commands = CommandState(self.model)
         self._pieces, self._phases, self._samples = [], [], 0
-        self._stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "wall_time_s": 0.0}
-        self._opts = {"continue": True}     # VODE (simulation.method) carries its history across steps
+        # VODE (simulation.method) carries its history across steps; the solver owns the counters
+        self._solver = IntervalSolver(self.model, self.scenario.simulation, "step", carry_history=True)
+        self._stats = self._solver.stats
+        self._stats["wall_time_s"] = 0.0
         self.last_step = None
         return self.observation()
 
@@ -117,8 +120,7 @@ class Simulator:
         t_eval = output_grid(t, t1, sim.output_dt_s, include_start=not (self._phases and self.record))
         self._opts["continue"] = not restart
         try:
-            ts, ys, t_next, y_next, _ = solve_interval(self.model, ctl, t, t1, self._y, [], sim, t_eval,
-                                                       self._stats, "step", self._opts)
+            ts, ys, t_next, y_next, _ = self._solver.solve(ctl, t, t1, self._y, (), t_eval, "step")
         except Exception:
             self.commands.restore(saved)
             raise

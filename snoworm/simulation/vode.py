@@ -183,7 +183,11 @@ class VodeStepper:
         return (s[:, None] ** np.arange(q + 1)) @ yh.T
 
     # ------------------------------------------------------------------ intervals
-    def advance(self, t1, events=(), t_eval=None):
+    def nfev_now(self) -> int:
+        """Right-hand-side calls since construction, read from VODE's own counter (cheap: for work limits)."""
+        return self._done["nfev"] + (int(self._it.iwork[_IW_NFE]) if self.t is not None else 0)
+
+    def advance(self, t1, events=(), t_eval=None, on_step=None):
         """Integrate from :attr:`t` to ``t1`` or to the first terminal event, whichever comes first.
 
         Parameters
@@ -193,9 +197,11 @@ class VodeStepper:
         events : sequence of callable
             Terminal events ``ev(t, y) -> float`` with an optional ``direction`` attribute
             (as in ``solve_ivp``: > 0 only rising, < 0 only falling, 0 either).
-        t_eval : array_like, optional
+        t_eval : sequence of float, optional
             Increasing output times within ``[t, t1]``; those at or before the stepper's
             current time are taken from its current state.
+        on_step : callable, optional
+            ``on_step(t, nfev)`` after every step, with :meth:`nfev_now` (work limits; it may raise).
 
         Returns
         -------
@@ -210,9 +216,12 @@ class VodeStepper:
             After an event the stepper stands beyond ``t_end``: call :meth:`restart` before
             integrating on.
         """
-        grid = np.asarray([] if t_eval is None else t_eval, float)
+        # the output grid as a Python list walked by index: no NumPy call per step
+        grid = [] if t_eval is None else (t_eval if isinstance(t_eval, list) else np.asarray(t_eval, float).tolist())
+        ng, gi, t_now = len(grid), 0, self.t
         out_t, out_y = [], []
-        gi = int(np.searchsorted(grid, self.t, side="right"))
+        while gi < ng and grid[gi] <= t_now:
+            gi += 1
         if gi:
             out_t.extend(grid[:gi])
             out_y.extend([self.y.copy()] * gi)
@@ -220,9 +229,18 @@ class VodeStepper:
         g = [ev(self.t, self.y) for ev in events]
         while True:
             self.step(t1)
-            hit, g = self._locate(events, dirs, g)
-            t_stop = hit[0] if hit else self.t
-            gj = int(np.searchsorted(grid, t_stop, side="right" if not hit else "left"))
+            if on_step is not None:
+                on_step(self.t, self.nfev_now())
+            hit = None
+            if events:
+                hit, g = self._locate(events, dirs, g)
+            gj = gi
+            if hit:
+                while gj < ng and grid[gj] < hit[0]:
+                    gj += 1
+            else:
+                while gj < ng and grid[gj] <= self.t:
+                    gj += 1
             if gj > gi:
                 out_t.extend(grid[gi:gj])
                 out_y.extend(self.dense(grid[gi:gj]))
