@@ -394,7 +394,7 @@ class ChainModel:
         if self.n == 1:
             if self.has_joints:
                 dY[..., L.s] = 0.0
-            T = np.zeros(x.shape[:-1] + (0,))
+            T = np.zeros_like(x, shape=x.shape[:-1] + (0,))
             return T, T, T
         rel = v[..., :-1] - v[..., 1:]
         stretch = x[..., :-1] - x[..., 1:] - self._L0

@@ -7,9 +7,11 @@ itself** (:meth:`snoworm.dynamics.ChainModel.evaluate`, and through it every law
 :mod:`snoworm.terrain`, :mod:`snoworm.drivetrain`, :mod:`snoworm.links`, :mod:`snoworm.feedback`)
 on symbolic arrays:
 
-* the state and the values of the controls are symbols; model parameters are numbers, so every
-  operation on parameters alone is computed once, by the same NumPy operation (constants folded);
-* every other operation is recorded as one line of Python (``t12 = t7 * t3``); NumPy's
+* the state, the values of the controls and the model's parameters are symbols; operations on
+  literal constants alone are computed there and then (by the same NumPy operation), operations
+  on parameters alone run once per model (hoisted out of the right-hand side: constants folded
+  per model), every other operation is one line of Python (``t12 = t7 * t3``) in the
+  right-hand side; NumPy's
   ``maximum``/``minimum`` become conditional expressions, ``tanh``/``sin``/``arctan``/``sqrt``
   the :mod:`math` functions, ``interp`` a bisection on the same table with NumPy's formula;
 * lines that do not reach a derivative are dropped, and temporaries used once are inlined.
@@ -19,17 +21,22 @@ reaches the NumPy path and this one alike (tests/test_model_floatkernel.py compa
 every shipped scenario and changes a law to check that both paths move).  Python-level branches
 of the kernel on the controls (which joints move, which segments run a force loop, ...) are
 taken at trace time, so one generated function serves every interval with the same *structure*
-of controls (:func:`structure_key`); the values of the controls are read at run time.  The
-code is Python bytecode (``compile``): no compiled extension, no JIT.
+of controls (:func:`structure_key`) and every model of the same structure (a sweep's cases
+share it; :data:`_SHARED`); the values of the controls are read at run time.  The code is
+Python bytecode (``compile``): no compiled extension, no JIT.
 """
 from __future__ import annotations
 
 import bisect
+import copy
 import math
-from dataclasses import fields as dc_fields
+import sys
+import types
+from dataclasses import fields as dc_fields, is_dataclass, replace
 
 import numpy as np
 
+from .. import drivetrain, feedback, links, terrain
 from .inputs import Controls
 
 __all__ = ["FloatKernel", "MAX_SEGMENTS", "STRUCTURAL_FIELDS", "structure_key"]
@@ -264,8 +271,9 @@ def _symbolic_controls(ctl: Controls):
     return Controls(**kw), k
 
 
-def _prune_and_inline(lines, outputs):
-    """Drop lines that reach no output; inline temporaries used exactly once."""
+def _prune_and_inline(lines, outputs, static_names):
+    """Drop lines that reach no output; split the rest into per-model lines (on parameters and
+    constants only) and per-call lines; inline per-call temporaries used exactly once."""
     uses = {}
     live = set(a.name for a in outputs if isinstance(a, Expr))
     kept = []
@@ -279,17 +287,22 @@ def _prune_and_inline(lines, outputs):
     for a in outputs:
         if isinstance(a, Expr):
             uses[a.name] = uses.get(a.name, 0) + 1
-    inline, body = {}, []
+    static = set(static_names)
+    inline, head, body = {}, [], []
     for name, src, deps in kept:
+        if all(d in static for d in deps):
+            static.add(name)
+            head.append(f"    {name} = {src}")
+            continue
         for d in sorted(set(deps), key=len, reverse=True):
             if d in inline:
                 src = _replace_name(src, d, f"({inline[d]})")
         if uses.get(name, 0) == 1:
             inline[name] = src
         else:
-            body.append(f"    {name} = {src}")
+            body.append(f"        {name} = {src}")
     outs = [f"({inline[a.name]})" if isinstance(a, Expr) and a.name in inline else _src(a) for a in outputs]
-    return body, outs
+    return head, body, outs
 
 
 def _replace_name(src, name, new):
@@ -310,46 +323,125 @@ def _replace_name(src, name, new):
         i = j + n
 
 
+#: attributes of a model the trace leaves as they are (objects, caches, the layout, integers)
+_NOT_PARAMETERS = {"float_kernel", "_fd", "_bands", "_ctl_cache", "layout", "profile", "tp", "batch_shape"}
+
+
+def _walk_parameters(model, leaf):
+    """A shallow copy of ``model`` with every float parameter replaced by ``leaf(value)``, in a fixed order.
+
+    Float arrays, Python floats, and the float fields of the dataclasses and tuples the model
+    holds (segment and link arrays, terrain coefficients, precomputed law factors) are
+    parameters; integers, flags, strings and objects are not.
+    """
+    def conv(v):
+        if isinstance(v, np.ndarray):
+            return leaf(v) if v.dtype.kind == "f" else v
+        if isinstance(v, float):
+            return leaf(v)
+        if isinstance(v, tuple):
+            return tuple(conv(x) for x in v)
+        if is_dataclass(v) and not isinstance(v, type):
+            return replace(v, **{f.name: conv(getattr(v, f.name)) for f in dc_fields(v)})
+        return v
+    pm = copy.copy(model)
+    for name, v in vars(model).items():
+        if name not in _NOT_PARAMETERS:
+            setattr(pm, name, conv(v))
+    return pm
+
+
+def _law_fingerprint(model):
+    """The law functions and constants as they are now, and the kernel's own methods: generated
+    code is shared only while they are the same objects (a law changed at run time, e.g. by a
+    test's monkeypatch, is traced anew)."""
+    items = []
+    for mod in (terrain, drivetrain, links, feedback, *(sys.modules[type(model).__module__],)):
+        items += [(k, v) for k, v in vars(mod).items() if isinstance(v, (types.FunctionType, float))]
+    items += [(k, v) for k, v in vars(type(model)).items() if isinstance(v, types.FunctionType)]
+    return tuple(items)
+
+
+def model_parameters(model):
+    """``(values, signature)``: the model's float parameters in trace order, and what a generated
+    function depends on besides them (sizes, flags, X_t table, torque-balance convention)."""
+    values, shapes = [], []
+
+    def leaf(v):
+        a = np.asarray(v, float)
+        shapes.append(a.shape)
+        values.extend(a.reshape(-1).tolist())
+        return v
+    _walk_parameters(model, leaf)
+    prof = model.profile
+    sig = (_law_fingerprint(model), model.n, model.layout.fields, model.force_loop, model.has_joints, model.tp.torque_balance,
+           None if getattr(prof, "is_constant", False) else prof, model._coef is None, tuple(shapes))
+    return values, sig
+
+
 def generate(model, ctl: Controls):
-    """Source and globals of the float right-hand side of ``model`` for controls shaped like ``ctl``."""
+    """Source and globals of ``make(P)``, which returns the float right-hand side ``rhs(y, c)`` of
+    ``model`` for controls shaped like ``ctl`` with the parameters ``P`` (:func:`model_parameters`)."""
     global _TRACE
     shape = model.layout.shape
     n_y = int(np.prod(shape))
     Y = _symbols("y", shape)
     sym_ctl, n_c = _symbolic_controls(ctl)
+    n_p = [0]
+
+    def leaf(v):
+        a = np.asarray(v, float)
+        arr = np.empty(a.shape, dtype=object)
+        flat = arr.reshape(-1)
+        for k in range(flat.size):
+            flat[k] = Expr(f"p{n_p[0]}")
+            n_p[0] += 1
+        return arr.view(SymArray) if isinstance(v, np.ndarray) else flat[0]
+    flags = model.control_flags(ctl)
+    pm = _walk_parameters(model, leaf)
     _TRACE = tr = _Trace()
     try:
         with np.errstate(all="ignore"):
-            cd = model.control_arrays(sym_ctl, model.control_flags(ctl))
-            dY, _ = model.evaluate(Y, sym_ctl, cd=cd)
+            cd = pm.control_arrays(sym_ctl, flags)
+            dY, _ = pm.evaluate(Y, sym_ctl, cd=cd)
     finally:
         _TRACE = None
     outputs = list(np.asarray(dY, dtype=object).reshape(-1))
-    body, outs = _prune_and_inline(tr.lines, outputs)
-    head = ["def rhs(y, c):"]
-    head.append(f"    {', '.join(f'y{k}' for k in range(n_y))}, = y")
+    params = [f"p{k}" for k in range(n_p[0])]
+    head, body, outs = _prune_and_inline(tr.lines, outputs, params)
+    lines = ["def make(P):"]
+    if params:
+        lines.append(f"    {', '.join(params)}, = P")
+    lines += head + ["    def rhs(y, c):", f"        {', '.join(f'y{k}' for k in range(n_y))}, = y"]
     if n_c:
-        head.append(f"    {', '.join(f'c{k}' for k in range(n_c))}, = c")
-    src = "\n".join(head + body + [f"    return _array([{', '.join(outs)}])"]) + "\n"
+        lines.append(f"        {', '.join(f'c{k}' for k in range(n_c))}, = c")
+    lines += body + [f"        return _array([{', '.join(outs)}])", "    return rhs"]
     glb = {"_array": np.array, "_tanh": math.tanh, "_sin": math.sin, "_atan": math.atan, "_sqrt": math.sqrt,
            "_exp": math.exp, "_interp": interp, "inf": math.inf, "nan": math.nan, **tr.consts}
-    return src, glb
+    return "\n".join(lines) + "\n", glb
+
+
+#: generated ``make`` functions by (model signature, structure of controls), shared by every model
+#: of the process (the cases of a sweep differ in parameters only)
+_SHARED = {}
 
 
 class FloatKernel:
     """The float right-hand side of one chain, generated per structure of the controls.
 
     ``kernel(y, ctl)`` equals ``model.evaluate`` of the NumPy kernel (to rounding: the same
-    operations, except ``math`` for NumPy's elementwise functions).  The generated function of each
-    structure (:func:`structure_key`) is kept for the model's lifetime; the run-time values of
-    the last ``Controls`` object are cached by identity.
+    operations, except ``math`` for NumPy's elementwise functions).  Generated code is shared by
+    every model of the same signature (:func:`model_parameters`) and structure of controls
+    (:func:`structure_key`); this model's parameters are bound once per structure, the run-time
+    values of the last ``Controls`` object are cached by identity.
     """
 
     def __init__(self, model):
         self.model = model
         self._by_key = {}
+        self._params = None
         self._last = (None, None, None)
-        #: number of functions generated (one per structure of controls met)
+        #: number of functions generated for this model (a structure met first by it)
         self.generated = 0
 
     def function(self, ctl: Controls):
@@ -360,10 +452,16 @@ class FloatKernel:
         key = structure_key(self.model, ctl)
         f = self._by_key.get(key)
         if f is None:
-            src, glb = generate(self.model, ctl)
-            exec(compile(src, f"<snoworm float kernel, N={self.model.n}>", "exec"), glb)
-            f = self._by_key[key] = glb["rhs"]
-            self.generated += 1
+            if self._params is None:
+                self._params = model_parameters(self.model)
+            values, sig = self._params
+            make = _SHARED.get((sig, key))
+            if make is None:
+                src, glb = generate(self.model, ctl)
+                exec(compile(src, f"<snoworm float kernel, N={self.model.n}>", "exec"), glb)
+                make = _SHARED[(sig, key)] = glb["make"]
+                self.generated += 1
+            f = self._by_key[key] = make(values)
         vals = control_values(ctl)
         self._last = (ctl, f, vals)
         return f, vals

@@ -1,0 +1,117 @@
+"""Speed-ups against another version of snoworm measured in the same benchmark run (issue 25).
+
+The baseline is a git ref of this repository (``main`` by default), exported with ``git archive``
+into a temporary folder (the repository is only read).  Each measurement runs in a child
+process that imports either the baseline tree or this checkout, and the children alternate
+(baseline, current, baseline, current, ...), so a drift of the shared machine's speed weighs on
+both sides alike.  Each side runs its own scenario files: the baseline's settings are "today's".
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tarfile
+import tempfile
+from io import BytesIO
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+_RUN_CHILD = r"""
+import json, sys, time
+sys.path.insert(0, {tree!r})
+import snoworm
+from snoworm import load_scenario, simulate
+assert snoworm.__file__.startswith({tree!r}), snoworm.__file__
+sc = load_scenario({tree!r} + "/snoworm/scenarios/{name}.yaml")
+simulate(sc)                                    # warm-up: imports, generated code, caches
+out = []
+for _ in range({repeats}):
+    w0, c0 = time.perf_counter(), time.process_time()
+    res = simulate(sc)
+    out.append((time.perf_counter() - w0, time.process_time() - c0))
+print(json.dumps({{"wall_s": min(w for w, _ in out), "cpu_s": min(c for _, c in out), "nfev": res.stats["nfev"],
+                  "duration_s": sc.simulation.duration_s}}))
+"""
+
+_SWEEP_CHILD = r"""
+import json, sys, time
+sys.path.insert(0, {tree!r})
+import snoworm
+from snoworm.studies.sweep import run_sweep
+assert snoworm.__file__.startswith({tree!r}), snoworm.__file__
+t0 = time.perf_counter()
+tab = run_sweep({tree!r} + "/snoworm/scenarios/inchworm6.yaml", {sets!r}, plot=False, progress=False, jobs={jobs})
+wall = time.perf_counter() - t0
+print(json.dumps({{"wall_s": wall, "cases": len(tab.rows), "ok": sum(r["status"] == "ok" for r in tab.rows)}}))
+"""
+
+
+def export_tree(ref: str, dest: Path) -> Path:
+    """``git archive`` of ``ref``'s ``snoworm`` package into ``dest`` (returns ``dest``)."""
+    data = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", ref, "snoworm"], check=True,
+                          capture_output=True).stdout
+    with tarfile.open(fileobj=BytesIO(data)) as tar:
+        tar.extractall(dest)
+    return dest
+
+
+def _child(code: str, cwd: str) -> dict:
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=cwd)
+    if p.returncode:
+        raise RuntimeError(f"benchmark child failed: {p.stderr[-2000:]}")
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+def compare_runs(base: str, names, rounds: int, repeats: dict, report) -> dict:
+    """Best wall and CPU time of each scenario on the baseline tree and this checkout, interleaved."""
+    out = {}
+    for name in names:
+        best = {"baseline": None, "current": None}
+        for _ in range(rounds):
+            for side, tree in (("baseline", base), ("current", str(ROOT))):
+                r = _child(_RUN_CHILD.format(tree=tree, name=name, repeats=repeats.get(name, 1)), tree)
+                b = best[side]
+                best[side] = r if b is None else dict(r, wall_s=min(b["wall_s"], r["wall_s"]),
+                                                      cpu_s=min(b["cpu_s"], r["cpu_s"]))
+        b, c = best["baseline"], best["current"]
+        out[name] = {"baseline": b, "current": c, "speedup_wall": b["wall_s"] / c["wall_s"],
+                     "speedup_cpu": b["cpu_s"] / c["cpu_s"], "rtf_wall": c["duration_s"] / c["wall_s"],
+                     "rtf_cpu": c["duration_s"] / c["cpu_s"]}
+        report(f"  {name:16s} baseline {b['wall_s']:7.3f} s wall {b['cpu_s']:7.3f} s CPU (nfev {b['nfev']})   "
+               f"current {c['wall_s']:7.3f} s wall {c['cpu_s']:7.3f} s CPU (nfev {c['nfev']})   speed-up "
+               f"{out[name]['speedup_wall']:.2f}x wall, {out[name]['speedup_cpu']:.2f}x CPU; current "
+               f"{out[name]['rtf_wall']:.1f}x real time (wall)")
+    return out
+
+
+def compare_inching_sweep(base: str, n_xt: int, n_tow: int, duration, report) -> dict:
+    """inchworm6 over terrain.xt x tow.force_N: the baseline serial, then this checkout with ``-j 2``."""
+    sets = [f"terrain.xt=0.2:0.35:{n_xt}", f"tow.force_N=0:90:{n_tow}"]
+    if duration is not None:
+        sets.append(f"simulation.duration_s={duration}")
+    out = {"sets": sets, "cases": n_xt * n_tow}
+    for label, tree, jobs in (("baseline serial", base, 1), ("current serial", str(ROOT), 1),
+                              ("current -j 2", str(ROOT), 2)):
+        r = _child(_SWEEP_CHILD.format(tree=tree, sets=sets, jobs=jobs), tree)
+        r["cases_per_s"] = r["cases"] / r["wall_s"]
+        out[label] = r
+        report(f"  inchworm6 sweep, {label:16s} {r['cases_per_s']:6.2f} cases/s ({r['wall_s']:6.1f} s for "
+               f"{r['cases']} cases, {r['ok']} ok)")
+    out["speedup_serial"] = out["current serial"]["cases_per_s"] / out["baseline serial"]["cases_per_s"]
+    out["speedup"] = out["current -j 2"]["cases_per_s"] / out["baseline serial"]["cases_per_s"]
+    report(f"  against the baseline's serial throughput: current serial {out['speedup_serial']:.2f}x, "
+           f"current -j 2 {out['speedup']:.2f}x")
+    return out
+
+
+def baseline_section(ref: str, quick: bool, report) -> dict:
+    """Every baseline comparison of the benchmark (scenarios interleaved, then the inching sweep)."""
+    with tempfile.TemporaryDirectory(prefix="snoworm-baseline-") as tmp:
+        base = str(export_tree(ref, Path(tmp)))
+        rounds = 2 if quick else 3
+        runs = compare_runs(base, ("inchworm6", "tow6_uniform", "traverse_patch"), rounds,
+                            {"tow6_uniform": 10, "inchworm6": 2}, report)
+        sweep = compare_inching_sweep(base, *((4, 5, 6) if quick else (10, 10, None)), report)
+    return {"ref": ref, "runs": runs, "inching_sweep": sweep}
