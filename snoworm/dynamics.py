@@ -251,7 +251,7 @@ class ChainModel:
         section 7: the chord grade (:meth:`ElevationProfile.sin_grade`), the normal load per wheel, shape
         (..., N, 2) front and rear (:func:`terrain.normal_load_N`), and gravity along the track, shape
         (..., N) (:func:`terrain.gravity_force_N`).  Level ground: ``(0, 1, static load, 0)``."""
-        x = np.asarray(x_m, float)
+        x = _as_float(x_m)
         if self.elevation is None:
             z = np.zeros(np.shape(x + self._half_base))
             return z, z + 1.0, np.stack([z + self.normal_force_N[..., 0]] * 2, axis=-1), z

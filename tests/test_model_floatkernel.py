@@ -64,8 +64,10 @@ def states_along_track(m, rng, k):
     for _ in range(k):
         y = random_state(m, rng)
         Y = m.unpack(y)
-        if not prof.is_constant:
-            Y[:, m.layout.x] += rng.uniform(prof.positions_m[0] - 5.0, prof.positions_m[-1] + 5.0)
+        elev = m.elevation
+        table = prof.positions_m if not prof.is_constant else (elev.positions_m if elev is not None else ())
+        if len(table):
+            Y[:, m.layout.x] += rng.uniform(table[0] - 5.0, min(table[-1], table[0] + 1e3) + 5.0)
         out.append(y)
     return out
 
@@ -87,10 +89,18 @@ def test_float_kernel_equals_the_numpy_kernel_on_every_shipped_scenario(name):
     assert fk._by_key                        # run on generated code (made here or shared)
 
 
-def test_every_branch_of_the_kernel_on_busy_controls():
-    """Force loops, free joints in force and length command, direct torques, motors off: both paths agree."""
+GRADES = [[], [("terrain.grade_deg", 8.0)],
+          [("terrain.elevation", [[-20.0, 0.0], [0.0, 0.0], [10.0, 1.5], [12.0, 1.6], [30.0, 0.5]]),
+           ("terrain.patches", [{"start_m": 2.0, "end_m": 9.0, "xt": 0.4, "ramp_m": 0.5}])]]
+
+
+@pytest.mark.parametrize("grade", GRADES, ids=["level", "constant grade", "elevation table and patch"])
+def test_every_branch_of_the_kernel_on_busy_controls(grade):
+    """Force loops, free joints in force and length command, direct torques, motors off, on level
+    ground, a constant grade and an elevation table (gravity and normal loads, docs/model.md
+    section 7) with an X_t patch: both paths agree."""
     rng = np.random.default_rng(5)
-    for overrides in ([("vehicle.links.type", "prismatic")], []):
+    for overrides in ([("vehicle.links.type", "prismatic")] + grade, grade):
         m = model_for(SCENARIOS / "tow6_uniform.yaml", overrides, force_loop=True)
         for k in range(20):
             ctl = busy_controls(m, rng)
@@ -102,7 +112,7 @@ def test_every_branch_of_the_kernel_on_busy_controls():
             if k % 3 == 0:
                 ctl = ctl.with_(torque_active=rng.integers(0, 2, n).astype(float), torque_cmd_Nm=rng.uniform(-30, 30, n),
                                 motor_on=rng.integers(0, 2, n).astype(float))
-            y = random_state(m, rng)
+            y = states_along_track(m, rng, 1)[0]
             assert scaled_difference(m, m.float_kernel(y, ctl), numpy_rhs(m, y, ctl)) <= REL
 
 

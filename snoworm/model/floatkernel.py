@@ -324,7 +324,8 @@ def _replace_name(src, name, new):
 
 
 #: attributes of a model the trace leaves as they are (objects, caches, the layout, integers)
-_NOT_PARAMETERS = {"float_kernel", "_fd", "_bands", "_ctl_cache", "layout", "profile", "tp", "batch_shape"}
+_NOT_PARAMETERS = {"float_kernel", "_fd", "_bands", "_ctl_cache", "layout", "profile", "elevation", "tp",
+                   "batch_shape"}
 
 
 def _walk_parameters(model, leaf):
@@ -374,8 +375,11 @@ def model_parameters(model):
         return v
     _walk_parameters(model, leaf)
     prof = model.profile
-    sig = (_law_fingerprint(model), model.n, model.layout.fields, model.force_loop, model.has_joints, model.tp.torque_balance,
-           None if getattr(prof, "is_constant", False) else prof, model._coef is None, tuple(shapes))
+    elev = getattr(model, "elevation", None)
+    sig = (_law_fingerprint(model), model.n, model.layout.fields, model.force_loop, model.has_joints,
+           model.tp.torque_balance, None if getattr(prof, "is_constant", False) else prof, model._coef is None,
+           None if elev is None else ("constant grade" if elev.is_constant else elev),
+           getattr(model, "_G_const", None) is None, tuple(shapes))
     return values, sig
 
 
