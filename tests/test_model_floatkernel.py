@@ -195,3 +195,16 @@ def test_a_branch_on_a_state_cannot_be_traced():
     m.evaluate = branching
     with pytest.raises(TypeError):
         floatkernel.generate(m, ctl)
+
+
+def test_a_model_with_generated_code_pickles_for_worker_processes():
+    """Sweeps and the paper send models to worker processes: the generated closures stay behind
+    and the copy generates (or reuses) its own."""
+    import pickle
+    m = model_for(SCENARIOS / "inchworm6.yaml")
+    rng = np.random.default_rng(6)
+    ctl, y = busy_controls(m, rng), random_state(m, rng)
+    before = m.float_kernel(y, ctl)
+    m2 = pickle.loads(pickle.dumps(m))
+    assert m2.float_kernel.model is m2 and not m2.float_kernel._by_key
+    np.testing.assert_array_equal(m2.float_kernel(y, ctl), before)      # the same code on the same numbers

@@ -448,6 +448,14 @@ class FloatKernel:
         #: number of functions generated for this model (a structure met first by it)
         self.generated = 0
 
+    def __getstate__(self):
+        """Pickled without its generated functions (closures; a copy regenerates or reuses them)."""
+        return {"model": self.model, "generated": self.generated}
+
+    def __setstate__(self, state):
+        self.__init__(state["model"])
+        self.generated = state["generated"]
+
     def function(self, ctl: Controls):
         """``(f, values)``: the generated ``f(y_list, values)`` for ``ctl`` and its control values."""
         last, f, vals = self._last
