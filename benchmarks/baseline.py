@@ -88,16 +88,19 @@ def compare_runs(base: str, names, rounds: int, repeats: dict, report) -> dict:
 
 def compare_inching_sweep(base: str, n_xt: int, n_tow: int, duration, report, chunks: int = 5) -> dict:
     """inchworm6 over terrain.xt x tow.force_N: the baseline serial against this checkout serial and
-    with ``-j 2``.  The X_t values are split into ``chunks`` sweeps run in turn by the three sides
+    with ``-j 2`` (and the baseline with ``-j 2``, for the machine's parallel capacity at the time).
+    The X_t values are split into ``chunks`` sweeps run in turn by the four sides
     (interleaved, so the machine's drift weighs on each alike); cases/s over all chunks."""
     xts = [round(0.2 + 0.15 * k / (n_xt - 1), 10) for k in range(n_xt)]
     tail = [f"tow.force_N=0:90:{n_tow}"] + ([f"simulation.duration_s={duration}"] if duration is not None else [])
-    sides = (("baseline serial", base, 1), ("current serial", str(ROOT), 1), ("current -j 2", str(ROOT), 2))
+    # the baseline with -j 2 too: what two processes give on the machine as it is loaded now
+    sides = (("baseline serial", base, 1), ("current serial", str(ROOT), 1), ("current -j 2", str(ROOT), 2),
+             ("baseline -j 2", base, 2))
     out = {"sets": [f"terrain.xt=0.2:0.35:{n_xt}"] + tail, "cases": n_xt * n_tow, "chunks": chunks}
     tot = {label: {"wall_s": 0.0, "cases": 0, "ok": 0} for label, _, _ in sides}
     for c in range(chunks):
         sets = ["terrain.xt=" + ",".join(str(x) for x in xts[c::chunks])] + tail
-        order = sides[c % 3:] + sides[:c % 3]            # rotate who goes first
+        order = sides[c % len(sides):] + sides[:c % len(sides)]       # rotate who goes first
         for label, tree, jobs in order:
             r = _child(_SWEEP_CHILD.format(tree=tree, sets=sets, jobs=jobs), tree)
             for k in ("wall_s", "cases", "ok"):
@@ -108,8 +111,10 @@ def compare_inching_sweep(base: str, n_xt: int, n_tow: int, duration, report, ch
                f"{r['cases']} cases, {r['ok']} ok; {chunks} interleaved chunks)")
     out["speedup_serial"] = out["current serial"]["cases_per_s"] / out["baseline serial"]["cases_per_s"]
     out["speedup"] = out["current -j 2"]["cases_per_s"] / out["baseline serial"]["cases_per_s"]
+    out["baseline_2proc"] = out["baseline -j 2"]["cases_per_s"] / out["baseline serial"]["cases_per_s"]
     report(f"  against the baseline's serial throughput: current serial {out['speedup_serial']:.2f}x, "
-           f"current -j 2 {out['speedup']:.2f}x")
+           f"current -j 2 {out['speedup']:.2f}x (baseline -j 2: {out['baseline_2proc']:.2f}x, the machine's "
+           "parallel capacity at this load)")
     return out
 
 
