@@ -28,10 +28,10 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
+from benchmarks.baseline import baseline_section  # noqa: E402
 from snoworm import Simulator, load_scenario, simulate  # noqa: E402
 from snoworm.simulation.driver import assemble  # noqa: E402
 from snoworm.studies.sweep import run_sweep  # noqa: E402
-from benchmarks.baseline import baseline_section  # noqa: E402
 from tests.reference_quantities import compared, is_gait, quantities, scaled_error  # noqa: E402
 
 TIGHT = json.loads((ROOT / "tests" / "data" / "tight_reference.json").read_text())

@@ -16,13 +16,11 @@ r"""Longitudinal dynamics of a chain of wheeled segments (docs/model.md section 
 
 F_n is the normal load of :func:`snoworm.terrain.normal_load_N` on the grade theta_k under the segment
 (:mod:`snoworm.slope`, docs/model.md section 7); on level ground (``elevation=None`` or level) every
-grade term is skipped.  The model composes the law kernels -- terrain (:mod:`snoworm.terrain`, Eqs. 1-3), motor
-(:mod:`snoworm.drivetrain`), links (:mod:`snoworm.links`) and control laws
-(:mod:`snoworm.feedback`) -- into one kernel, :meth:`ChainModel.evaluate`, which computes every
-force from the state for any leading batch shape: the right-hand side calls it on one state
-(or a stack of batch members), the results call it on all output samples at once after the
-solve, and the finite-difference Jacobian (:mod:`snoworm.model.jacobian`) on a stack of perturbed
-states.
+grade term is skipped.  The model composes the laws (:mod:`snoworm.terrain`, Eqs. 1-3,
+:mod:`snoworm.drivetrain`, :mod:`snoworm.links`, :mod:`snoworm.feedback`) into one kernel,
+:meth:`ChainModel.evaluate`, for any leading batch shape: results and the finite-difference
+Jacobian (:mod:`snoworm.model.jacobian`) call it on stacks of states, the right-hand side of a
+short chain runs the float code traced from it (:mod:`snoworm.model.floatkernel`).
 
 The state layout is named by :class:`~snoworm.model.arrays.StateLayout`: one block of ``n_s``
 fields per segment, interleaved so the Jacobian is banded::
@@ -42,7 +40,7 @@ import numpy as np
 from . import drivetrain, feedback, links as link_law, terrain
 from .model import floatkernel, jacobian
 from .model.arrays import LinkArrays, SegmentArrays, StateLayout
-from .model.inputs import Controls
+from .model.inputs import Controls, as_float as _as_float, control_arrays, control_flags
 from .slope import ElevationProfile
 from .terrain import TerrainParams, TerrainProfile
 
@@ -104,7 +102,8 @@ class ChainModel:
         self.layout = StateLayout(self.n, self.force_loop, self.has_joints, self.batch_shape)
         self.n_batch = self.layout.n_batch
         self.n_states = self.layout.size
-        col = lambda a: np.asarray(a, float)[..., None]
+        def col(a):
+            return np.asarray(a, float)[..., None]
         #: per-wheel static normal load, shape (..., N, 1) (broadcasts against axle arrays)
         self.normal_force_N = col(seg.normal_force_N)
         # grade terms (docs/model.md section 7): pitch transfer 2h/b and the chord's half-length
@@ -137,7 +136,8 @@ class ChainModel:
         are evaluated once here (:func:`terrain.traction_coefficients` and friends).
         """
         tp, L = self.tp, self.links
-        z = lambda v: np.array(v, float)
+        def z(v):
+            return np.array(v, float)
         self._tpk = replace(tp, **{k: z(getattr(tp, k)) for k in tp.__dataclass_fields__ if k != "torque_balance"})
         self._zero = z(0.0)
         self._Fn_k, self._G_const = self.normal_force_N, None
@@ -170,40 +170,12 @@ class ChainModel:
         cached, d = self._ctl_cache
         if cached is ctl:
             return d
-        d = self.control_arrays(ctl, self.control_flags(ctl))
+        d = control_arrays(self, ctl, control_flags(self, ctl))
         self._ctl_cache = (ctl, d)
         return d
 
-    def control_flags(self, ctl: Controls) -> dict:
-        """Which parts of the laws act in an interval (constant within it, so skipping the others
-        changes no result): the kernel's branches on the controls, from their values."""
-        f = {"all_on": bool(np.all(np.asarray(ctl.motor_on, float) == 1.0)),
-             "torque": (np.asarray(ctl.torque_active) > 0)[..., None] if np.any(ctl.torque_active) else None}
-        if self.has_joints and self.n > 1:
-            f["length_mode"] = np.asarray(ctl.joint_length_mode) > 0
-            moving = np.asarray(ctl.joint_active, float) * self.links.prismatic != 0
-            f["moving"] = moving
-            f["any_active"] = bool(np.any(moving))
-            f["any_length"] = bool(np.any(f["length_mode"] & moving))
-            f["any_force"] = bool(np.any(~f["length_mode"] & moving))
-            f["any_kv"] = bool(np.any(np.asarray(ctl.joint_kv) != 0))
-            f["any_ka"] = bool(np.any(np.asarray(ctl.joint_ka) != 0))
-        return f
-
-    def control_arrays(self, ctl: Controls, flags: dict) -> dict:
-        """The arrays the kernel takes from the controls, with the ``flags`` of :meth:`control_flags`
-        (arithmetic only: the float kernel, :mod:`snoworm.model.floatkernel`, traces it on symbols)."""
-        on = _as_float(ctl.motor_on)[..., None]       # on_mask None: all on, no masking (same result)
-        d = dict(flags, on=on, w_ref=(_as_float(ctl.speed_sp_mps) / self.seg.wheel_radius_m)[..., None],
-                 on_mask=None if flags["all_on"] else on, torque_cmd=_as_float(ctl.torque_cmd_Nm)[..., None])
-        if self.has_joints and self.n > 1:
-            d["neg_dir"] = -_as_float(ctl.joint_dir)
-            d["neg_vt"] = -_as_float(ctl.joint_vtarget_mps)
-            d["active"] = _as_float(ctl.joint_active) * self.links.prismatic
-        return d
-
     @classmethod
-    def stack(cls, models) -> "ChainModel":
+    def stack(cls, models) -> ChainModel:
         """B chains of the same structure as ONE model with a leading batch axis (for batched runs).
 
         Every model must have the same N, state layout, terrain coefficients and either the same
@@ -223,7 +195,8 @@ class ChainModel:
                 raise ValueError("stacked chains need the same X_t profile, or constant profiles")
             if m.elevation != m0.elevation:
                 raise ValueError("stacked chains need the same elevation profile")
-        st = lambda objs, name: np.stack([np.asarray(getattr(o, name), float) for o in objs])
+        def st(objs, name):
+            return np.stack([np.asarray(getattr(o, name), float) for o in objs])
         seg = SegmentArrays(**{k: st([m.seg for m in models], k) for k in SegmentArrays.__dataclass_fields__})
         links = LinkArrays(**{k: st([m.links for m in models], k) for k in LinkArrays.__dataclass_fields__})
         if all(m.profile == m0.profile for m in models):
@@ -305,7 +278,7 @@ class ChainModel:
             With ``outputs=True``: named intermediate quantities (per axle arrays have a
             trailing axis of 2: front, rear), used for results after the solve.
 
-        ``cd``: the arrays of :meth:`control_arrays` for ``ctl`` (default: computed and cached).
+        ``cd``: the arrays of :func:`snoworm.model.inputs.control_arrays` for ``ctl`` (default: computed and cached).
         """
         tp, L = self._tpk, self.layout
         x, v = Y[..., L.x], Y[..., L.v]
@@ -349,8 +322,13 @@ class ChainModel:
         dY[..., L.v] = (wheel_net + Fl if G is None else wheel_net + Fl + G) / self._m
         if not outputs:
             return dY, None
+        return dY, self._outputs(X=X, i=i, Ft=Ft, Ftr=Ftr, Trr=Trr, Tm=Tm, T=T, wheel_net=wheel_net, Fl=Fl, sp=sp, x=x,
+                                 w=w, reaction=reaction, T_spring=T_spring, damper_v=damper_v, V=V, G=G, Fn=Fn)
+
+    def _outputs(self, *, X, i, Ft, Ftr, Trr, Tm, T, wheel_net, Fl, sp, x, w, reaction, T_spring, damper_v, V, G, Fn):
+        """The named quantities of :meth:`evaluate` for the results, from its intermediates."""
         nw = self.wheels_per_axle[..., None]
-        out = {
+        return {
             "X": np.broadcast_to(X, Ft.shape), "slip": i, "traction_axle_N": Ft * nw,
             "resistance_axle_N": Ftr * nw, "resistance_torque_Nm": Trr, "motor_torque_Nm": Tm,
             "link_force_N": T, "wheel_net_N": wheel_net, "link_net_N": Fl,
@@ -363,7 +341,6 @@ class ChainModel:
             "gravity_N": np.zeros(x.shape) if G is None else np.broadcast_to(G, x.shape),
             "normal_load_N": np.broadcast_to(Fn, Ft.shape),
         }
-        return dY, out
 
     def _terrain(self, x, V, wm, Fn):
         """Per-axle terrain quantities (Eqs. 1-3, resistance torque), X_t evaluated at each axle.
@@ -450,7 +427,3 @@ class ChainModel:
         dY, _ = self.evaluate(y.reshape(self.layout.shape), ctl)
         return dY.reshape(-1)
 
-
-def _as_float(a):
-    """A control array as floats; symbolic arrays of the float kernel's trace as they are."""
-    return a if getattr(a, "dtype", None) == object else np.asarray(a, float)

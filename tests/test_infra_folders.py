@@ -261,39 +261,3 @@ def test_earlier_output_note(tmp_path):
     note = earlier_output_note(tmp_path)
     assert note.startswith(f"note: {tmp_path} holds earlier results (snoworm run x --out d, ") and "\n" not in note
     assert "resumed" in earlier_output_note(tmp_path, resumes=True)
-
-
-def test_every_staged_file_is_synced_to_disk_before_the_folder_appears(tmp_path, monkeypatch):
-    """Files staged by atomic_write_text skip their own fsync; the commit syncs every staged file
-    (plots and the manifest included) before the rename; outside a stage each file syncs itself."""
-    synced, events = [], []
-    real_fsync, real_rename = os.fsync, os.rename
-
-    def fsync(fd):
-        synced.append(os.path.basename(os.readlink(f"/proc/self/fd/{fd}")))
-        events.append("fsync")
-        return real_fsync(fd)
-
-    def rename(src, dst):
-        events.append("rename")
-        return real_rename(src, dst)
-    monkeypatch.setattr(folders.os, "fsync", fsync)
-    monkeypatch.setattr(folders.os, "rename", rename)
-    with output_folder(tmp_path / "run", command="test") as stage:
-        folders.atomic_write_text(stage / "summary.json", "{}\n")
-        (stage / "plot.png").write_bytes(b"png")                   # a file written by another writer
-        assert synced == []                                         # deferred to the commit
-    assert sorted(synced) == sorted([MANIFEST, "plot.png", "summary.json"])
-    assert events[-1] == "rename" and "rename" not in events[:-1]   # all synced, then the folder appears
-    synced.clear()
-    folders.atomic_write_text(tmp_path / "alone.txt", "x")
-    assert len(synced) == 1                                         # not in a stage: synced at once
-
-
-def test_a_failed_sync_at_the_commit_writes_nothing(tmp_path, monkeypatch):
-    def no_disk(fd):
-        raise OSError(errno.EIO, os.strerror(errno.EIO))
-    monkeypatch.setattr(folders.os, "fsync", no_disk)
-    with pytest.raises(OutputError, match="Input/output error"):
-        _write(tmp_path / "run", ["segments.csv"])
-    assert list(tmp_path.iterdir()) == []

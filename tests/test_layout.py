@@ -79,12 +79,6 @@ def test_no_function_over_80_lines():
     assert not long, f"functions over {MAX_FUNCTION_LINES} lines:\n  " + "\n  ".join(long)
 
 
-#: Known to exceed a limit once formatted, on a module another change owns: the kernel's
-#: ``ChainModel.evaluate`` (81 lines formatted) is being rewritten with the plain-float kernel
-#: (issue 25); drop this when that lands.
-FORMAT_PENDING = ("snoworm/dynamics.py:",)
-
-
 def test_the_sizes_hold_once_formatted(tmp_path):
     # no module or function is kept under a limit by joining lines: the limits hold for the code
     # as `ruff format` lays it out (run on a copy; ruff is in the test extra)
@@ -94,6 +88,4 @@ def test_the_sizes_hold_once_formatted(tmp_path):
                        text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     long = long_modules(tmp_path / "snoworm") + long_functions(tmp_path / "snoworm")
-    pending = [x for x in long if x.startswith(FORMAT_PENDING)]
-    assert not [x for x in long if x not in pending], "over the size limits once formatted:\n  " + "\n  ".join(long)
-    assert len(pending) <= 1, pending          # the one known case below, nothing more
+    assert not long, "over the size limits once formatted:\n  " + "\n  ".join(long)

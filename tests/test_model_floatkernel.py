@@ -15,7 +15,7 @@ import pytest
 from snoworm import load_scenario, simulate
 from snoworm.dynamics import ChainModel, Controls
 from snoworm.model import floatkernel
-from snoworm.model.floatkernel import FloatKernel, MAX_SEGMENTS
+from snoworm.model.floatkernel import MAX_SEGMENTS, FloatKernel
 from tests.conftest import SCENARIOS, busy_controls, model_for, random_state
 
 SHIPPED = sorted(p.stem for p in SCENARIOS.glob("*.yaml"))
@@ -36,7 +36,7 @@ def scaled_difference(m, a, b):
     return float(np.max(np.abs(A - B) / scale))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def recorded(name):
     """The controls a shipped scenario's run used (each distinct object once) and states met on the way."""
     sc = load_scenario(SCENARIOS / f"{name}.yaml")
@@ -173,13 +173,6 @@ def test_long_chains_and_stacks_keep_the_numpy_kernel():
     assert m.float_kernel is None
     short = model_for(SCENARIOS / "tow6_uniform.yaml")
     assert ChainModel.stack([short, short]).float_kernel is None
-
-
-def test_interp_is_numpys_interp():
-    xp, fp = (0.0, 1.0, 2.5, 4.0), (0.9, 0.3, 0.3, 0.7)
-    sl = tuple((fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) for j in range(3))
-    for x in np.r_[np.linspace(-1, 5, 61), xp]:
-        assert floatkernel.interp(float(x), xp, fp, sl) == pytest.approx(np.interp(x, xp, fp), rel=1e-15, abs=1e-15)
 
 
 def test_a_branch_on_a_state_cannot_be_traced():

@@ -5,8 +5,8 @@ import pytest
 from snoworm import SolverError, load_scenario, simulate
 from snoworm.simulation import guard
 from snoworm.simulation.driver import assemble
-from snoworm.simulation.interval import IntervalSolver, output_grid
 from snoworm.simulation.guard import WORK_BASE_NFEV, WORK_NFEV_PER_S, work_rate
+from snoworm.simulation.interval import IntervalSolver, output_grid
 
 
 def test_work_limit_ends_a_too_stiff_run(monkeypatch, scenario_path):

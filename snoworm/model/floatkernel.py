@@ -27,7 +27,6 @@ Python bytecode (``compile``): no compiled extension, no JIT.
 """
 from __future__ import annotations
 
-import bisect
 import copy
 import math
 import sys
@@ -37,7 +36,8 @@ from dataclasses import fields as dc_fields, is_dataclass, replace
 import numpy as np
 
 from .. import drivetrain, feedback, links, terrain
-from .inputs import Controls
+from .inputs import Controls, control_arrays, control_flags
+from .symbolic import Expr, SymArray, interp, source, symbols, tracing  # noqa: F401 (interp: the generated code's)
 
 __all__ = ["FloatKernel", "MAX_SEGMENTS", "STRUCTURAL_FIELDS", "structure_key"]
 
@@ -49,189 +49,9 @@ MAX_SEGMENTS = 16
 #: generated function is specific to their values (the others are read at run time).
 STRUCTURAL_FIELDS = ("fc_active", "fc_link", "joint_mover", "joint_anchor", "joint_length_mode", "torque_active")
 
-_TRACE = None          # the trace being recorded (tracing is single-threaded and short)
-
-
-class _Trace:
-    """Lines recorded while the kernel runs on symbols, and the tables they refer to."""
-
-    def __init__(self):
-        self.lines = []            # (name, source, names used)
-        self.consts = {}
-        self.n = 0
-
-    def emit(self, src, deps):
-        name = f"t{self.n}"
-        self.n += 1
-        self.lines.append((name, src, deps))
-        return Expr(name)
-
-    def table(self, obj, prefix):
-        name = f"_{prefix}{len(self.consts)}"
-        self.consts[name] = obj
-        return name
-
-
-def _src(a):
-    if isinstance(a, Expr):
-        return a.name
-    r = repr(float(a))
-    return f"({r})" if r.startswith("-") or "e" in r or r in ("inf", "nan") else r
-
-
-def _deps(*args):
-    return tuple(a.name for a in args if isinstance(a, Expr))
-
-
-def _num(a):
-    return not isinstance(a, Expr)
-
-
-class Expr:
-    """A symbolic float: the name of a generated variable; arithmetic on it records a line."""
-
-    __slots__ = ("name",)
-
-    def __init__(self, name):
-        self.name = name
-
-    def _bin(self, op, a, b):
-        if op == "*" and (_num(a) and a == 1.0):
-            return b
-        if op in ("*", "/") and (_num(b) and b == 1.0):
-            return a
-        if op in ("+", "-") and _num(b) and b == 0.0:
-            return a
-        if op == "+" and _num(a) and a == 0.0:
-            return b
-        return _TRACE.emit(f"{_src(a)} {op} {_src(b)}", _deps(a, b))
-
-    __add__ = lambda s, o: s._bin("+", s, o)
-    __radd__ = lambda s, o: s._bin("+", o, s)
-    __sub__ = lambda s, o: s._bin("-", s, o)
-    __rsub__ = lambda s, o: s._bin("-", o, s)
-    __mul__ = lambda s, o: s._bin("*", s, o)
-    __rmul__ = lambda s, o: s._bin("*", o, s)
-    __truediv__ = lambda s, o: s._bin("/", s, o)
-    __rtruediv__ = lambda s, o: s._bin("/", o, s)
-    __pow__ = lambda s, o: s._bin("**", s, o)
-    __rpow__ = lambda s, o: s._bin("**", o, s)
-
-    def __neg__(self):
-        return _TRACE.emit(f"-{self.name}", (self.name,))
-
-    def __pos__(self):
-        return self
-
-    def __abs__(self):
-        return _TRACE.emit(f"abs({self.name})", (self.name,))
-
-    def __float__(self):
-        raise TypeError("a symbolic value has no float value: the kernel converted a state to float")
-
-    def __bool__(self):
-        raise TypeError("the kernel branches on a state value: it cannot be traced to float code")
-
-
-def _unary(fname, ufunc):
-    def f(a):
-        return float(ufunc(a)) if _num(a) else _TRACE.emit(f"{fname}({a.name})", (a.name,))
-    return f
-
-
-def _maximum(a, b):
-    if _num(a) and _num(b):
-        return float(np.maximum(a, b))
-    return _TRACE.emit(f"{_src(a)} if {_src(a)} >= {_src(b)} else {_src(b)}", _deps(a, a, b, b))
-
-
-def _minimum(a, b):
-    if _num(a) and _num(b):
-        return float(np.minimum(a, b))
-    return _TRACE.emit(f"{_src(a)} if {_src(a)} <= {_src(b)} else {_src(b)}", _deps(a, a, b, b))
-
-
-#: NumPy ufuncs traced element by element (the others run on object arrays, calling Expr's operators)
-_ELEMENTWISE = {np.maximum: _maximum, np.minimum: _minimum, np.tanh: _unary("_tanh", np.tanh),
-                np.sin: _unary("_sin", np.sin), np.arctan: _unary("_atan", np.arctan),
-                np.sqrt: _unary("_sqrt", np.sqrt), np.exp: _unary("_exp", np.exp)}
-
-
-def _plain(a):
-    if isinstance(a, SymArray):
-        return a.view(np.ndarray)
-    if isinstance(a, (tuple, list)):
-        return type(a)(_plain(x) for x in a)
-    if isinstance(a, np.ndarray) and a.dtype != object and a.dtype.kind == "f":
-        return a.astype(object)        # Python floats: arithmetic with symbols folds exactly
-    return a
-
-
-def _wrap(r):
-    if isinstance(r, np.ndarray) and r.dtype == object:
-        return r.view(SymArray)
-    if isinstance(r, tuple):
-        return tuple(_wrap(x) for x in r)
-    return r
-
-
-class SymArray(np.ndarray):
-    """An object array of :class:`Expr` and floats whose NumPy operations are recorded."""
-
-    def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
-        if method == "__call__" and ufunc in _ELEMENTWISE and not kwargs:
-            f = np.frompyfunc(_ELEMENTWISE[ufunc], ufunc.nin, 1)
-            return _wrap(np.asarray(f(*[_plain(a) for a in inputs]), dtype=object))
-        if ufunc in _ELEMENTWISE or (ufunc in (np.greater, np.less, np.equal, np.not_equal, np.greater_equal,
-                                               np.less_equal)):
-            raise TypeError(f"cannot trace {ufunc.__name__}.{method} on states to float code")
-        kw = {k: _plain(v) for k, v in kwargs.items()}
-        return _wrap(getattr(ufunc, method)(*[_plain(a) for a in inputs], **kw))
-
-    def __array_function__(self, func, types, args, kwargs):
-        if func is np.interp:
-            return _interp_traced(*args, **kwargs)
-        return _wrap(func(*_plain(args), **{k: _plain(v) for k, v in kwargs.items()}))
-
-
-def interp(x, xp, fp, slopes):
-    """``numpy.interp(x, xp, fp)`` for one float (the same formula, table held beyond its ends)."""
-    if x <= xp[0]:
-        return fp[0]
-    if x >= xp[-1]:
-        return fp[-1]
-    j = bisect.bisect_right(xp, x) - 1
-    return slopes[j] * (x - xp[j]) + fp[j]
-
-
-def _interp_traced(x, xp, fp, left=None, right=None, period=None):
-    if left is not None or right is not None or period is not None:
-        raise TypeError("float kernel: interp with left/right/period is not supported")
-    xp_t, fp_t = tuple(float(v) for v in xp), tuple(float(v) for v in fp)
-    slopes = tuple((fp_t[j + 1] - fp_t[j]) / (xp_t[j + 1] - xp_t[j]) for j in range(len(xp_t) - 1))
-    names = None
-
-    def one(a):
-        nonlocal names
-        if _num(a):
-            return float(np.interp(a, xp_t, fp_t))
-        if names is None:
-            names = [_TRACE.table(v, p) for v, p in ((xp_t, "XP"), (fp_t, "FP"), (slopes, "SL"))]
-        return _TRACE.emit(f"_interp({a.name}, {', '.join(names)})", (a.name,))
-    return _wrap(np.asarray(np.frompyfunc(one, 1, 1)(_plain(x)), dtype=object))
-
-
-def _symbols(prefix, shape):
-    arr = np.empty(shape, dtype=object)
-    flat = arr.reshape(-1)
-    for k in range(flat.size):
-        flat[k] = Expr(f"{prefix}{k}")
-    return arr.view(SymArray)
-
-
 def structure_key(model, ctl: Controls):
     """What a generated function depends on in ``ctl``: the structural fields and the kernel's flags."""
-    flags = model.control_flags(ctl)
+    flags = control_flags(model, ctl)
     key = [np.asarray(getattr(ctl, f)).tobytes() for f in STRUCTURAL_FIELDS]
     key += [repr(flags.get(k)) if not isinstance(flags.get(k), np.ndarray) else flags[k].tobytes()
             for k in sorted(flags)]
@@ -261,7 +81,7 @@ def _symbolic_controls(ctl: Controls):
     kw, k = {}, 0
     for f in _value_fields():
         a = np.asarray(getattr(ctl, f), float)
-        s = _symbols("c", a.shape)
+        s = symbols("c", a.shape)
         for e in s.reshape(-1):
             e.name = f"c{k}"
             k += 1
@@ -301,7 +121,7 @@ def _prune_and_inline(lines, outputs, static_names):
             inline[name] = src
         else:
             body.append(f"        {name} = {src}")
-    outs = [f"({inline[a.name]})" if isinstance(a, Expr) and a.name in inline else _src(a) for a in outputs]
+    outs = [f"({inline[a.name]})" if isinstance(a, Expr) and a.name in inline else source(a) for a in outputs]
     return head, body, outs
 
 
@@ -386,10 +206,9 @@ def model_parameters(model):
 def generate(model, ctl: Controls):
     """Source and globals of ``make(P)``, which returns the float right-hand side ``rhs(y, c)`` of
     ``model`` for controls shaped like ``ctl`` with the parameters ``P`` (:func:`model_parameters`)."""
-    global _TRACE
     shape = model.layout.shape
     n_y = int(np.prod(shape))
-    Y = _symbols("y", shape)
+    Y = symbols("y", shape)
     sym_ctl, n_c = _symbolic_controls(ctl)
     n_p = [0]
 
@@ -401,15 +220,11 @@ def generate(model, ctl: Controls):
             flat[k] = Expr(f"p{n_p[0]}")
             n_p[0] += 1
         return arr.view(SymArray) if isinstance(v, np.ndarray) else flat[0]
-    flags = model.control_flags(ctl)
+    flags = control_flags(model, ctl)
     pm = _walk_parameters(model, leaf)
-    _TRACE = tr = _Trace()
-    try:
-        with np.errstate(all="ignore"):
-            cd = pm.control_arrays(sym_ctl, flags)
-            dY, _ = pm.evaluate(Y, sym_ctl, cd=cd)
-    finally:
-        _TRACE = None
+    with tracing() as tr, np.errstate(all="ignore"):
+        cd = control_arrays(pm, sym_ctl, flags)
+        dY, _ = pm.evaluate(Y, sym_ctl, cd=cd)
     outputs = list(np.asarray(dY, dtype=object).reshape(-1))
     params = [f"p{k}" for k in range(n_p[0])]
     head, body, outs = _prune_and_inline(tr.lines, outputs, params)

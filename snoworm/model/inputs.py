@@ -10,7 +10,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-__all__ = ["Controls"]
+__all__ = ["Controls", "as_float", "control_arrays", "control_flags"]
 
 
 @dataclass(frozen=True)
@@ -112,3 +112,39 @@ class Controls:
     def with_(self, **kw) -> Controls:
         """A copy with some arrays replaced (converted to float arrays)."""
         return replace(self, **{k: np.asarray(v) for k, v in kw.items()})
+
+
+def as_float(a):
+    """A control array as floats; symbolic arrays of the float kernel's trace as they are."""
+    return a if isinstance(a, np.ndarray) and a.dtype.kind == "O" else np.asarray(a, float)
+
+
+def control_flags(model, ctl: Controls) -> dict:
+    """Which parts of the laws act in an interval of ``model`` (a :class:`~snoworm.dynamics.ChainModel`)
+    under ``ctl``: the kernel's branches on the controls (constant within an interval, so skipping
+    the other parts changes no result), from the controls' values."""
+    f = {"all_on": bool(np.all(np.asarray(ctl.motor_on, float) == 1.0)),
+         "torque": (np.asarray(ctl.torque_active) > 0)[..., None] if np.any(ctl.torque_active) else None}
+    if model.has_joints and model.n > 1:
+        f["length_mode"] = np.asarray(ctl.joint_length_mode) > 0
+        moving = np.asarray(ctl.joint_active, float) * model.links.prismatic != 0
+        f["moving"] = moving
+        f["any_active"] = bool(np.any(moving))
+        f["any_length"] = bool(np.any(f["length_mode"] & moving))
+        f["any_force"] = bool(np.any(~f["length_mode"] & moving))
+        f["any_kv"] = bool(np.any(np.asarray(ctl.joint_kv) != 0))
+        f["any_ka"] = bool(np.any(np.asarray(ctl.joint_ka) != 0))
+    return f
+
+
+def control_arrays(model, ctl: Controls, flags: dict) -> dict:
+    """The arrays ``model``'s kernel takes from ``ctl``, with the ``flags`` of :func:`control_flags`
+    (arithmetic only: the float kernel, :mod:`snoworm.model.floatkernel`, traces it on symbols)."""
+    on = as_float(ctl.motor_on)[..., None]       # on_mask None: all on, no masking (same result)
+    d = dict(flags, on=on, w_ref=(as_float(ctl.speed_sp_mps) / model.seg.wheel_radius_m)[..., None],
+             on_mask=None if flags["all_on"] else on, torque_cmd=as_float(ctl.torque_cmd_Nm)[..., None])
+    if model.has_joints and model.n > 1:
+        d["neg_dir"] = -as_float(ctl.joint_dir)
+        d["neg_vt"] = -as_float(ctl.joint_vtarget_mps)
+        d["active"] = as_float(ctl.joint_active) * model.links.prismatic
+    return d

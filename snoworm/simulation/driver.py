@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.inputs import Controls
 from ..dynamics import ChainModel
+from ..model.inputs import Controls
 from ..modes import mode_class
 from ..modes.codeload import allow_code as allowed_code
 from ..results.result import Result

@@ -21,13 +21,13 @@ import time
 
 import numpy as np
 
-from .driver import assemble
-from .interval import IntervalSolver, output_grid
+from ..config.schema import quote
+from ..config.sections import MAX_OUTPUT_SAMPLES
 from ..modes import Mode
 from ..modes.command import COMMAND_KEYS, CommandState, Observation, observe
 from ..results.result import Result
-from ..config.schema import quote
-from ..config.sections import MAX_OUTPUT_SAMPLES
+from .driver import assemble
+from .interval import IntervalSolver, output_grid
 
 __all__ = ["Simulator", "Observation", "COMMAND_KEYS", "DT_MIN_S"]
 
