@@ -12,7 +12,7 @@ action map, observation normalisation, default reward, termination and truncatio
 :class:`~snoworm.env.core.EnvCore`).  A control period has no gait events, so every member's interval
 ends at the same time: the B chains are stacked (:meth:`ChainModel.stack`, the kernel with one
 more leading axis) and integrated over the period by the driver's interval solve
-(:func:`snoworm.simulation.driver.solve_interval`), on VODE with its tolerances divided by
+(:class:`snoworm.simulation.interval.IntervalSolver`), on VODE with its tolerances divided by
 sqrt(B), restarted at a period whose command changed and carried on while every member holds its
 command (as the single environment): VODE's error test is a weighted RMS norm over the whole
 stack, and with those tolerances a stack that passes it has every member within the RMS norm it
@@ -47,8 +47,9 @@ from gymnasium.vector.utils import batch_space
 from ..dynamics import ChainModel
 from ..model.quantities import output_series
 from ..modes.command import CommandState
-from ..simulation.driver import assemble, output_grid, solve_interval
+from ..simulation.driver import assemble
 from ..simulation.guard import SPEED_SANITY_FACTOR, SolverError
+from ..simulation.interval import IntervalSolver, output_grid
 from .core import EnvCore, table_fields
 
 __all__ = ["SnowormVectorEnv"]
@@ -94,8 +95,7 @@ class SnowormVectorEnv(VectorEnv):
         if method is not None and method != sc.simulation.method:
             sc = sc.with_({"simulation.method": method})
         self.scenario, self.dt_s, self.render_mode = sc, core.dt_s, None
-        #: solver options kept over the periods: VODE on the stack (see :meth:`step`)
-        self._opts, self._command = {"vode_stack": True, "continue": False}, None
+        self._command = None
         self.single_action_space = core.single_action_space
         self.single_observation_space = core.single_observation_space
         self.action_space = batch_space(self.single_action_space, B)
@@ -109,8 +109,10 @@ class SnowormVectorEnv(VectorEnv):
         self._xmean0 = float(np.mean(fields0["x_m"]))
         self._vmax = SPEED_SANITY_FACTOR * float(np.max(self.model.seg.no_load_speed_radps
                                                         * self.model.seg.wheel_radius_m))
-        self._grid = output_grid(0.0, core.dt_s, core.scenario.simulation.output_dt_s, include_start=True)
+        self._grid = np.asarray(output_grid(0.0, core.dt_s, core.scenario.simulation.output_dt_s, include_start=True))
         self.stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "member_solves": 0, "solver_failures": 0}
+        #: the interval solve of the stack, kept over the periods: VODE on the stack (see :meth:`step`)
+        self._solver = IntervalSolver(self.stacked, sc.simulation, "step", vode_stack=True, stats=self.stats)
         self._started = False
 
     # ------------------------------------------------------------------ reset
@@ -160,7 +162,7 @@ class SnowormVectorEnv(VectorEnv):
         held = self._command is not None and all(np.array_equal(command[k], self._command[k]) for k in command)
         # VODE: restarted at every period, but carried on while every member holds its command (a
         # member reset in between changes the state, and the stepper then restarts by itself)
-        self._opts["continue"], self._command = held, command
+        self._solver.carry_history, self._command = held, command
         ctl = self._cmd.apply(command)
         restart = self._autoreset.copy()
         if restart.any():           # NEXT_STEP autoreset: these members start again; their action is ignored
@@ -205,11 +207,10 @@ class SnowormVectorEnv(VectorEnv):
 
         Members are solved alone (and failures isolated) only if the stacked solve fails."""
         B, n_s = self.num_envs, self._y0.size
-        sim, t0 = self.scenario.simulation, self._T
+        t0 = self._T
         t_eval = t0 + self._grid
         try:
-            ts, ys, _, _, _ = solve_interval(self.stacked, ctl, t0, t0 + self.dt_s, self._y.reshape(-1), [], sim,
-                                             t_eval, self.stats, "step", self._opts)
+            ts, ys, _, _, _ = self._solver.solve(ctl, t0, t0 + self.dt_s, self._y.reshape(-1), (), t_eval, "step")
             ys = ys.reshape(ts.size, B, n_s)
             bad = self._insane(ys)
             if not bad.any():
@@ -227,8 +228,8 @@ class SnowormVectorEnv(VectorEnv):
         for b in range(B):
             self.stats["member_solves"] += 1
             try:
-                tb, yb, _, _, _ = solve_interval(self.model, _member(ctl, b), t0, t0 + self.dt_s, self._y[b], [],
-                                                 sim, t_eval, self.stats, "step", {})
+                alone = IntervalSolver(self.model, sim, "step", stats=self.stats)
+                tb, yb, _, _, _ = alone.solve(_member(ctl, b), t0, t0 + self.dt_s, self._y[b], (), t_eval, "step")
             except SolverError as exc:
                 failed[b], errors[b] = True, str(exc)
                 continue

@@ -93,6 +93,12 @@ class IntervalSolver:
         itself if VODE then fails).  May be changed between calls.
     progress : callable, optional
         ``progress(t_s, duration_s)`` within long intervals (:class:`~snoworm.simulation.guard.WorkMeter`).
+    vode_stack : bool
+        A stacked model (B members) may run on VODE, with its tolerances divided by sqrt(B) so that
+        VODE's RMS error norm over the stack <= 1 implies each member's own <= 1 (what it has alone);
+        without it a stack skips VODE for LSODA (max norm).
+    stats : dict, optional
+        The counters to update (default: a new dict), e.g. a caller's own with more keys.
 
     Attributes
     ----------
@@ -103,10 +109,10 @@ class IntervalSolver:
         The run's work and wall-time limits, counted from the first interval's start.
     """
 
-    def __init__(self, model, sim, name="", carry_history=False, progress=None):
+    def __init__(self, model, sim, name="", carry_history=False, progress=None, vode_stack=False, stats=None):
         self.model, self.sim, self.name = model, sim, name
-        self.carry_history = bool(carry_history)
-        self.stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0}
+        self.carry_history, self.vode_stack = bool(carry_history), bool(vode_stack)
+        self.stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0} if stats is None else stats
         self.meter = WorkMeter(sim, name, progress)
         self._options = {}
         self._stepper = None
@@ -147,7 +153,7 @@ class IntervalSolver:
     def _solve(self, ctl, t, t1, y, events, t_eval, label):
         failures, model = [], self.model
         for method in _fallbacks(self.sim.method):
-            if method == "VODE" and model.n_batch > 1:
+            if method == "VODE" and model.n_batch > 1 and not self.vode_stack:
                 continue                # stacked members: LSODA's max-norm error test (see simulate_batch)
             try:
                 out = (self._vode if method == "VODE" else self._solve_ivp)(method, ctl, t, t1, y, events, t_eval)
@@ -172,9 +178,10 @@ class IntervalSolver:
         st = self._stepper
         if st is None:
             o = self.options("VODE")
+            k = 1.0 / np.sqrt(self.model.n_batch)      # 1 for one chain; 1/sqrt(B) for a stack (vode_stack)
             st = self._stepper = VodeStepper(self.model.rhs, self.model.jacobian_banded, self.model.n_states,
-                                             rtol=o["rtol"], atol=o["atol"], lband=o["lband"], uband=o["uband"],
-                                             max_step=o.get("max_step"))
+                                             rtol=o["rtol"] * k, atol=o["atol"] * k, lband=o["lband"],
+                                             uband=o["uband"], max_step=o.get("max_step"))
         before = (st.nfev, st.njev, st.nlu)
         st.ctl = ctl
         if not (self.carry_history and st.t == t and np.array_equal(st.y, y)):

@@ -118,7 +118,7 @@ class Simulator:
         t, t1 = self.t_s, self.t_s + float(dt)
         sim = self.scenario.simulation
         t_eval = output_grid(t, t1, sim.output_dt_s, include_start=not (self._phases and self.record))
-        self._opts["continue"] = not restart
+        self._solver.carry_history = not restart
         try:
             ts, ys, t_next, y_next, _ = self._solver.solve(ctl, t, t1, self._y, (), t_eval, "step")
         except Exception:
