@@ -6,6 +6,7 @@ process that imports either the baseline tree or this checkout, and the children
 (baseline, current, baseline, current, ...), so a drift of the shared machine's speed weighs on
 both sides alike.  Each side runs its own scenario files: the baseline's settings are "today's".
 """
+
 from __future__ import annotations
 
 import json
@@ -50,8 +51,9 @@ print(json.dumps({{"wall_s": wall, "cases": len(tab.rows), "ok": sum(r["status"]
 
 def export_tree(ref: str, dest: Path) -> Path:
     """``git archive`` of ``ref``'s ``snoworm`` package into ``dest`` (returns ``dest``)."""
-    data = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", ref, "snoworm"], check=True,
-                          capture_output=True).stdout
+    data = subprocess.run(
+        ["git", "-C", str(ROOT), "archive", "--format=tar", ref, "snoworm"], check=True, capture_output=True
+    ).stdout
     with tarfile.open(fileobj=BytesIO(data)) as tar:
         tar.extractall(dest)
     return dest
@@ -73,16 +75,24 @@ def compare_runs(base: str, names, rounds: int, repeats: dict, report) -> dict:
             for side, tree in (("baseline", base), ("current", str(ROOT))):
                 r = _child(_RUN_CHILD.format(tree=tree, name=name, repeats=repeats.get(name, 1)), tree)
                 b = best[side]
-                best[side] = r if b is None else dict(r, wall_s=min(b["wall_s"], r["wall_s"]),
-                                                      cpu_s=min(b["cpu_s"], r["cpu_s"]))
+                best[side] = (
+                    r if b is None else dict(r, wall_s=min(b["wall_s"], r["wall_s"]), cpu_s=min(b["cpu_s"], r["cpu_s"]))
+                )
         b, c = best["baseline"], best["current"]
-        out[name] = {"baseline": b, "current": c, "speedup_wall": b["wall_s"] / c["wall_s"],
-                     "speedup_cpu": b["cpu_s"] / c["cpu_s"], "rtf_wall": c["duration_s"] / c["wall_s"],
-                     "rtf_cpu": c["duration_s"] / c["cpu_s"]}
-        report(f"  {name:16s} baseline {b['wall_s']:7.3f} s wall {b['cpu_s']:7.3f} s CPU (nfev {b['nfev']})   "
-               f"current {c['wall_s']:7.3f} s wall {c['cpu_s']:7.3f} s CPU (nfev {c['nfev']})   speed-up "
-               f"{out[name]['speedup_wall']:.2f}x wall, {out[name]['speedup_cpu']:.2f}x CPU; current "
-               f"{out[name]['rtf_wall']:.1f}x real time (wall)")
+        out[name] = {
+            "baseline": b,
+            "current": c,
+            "speedup_wall": b["wall_s"] / c["wall_s"],
+            "speedup_cpu": b["cpu_s"] / c["cpu_s"],
+            "rtf_wall": c["duration_s"] / c["wall_s"],
+            "rtf_cpu": c["duration_s"] / c["cpu_s"],
+        }
+        report(
+            f"  {name:16s} baseline {b['wall_s']:7.3f} s wall {b['cpu_s']:7.3f} s CPU (nfev {b['nfev']})   "
+            f"current {c['wall_s']:7.3f} s wall {c['cpu_s']:7.3f} s CPU (nfev {c['nfev']})   speed-up "
+            f"{out[name]['speedup_wall']:.2f}x wall, {out[name]['speedup_cpu']:.2f}x CPU; current "
+            f"{out[name]['rtf_wall']:.1f}x real time (wall)"
+        )
     return out
 
 
@@ -94,27 +104,35 @@ def compare_inching_sweep(base: str, n_xt: int, n_tow: int, duration, report, ch
     xts = [round(0.2 + 0.15 * k / (n_xt - 1), 10) for k in range(n_xt)]
     tail = [f"tow.force_N=0:90:{n_tow}"] + ([f"simulation.duration_s={duration}"] if duration is not None else [])
     # the baseline with -j 2 too: what two processes give on the machine as it is loaded now
-    sides = (("baseline serial", base, 1), ("current serial", str(ROOT), 1), ("current -j 2", str(ROOT), 2),
-             ("baseline -j 2", base, 2))
+    sides = (
+        ("baseline serial", base, 1),
+        ("current serial", str(ROOT), 1),
+        ("current -j 2", str(ROOT), 2),
+        ("baseline -j 2", base, 2),
+    )
     out = {"sets": [f"terrain.xt=0.2:0.35:{n_xt}"] + tail, "cases": n_xt * n_tow, "chunks": chunks}
     tot = {label: {"wall_s": 0.0, "cases": 0, "ok": 0} for label, _, _ in sides}
     for c in range(chunks):
         sets = ["terrain.xt=" + ",".join(str(x) for x in xts[c::chunks])] + tail
-        order = sides[c % len(sides):] + sides[:c % len(sides)]       # rotate who goes first
+        order = sides[c % len(sides) :] + sides[: c % len(sides)]  # rotate who goes first
         for label, tree, jobs in order:
             r = _child(_SWEEP_CHILD.format(tree=tree, sets=sets, jobs=jobs), tree)
             for k in ("wall_s", "cases", "ok"):
                 tot[label][k] += r[k]
     for label, _, _ in sides:
         r = out[label] = dict(tot[label], cases_per_s=tot[label]["cases"] / tot[label]["wall_s"])
-        report(f"  inchworm6 sweep, {label:16s} {r['cases_per_s']:6.2f} cases/s ({r['wall_s']:6.1f} s for "
-               f"{r['cases']} cases, {r['ok']} ok; {chunks} interleaved chunks)")
+        report(
+            f"  inchworm6 sweep, {label:16s} {r['cases_per_s']:6.2f} cases/s ({r['wall_s']:6.1f} s for "
+            f"{r['cases']} cases, {r['ok']} ok; {chunks} interleaved chunks)"
+        )
     out["speedup_serial"] = out["current serial"]["cases_per_s"] / out["baseline serial"]["cases_per_s"]
     out["speedup"] = out["current -j 2"]["cases_per_s"] / out["baseline serial"]["cases_per_s"]
     out["baseline_2proc"] = out["baseline -j 2"]["cases_per_s"] / out["baseline serial"]["cases_per_s"]
-    report(f"  against the baseline's serial throughput: current serial {out['speedup_serial']:.2f}x, "
-           f"current -j 2 {out['speedup']:.2f}x (baseline -j 2: {out['baseline_2proc']:.2f}x, the machine's "
-           "parallel capacity at this load)")
+    report(
+        f"  against the baseline's serial throughput: current serial {out['speedup_serial']:.2f}x, "
+        f"current -j 2 {out['speedup']:.2f}x (baseline -j 2: {out['baseline_2proc']:.2f}x, the machine's "
+        "parallel capacity at this load)"
+    )
     return out
 
 
@@ -123,8 +141,8 @@ def baseline_section(ref: str, quick: bool, report) -> dict:
     with tempfile.TemporaryDirectory(prefix="snoworm-baseline-") as tmp:
         base = str(export_tree(ref, Path(tmp)))
         rounds = 2 if quick else 3
-        runs = compare_runs(base, ("inchworm6", "tow6_uniform", "traverse_patch"), rounds,
-                            {"tow6_uniform": 10, "inchworm6": 2}, report)
-        sweep = compare_inching_sweep(base, *((4, 5, 6) if quick else (10, 10, None)), report,
-                                      chunks=2 if quick else 5)
+        runs = compare_runs(
+            base, ("inchworm6", "tow6_uniform", "traverse_patch"), rounds, {"tow6_uniform": 10, "inchworm6": 2}, report
+        )
+        sweep = compare_inching_sweep(base, *((4, 5, 6) if quick else (10, 10, None)), report, chunks=2 if quick else 5)
     return {"ref": ref, "runs": runs, "inching_sweep": sweep}

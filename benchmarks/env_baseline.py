@@ -1,6 +1,7 @@
 """snoworm.env.SnowormEnv as it was on main before issue 27 (main at bb09471, relative imports made
 absolute), kept verbatim as the speed baseline of benchmarks/run.py (bench_rl): the ratio of the
 new environments is measured against it in the same run.  Not part of the package."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -17,8 +18,17 @@ from snoworm.simulation.stepwise import Simulator
 __all__ = ["SnowormEnv", "OBSERVATION_FIELDS", "default_reward"]
 
 #: Observation arrays in the order they fill the observation vector.
-OBSERVATION_FIELDS = ("x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt",
-                      "link_force_N", "link_length_m", "joint_extension_m")
+OBSERVATION_FIELDS = (
+    "x_m",
+    "v_mps",
+    "wheel_speed_mps",
+    "slip",
+    "motor_torque_Nm",
+    "xt",
+    "link_force_N",
+    "link_length_m",
+    "joint_extension_m",
+)
 
 
 def default_reward(prev_obs, obs, info, energy_weight=1e-3) -> float:
@@ -47,8 +57,16 @@ class SnowormEnv(gymnasium.Env):
 
     metadata = {"render_modes": []}
 
-    def __init__(self, scenario, reward=None, dt_s=0.1, action_keys=("wheel_speed_mps",), energy_weight=1e-3,
-                 stall_speed_mps=0.01, stall_time_s=2.0):
+    def __init__(
+        self,
+        scenario,
+        reward=None,
+        dt_s=0.1,
+        action_keys=("wheel_speed_mps",),
+        energy_weight=1e-3,
+        stall_speed_mps=0.01,
+        stall_time_s=2.0,
+    ):
         if not dt_s > 0:
             raise ValueError(f"dt_s: the step length must be positive, got {dt_s!r}")
         self.sim = Simulator(scenario)
@@ -65,10 +83,12 @@ class SnowormEnv(gymnasium.Env):
     def _action_bounds(self):
         model = self.sim.model
         seg, links, n = model.seg, model.links, model.n
-        bounds = {"wheel_speed_mps": (np.zeros(n), seg.no_load_speed_radps * seg.wheel_radius_m),
-                  "wheel_torque_Nm": (-seg.torque_limit_Nm, seg.torque_limit_Nm),
-                  "joint_force_N": (-links.force_max_N, links.force_max_N),
-                  "joint_length_m": (links.stroke_min_m, links.stroke_max_m)}
+        bounds = {
+            "wheel_speed_mps": (np.zeros(n), seg.no_load_speed_radps * seg.wheel_radius_m),
+            "wheel_torque_Nm": (-seg.torque_limit_Nm, seg.torque_limit_Nm),
+            "joint_force_N": (-links.force_max_N, links.force_max_N),
+            "joint_length_m": (links.stroke_min_m, links.stroke_max_m),
+        }
         for key in self.action_keys:
             if key not in bounds:
                 raise ValueError(f"action_keys: {key!r} cannot be an action; choose among {', '.join(bounds)}")
@@ -89,7 +109,7 @@ class SnowormEnv(gymnasium.Env):
         cmd, j = {}, 0
         for key in self.action_keys:
             size = self.sim.model.n - (1 if key.startswith("joint_") else 0)
-            cmd[key] = a[j:j + size]
+            cmd[key] = a[j : j + size]
             j += size
         return cmd
 
@@ -106,7 +126,7 @@ class SnowormEnv(gymnasium.Env):
         obs = self.sim.step(self._command(action), self.dt_s)
         ts, ys, ctl = self.sim.last_step
         power = output_series(self.sim.model, ys, ctl)[0]["motor_electrical_power_W"].sum(-1)
-        energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(ts)))     # trapezoid rule
+        energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(ts)))  # trapezoid rule
         info = {"t_s": obs.t_s, "motor_energy_J": energy}
         reward = (self.reward_fn or (lambda p, o, i: default_reward(p, o, i, self.energy_weight)))(prev, obs, info)
         moving = float(np.mean(obs.v_mps)) >= self.stall_speed_mps or not np.any(self.sim.commands.source > 0)

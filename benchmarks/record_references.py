@@ -11,6 +11,7 @@ in the commit.  ``tight``: every shipped scenario at rtol 1e-9 and 1e-3 times th
 absolute tolerances with LSODA, whatever its YAML says; tests/test_tight_reference.py holds
 the shipped settings within half their 1e-3 promise of it.  Re-record it only when the model changes.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -46,7 +47,7 @@ def main(argv=None):
         else:
             res = simulate(load_scenario(SC / f"{name}.yaml", TIGHT_SETTINGS))
             data[name] = dict(quantities(res), settings=[list(s) for s in TIGHT_SETTINGS])
-        if name in old:              # keep the file's key order (small diffs)
+        if name in old:  # keep the file's key order (small diffs)
             data[name] = {k: data[name][k] for k in [*old[name], *data[name]] if k in data[name]}
         print(f"{name}: {time.perf_counter() - t0:.1f} s", flush=True)
     out.write_text(json.dumps(dict(sorted(data.items())), indent=1) + "\n")

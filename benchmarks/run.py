@@ -12,6 +12,7 @@ numbers as JSON.  Wall-clock numbers depend on the machine and its load (the cor
 recorded); ratios measured within one run are the meaningful part.  Timings are the best of a
 few repeats.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -59,8 +60,18 @@ TARGETS = {
 #: Whole-process commands timed by :func:`bench_processes` (``{out}``: a fresh temporary directory).
 PROCESSES = {
     "paper_s": ["paper", "--out", "{out}"],
-    "mobility_map_s": ["mobility-map", str(SC / "traverse_patch.yaml"), "--xt", "0.2:1.0:9", "--tow", "0,100,200",
-                       "-j", "2", "--out", "{out}"],
+    "mobility_map_s": [
+        "mobility-map",
+        str(SC / "traverse_patch.yaml"),
+        "--xt",
+        "0.2:1.0:9",
+        "--tow",
+        "0,100,200",
+        "-j",
+        "2",
+        "--out",
+        "{out}",
+    ],
 }
 
 
@@ -101,8 +112,11 @@ def rel_err(a, b):
 
 def steady_quantities(res):
     s = res.summary()
-    return {"final_link_forces_N": s["final_link_forces_N"], "final_speed_mps": s["final_speed_mps"],
-            "mean_speed_mps": s["mean_speed_mps"]}
+    return {
+        "final_link_forces_N": s["final_link_forces_N"],
+        "final_speed_mps": s["final_speed_mps"],
+        "mean_speed_mps": s["mean_speed_mps"],
+    }
 
 
 def bench_scenarios(repeats, report):
@@ -112,40 +126,72 @@ def bench_scenarios(repeats, report):
     for name in ("tow6_uniform", "inchworm6", "frostyboy_case3"):
         sc = load_scenario(SC / f"{name}.yaml")
         res, wall = run_timed(sc, 5 * repeats if name != "inchworm6" else max(1, repeats - 1))
-        ref = simulate(load_scenario(SC / f"{name}.yaml", [("simulation.rtol", 1e-9), ("simulation.atol_scale", 1e-3),
-                                                           ("simulation.method", "LSODA")]))
+        ref = simulate(
+            load_scenario(
+                SC / f"{name}.yaml",
+                [("simulation.rtol", 1e-9), ("simulation.atol_scale", 1e-3), ("simulation.method", "LSODA")],
+            )
+        )
         q, qr = steady_quantities(res), steady_quantities(ref)
         errs = {k: rel_err(q[k], qr[k]) for k in q}
         qt = quantities(res)
         tight = max(scaled_error(qt, TIGHT[name], k) for k in compared(is_gait(sc)))
-        rows[name] = {"duration_s": sc.simulation.duration_s, "wall_s": wall, "rtf": sc.simulation.duration_s / wall,
-                      "nfev": res.stats["nfev"], "njev": res.stats["njev"], "rhs_us": rhs_cost_us(sc),
-                      "rel_err_vs_tight": errs, "reference_nfev": ref.stats["nfev"], "tight_scaled_err": tight}
-        report(f"  {name:16s} RTF {rows[name]['rtf']:7.1f}x  wall {wall:6.3f} s  nfev {res.stats['nfev']:6d}  "
-               f"njev {res.stats['njev']:5d}  RHS {rows[name]['rhs_us']:6.1f} us  "
-               f"max rel. err vs rtol 1e-9: {max(errs.values()):.2e} ({', '.join(f'{k} {v:.1e}' for k, v in errs.items())}); "
-               f"worst quantity of tests/reference_quantities.py vs tests/data/tight_reference.json: {tight:.2e} of scale")
+        rows[name] = {
+            "duration_s": sc.simulation.duration_s,
+            "wall_s": wall,
+            "rtf": sc.simulation.duration_s / wall,
+            "nfev": res.stats["nfev"],
+            "njev": res.stats["njev"],
+            "rhs_us": rhs_cost_us(sc),
+            "rel_err_vs_tight": errs,
+            "reference_nfev": ref.stats["nfev"],
+            "tight_scaled_err": tight,
+        }
+        report(
+            f"  {name:16s} RTF {rows[name]['rtf']:7.1f}x  wall {wall:6.3f} s  nfev {res.stats['nfev']:6d}  "
+            f"njev {res.stats['njev']:5d}  RHS {rows[name]['rhs_us']:6.1f} us  "
+            f"max rel. err vs rtol 1e-9: {max(errs.values()):.2e} ({', '.join(f'{k} {v:.1e}' for k, v in errs.items())}); "
+            f"worst quantity of tests/reference_quantities.py vs tests/data/tight_reference.json: {tight:.2e} of scale"
+        )
     # tow6 on a constant 5 deg grade and along an elevation table (docs/model.md section 7), against the
     # level run of this session: a constant grade keeps the precomputed terrain factors, a table does not
-    for label, sets in (("tow6_uniform 5 deg", [("terrain.grade_deg", 5.0)]),
-                        ("tow6_uniform elevation table", [("terrain.elevation", [[-20, 0], [0, 0], [20, 1], [40, 1.5]])])):
+    for label, sets in (
+        ("tow6_uniform 5 deg", [("terrain.grade_deg", 5.0)]),
+        ("tow6_uniform elevation table", [("terrain.elevation", [[-20, 0], [0, 0], [20, 1], [40, 1.5]])]),
+    ):
         sc = load_scenario(SC / "tow6_uniform.yaml", sets)
         res, wall = run_timed(sc, 5 * repeats)
         rhs = rhs_cost_us(sc)
-        rows[label] = {"duration_s": sc.simulation.duration_s, "wall_s": wall, "rtf": sc.simulation.duration_s / wall,
-                       "nfev": res.stats["nfev"], "rhs_us": rhs, "rhs_ratio_to_level": rhs / rows["tow6_uniform"]["rhs_us"]}
-        report(f"  {label:28s} RTF {rows[label]['rtf']:7.1f}x  wall {wall:6.3f} s  nfev {res.stats['nfev']:6d}  "
-               f"RHS {rhs:6.1f} us ({rows[label]['rhs_ratio_to_level']:.2f}x the level RHS)")
+        rows[label] = {
+            "duration_s": sc.simulation.duration_s,
+            "wall_s": wall,
+            "rtf": sc.simulation.duration_s / wall,
+            "nfev": res.stats["nfev"],
+            "rhs_us": rhs,
+            "rhs_ratio_to_level": rhs / rows["tow6_uniform"]["rhs_us"],
+        }
+        report(
+            f"  {label:28s} RTF {rows[label]['rtf']:7.1f}x  wall {wall:6.3f} s  nfev {res.stats['nfev']:6d}  "
+            f"RHS {rhs:6.1f} us ({rows[label]['rhs_ratio_to_level']:.2f}x the level RHS)"
+        )
     # the same run on the previous solver settings (LSODA, rtol 1e-4, atol_scale 10), for the ratio
-    sc = load_scenario(SC / "inchworm6.yaml", [("simulation.method", "LSODA"), ("simulation.rtol", 1e-4),
-                                               ("simulation.atol_scale", 10)])
+    sc = load_scenario(
+        SC / "inchworm6.yaml",
+        [("simulation.method", "LSODA"), ("simulation.rtol", 1e-4), ("simulation.atol_scale", 10)],
+    )
     res, wall = run_timed(sc, max(1, repeats - 1))
-    rows["inchworm6 (LSODA)"] = {"duration_s": sc.simulation.duration_s, "wall_s": wall,
-                                 "rtf": sc.simulation.duration_s / wall, "nfev": res.stats["nfev"],
-                                 "njev": res.stats["njev"]}
-    report(f"  inchworm6 on LSODA (rtol 1e-4, atol_scale 10, the previous settings): RTF {sc.simulation.duration_s / wall:.1f}x  "
-           f"wall {wall:6.3f} s  nfev {res.stats['nfev']}  njev {res.stats['njev']}  -> VODE is "
-           f"{wall / rows['inchworm6']['wall_s']:.2f}x faster in this run")
+    rows["inchworm6 (LSODA)"] = {
+        "duration_s": sc.simulation.duration_s,
+        "wall_s": wall,
+        "rtf": sc.simulation.duration_s / wall,
+        "nfev": res.stats["nfev"],
+        "njev": res.stats["njev"],
+    }
+    report(
+        f"  inchworm6 on LSODA (rtol 1e-4, atol_scale 10, the previous settings): RTF {sc.simulation.duration_s / wall:.1f}x  "
+        f"wall {wall:6.3f} s  nfev {res.stats['nfev']}  njev {res.stats['njev']}  -> VODE is "
+        f"{wall / rows['inchworm6']['wall_s']:.2f}x faster in this run"
+    )
     return rows
 
 
@@ -154,19 +200,33 @@ def bench_scaling(report, repeats):
     for n in (2, 6, 12, 24, 48):
         sc = load_scenario(SC / "tow6_uniform.yaml", [("vehicle.segments", n), ("tow.force_N", 200.0 * n / 6)])
         res, wall = run_timed(sc, repeats)
-        rows[n] = {"rhs_us": rhs_cost_us(sc), "rtf": sc.simulation.duration_s / wall, "nfev": res.stats["nfev"],
-                   "njev": res.stats["njev"], "numpy_rhs_us": rhs_cost_us(sc, numpy_kernel=True),
-                   "float_kernel": sc.chain_model.float_kernel is not None}
-        report(f"  N = {n:3d}: RHS {rows[n]['rhs_us']:7.1f} us  ({rows[n]['rhs_us'] / n:6.2f} us/segment, "
-               f"{'float' if rows[n]['float_kernel'] else 'NumPy'} kernel; NumPy kernel {rows[n]['numpy_rhs_us']:6.1f} us)  "
-               f"RTF {rows[n]['rtf']:7.1f}x  nfev {res.stats['nfev']}  njev {res.stats['njev']}")
+        rows[n] = {
+            "rhs_us": rhs_cost_us(sc),
+            "rtf": sc.simulation.duration_s / wall,
+            "nfev": res.stats["nfev"],
+            "njev": res.stats["njev"],
+            "numpy_rhs_us": rhs_cost_us(sc, numpy_kernel=True),
+            "float_kernel": sc.chain_model.float_kernel is not None,
+        }
+        report(
+            f"  N = {n:3d}: RHS {rows[n]['rhs_us']:7.1f} us  ({rows[n]['rhs_us'] / n:6.2f} us/segment, "
+            f"{'float' if rows[n]['float_kernel'] else 'NumPy'} kernel; NumPy kernel {rows[n]['numpy_rhs_us']:6.1f} us)  "
+            f"RTF {rows[n]['rtf']:7.1f}x  nfev {res.stats['nfev']}  njev {res.stats['njev']}"
+        )
     return rows
 
 
 def _metric_err(rows_a, rows_b):
     """Max relative difference of the summary metrics of two sweep tables (floors near zero)."""
-    floors = {"distance_m": 1e-4, "mean_speed_mps": 1e-4, "late_speed_mps": 1e-4, "mean_slip": 1e-4,
-              "max_slip": 1e-4, "max_link_force_N": 1e-2, "energy_per_m_J": 1e-2}
+    floors = {
+        "distance_m": 1e-4,
+        "mean_speed_mps": 1e-4,
+        "late_speed_mps": 1e-4,
+        "mean_slip": 1e-4,
+        "max_slip": 1e-4,
+        "max_link_force_N": 1e-2,
+        "energy_per_m_J": 1e-2,
+    }
     worst = 0.0
     for a, b in zip(rows_a, rows_b):
         keys = dict(floors, **{k: 1e-2 for k in a if k.startswith("final_link_force_")})
@@ -186,14 +246,20 @@ def bench_sweep(n_xt, n_tow, duration, n_xt_big, report):
     sweep (``n_xt_big x n_tow`` cases, as a batched sweep is used), in one process and in two.
     The speed-ups are cases/s against the serial cases/s.
     """
+
     def sets_of(nx):
         return [f"terrain.xt=0.6:1.0:{nx}", f"tow.force_N=0:450:{n_tow}", f"simulation.duration_s={duration}"]
+
     n, n_big = n_xt * n_tow, n_xt_big * n_tow
     out = {"cases": n, "duration_s": duration, "sets": sets_of(n_xt), "big_cases": n_big, "big_sets": sets_of(n_xt_big)}
     tables = {}
-    runs = (("serial", n_xt, {}), ("2 processes", n_xt, {"jobs": 2}), ("batched", n_xt, {"batch": min(n, 100)}),
-            (f"batched, {n_big} cases", n_xt_big, {"batch": 100}),
-            (f"batched, {n_big} cases, 2 processes", n_xt_big, {"batch": 100, "jobs": 2}))
+    runs = (
+        ("serial", n_xt, {}),
+        ("2 processes", n_xt, {"jobs": 2}),
+        ("batched", n_xt, {"batch": min(n, 100)}),
+        (f"batched, {n_big} cases", n_xt_big, {"batch": 100}),
+        (f"batched, {n_big} cases, 2 processes", n_xt_big, {"batch": 100, "jobs": 2}),
+    )
     for label, nx, kw in runs:
         t0 = time.perf_counter()
         tables[label] = run_sweep(SC / "tow6_uniform.yaml", sets_of(nx), plot=False, progress=False, **kw)
@@ -207,10 +273,12 @@ def bench_sweep(n_xt, n_tow, duration, n_xt_big, report):
         out[label]["speedup"] = out[label]["cases_per_s"] / base
     out["batched_big"], out["batched_big_2proc"] = runs[3][0], runs[4][0]
     out["batched_rel_err"] = _metric_err(tables["serial"].rows, tables["batched"].rows)
-    report(f"  speed-up over serial: 2 processes {out['2 processes']['speedup']:.2f}x, batched "
-           f"{out['batched']['speedup']:.2f}x ({n} cases), {out[runs[3][0]]['speedup']:.2f}x ({n_big} cases), "
-           f"{out[runs[4][0]]['speedup']:.2f}x ({n_big} cases, 2 processes); batched vs serial metrics: "
-           f"max rel. err {out['batched_rel_err']:.2e}")
+    report(
+        f"  speed-up over serial: 2 processes {out['2 processes']['speedup']:.2f}x, batched "
+        f"{out['batched']['speedup']:.2f}x ({n} cases), {out[runs[3][0]]['speedup']:.2f}x ({n_big} cases), "
+        f"{out[runs[4][0]]['speedup']:.2f}x ({n_big} cases, 2 processes); batched vs serial metrics: "
+        f"max rel. err {out['batched_rel_err']:.2e}"
+    )
     return out
 
 
@@ -231,20 +299,31 @@ def bench_memory(n_a, n_b, report):
     sets = [f"terrain.xt=0.6:1.0:{n_a}", f"mode.speed_mps=1.0:2.5:{n_b}", "simulation.duration_s=3"]
     code = _MEMORY_CHILD.format(root=str(ROOT), scenario=str(SC / "frostyboy_case3.yaml"), sets=sets, batch=500)
     import resource
+
     before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     after = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     child = json.loads(p.stdout.strip().splitlines()[-1])
-    out = {"cases": child["cases"], "ok": child["ok"], "wall_s": child["wall_s"], "peak_MB": child["maxrss_kB"] / 1024,
-           "ru_maxrss_children_MB": max(after, before) / 1024, "sets": sets, "batch": 500}
-    report(f"  {child['cases']} cases ({child['ok']} ok) in {child['wall_s']:.1f} s "
-           f"({child['cases'] / child['wall_s']:.0f} cases/s): peak RSS {out['peak_MB']:.0f} MB")
+    out = {
+        "cases": child["cases"],
+        "ok": child["ok"],
+        "wall_s": child["wall_s"],
+        "peak_MB": child["maxrss_kB"] / 1024,
+        "ru_maxrss_children_MB": max(after, before) / 1024,
+        "sets": sets,
+        "batch": 500,
+    }
+    report(
+        f"  {child['cases']} cases ({child['ok']} ok) in {child['wall_s']:.1f} s "
+        f"({child['cases'] / child['wall_s']:.0f} cases/s): peak RSS {out['peak_MB']:.0f} MB"
+    )
     return out
 
 
 def bench_processes(repeats, report):
     """Wall time of whole ``snoworm`` processes (start-up, imports, runs, files), best of ``repeats``."""
     import tempfile
+
     out = {}
     for key, args in PROCESSES.items():
         best = np.inf
@@ -255,8 +334,10 @@ def bench_processes(repeats, report):
                 subprocess.run(cmd, check=True, capture_output=True, cwd=ROOT)
                 best = min(best, time.perf_counter() - t0)
         out[key] = best
-        report(f"  snoworm {' '.join(args[:1] + [a for a in args[1:] if not a.startswith('/') and a != '{out}' and a != '--out'])}: "
-               f"{best:6.2f} s")
+        report(
+            f"  snoworm {' '.join(args[:1] + [a for a in args[1:] if not a.startswith('/') and a != '{out}' and a != '--out'])}: "
+            f"{best:6.2f} s"
+        )
     return out
 
 
@@ -265,10 +346,16 @@ def bench_controllers(repeats, report):
     out = {}
     sc = load_scenario(ROOT / "examples" / "controllers" / "tow6_uniform_controller.yaml")
     res, wall = run_timed(sc, repeats)
-    out["controller_tow6"] = {"wall_s": wall, "rtf": sc.simulation.duration_s / wall, "nfev": res.stats["nfev"],
-                              "intervals": res.stats["intervals"]}
-    report(f"  tow6 20 s, 50 Hz Python controller: RTF {out['controller_tow6']['rtf']:6.1f}x  wall {wall:6.3f} s  "
-           f"nfev {res.stats['nfev']}  intervals {res.stats['intervals']}")
+    out["controller_tow6"] = {
+        "wall_s": wall,
+        "rtf": sc.simulation.duration_s / wall,
+        "nfev": res.stats["nfev"],
+        "intervals": res.stats["intervals"],
+    }
+    report(
+        f"  tow6 20 s, 50 Hz Python controller: RTF {out['controller_tow6']['rtf']:6.1f}x  wall {wall:6.3f} s  "
+        f"nfev {res.stats['nfev']}  intervals {res.stats['intervals']}"
+    )
     # on VODE, which the Simulator keeps across steps (no restart per step; LSODA restarts every step)
     base = load_scenario(SC / "tow6_uniform.yaml", [("simulation.method", "VODE")])
     best = np.inf
@@ -311,15 +398,19 @@ def bench_rl(repeats, report, steps=200, batch=64):
     LSODA), and the vector environment with B = ``batch`` (``steps / 4`` periods; default VODE with
     its tolerances / sqrt(B), and on LSODA)."""
     import warnings
-    warnings.filterwarnings("ignore", module="gymnasium")     # the baseline's unnormalised spaces
+
+    warnings.filterwarnings("ignore", module="gymnasium")  # the baseline's unnormalised spaces
     from benchmarks.env_baseline import SnowormEnv as BaselineEnv
     from snoworm.env import SnowormEnv, SnowormVectorEnv
+
     sc = load_scenario(SC / "tow6_uniform.yaml")
-    envs = {"main's SnowormEnv (LSODA, restarted every period)": (BaselineEnv(sc, dt_s=0.1), False),
-            "SnowormEnv (VODE, default)": (SnowormEnv(sc, dt_s=0.1), False),
-            "SnowormEnv (method LSODA)": (SnowormEnv(sc, dt_s=0.1, method="LSODA"), False),
-            f"SnowormVectorEnv B = {batch}": (SnowormVectorEnv(batch, sc, dt_s=0.1), True),
-            f"SnowormVectorEnv B = {batch} (method LSODA)": (SnowormVectorEnv(batch, sc, dt_s=0.1, method="LSODA"), True)}
+    envs = {
+        "main's SnowormEnv (LSODA, restarted every period)": (BaselineEnv(sc, dt_s=0.1), False),
+        "SnowormEnv (VODE, default)": (SnowormEnv(sc, dt_s=0.1), False),
+        "SnowormEnv (method LSODA)": (SnowormEnv(sc, dt_s=0.1, method="LSODA"), False),
+        f"SnowormVectorEnv B = {batch}": (SnowormVectorEnv(batch, sc, dt_s=0.1), True),
+        f"SnowormVectorEnv B = {batch} (method LSODA)": (SnowormVectorEnv(batch, sc, dt_s=0.1, method="LSODA"), True),
+    }
     best = dict.fromkeys(envs, 0.0)
     for _ in range(repeats):
         for label, (env, vector) in envs.items():
@@ -327,10 +418,17 @@ def bench_rl(repeats, report, steps=200, batch=64):
     for label, rate in best.items():
         report(f"  {label:52s} {rate:8.1f} env-steps/s")
     labels = list(envs)
-    out = {"rates": best, "batch": batch, "steps": steps,
-           "single_speedup": best[labels[1]] / best[labels[0]], "vector_speedup": best[labels[3]] / best[labels[1]]}
-    report(f"  SnowormEnv / main's env: {out['single_speedup']:.2f}x; vector B = {batch} / SnowormEnv: "
-           f"{out['vector_speedup']:.2f}x (vector / main's env: {best[labels[3]] / best[labels[0]]:.1f}x)")
+    out = {
+        "rates": best,
+        "batch": batch,
+        "steps": steps,
+        "single_speedup": best[labels[1]] / best[labels[0]],
+        "vector_speedup": best[labels[3]] / best[labels[1]],
+    }
+    report(
+        f"  SnowormEnv / main's env: {out['single_speedup']:.2f}x; vector B = {batch} / SnowormEnv: "
+        f"{out['vector_speedup']:.2f}x (vector / main's env: {best[labels[3]] / best[labels[0]]:.1f}x)"
+    )
     return out
 
 
@@ -355,14 +453,16 @@ def bench_startup(repeats, report):
     """Whole-process wall times of three commands and of their import floors, interleaved (one of
     each per round, after an untimed warm-up round), best of ``repeats`` rounds."""
     import tempfile
+
     # installed code as users get it: byte-compiled (an environment with PYTHONDONTWRITEBYTECODE
     # would otherwise compile every module from source at every start)
-    subprocess.run([sys.executable, "-m", "compileall", "-q", str(ROOT / "snoworm")], check=True,
-                   stdout=subprocess.DEVNULL)
+    subprocess.run(
+        [sys.executable, "-m", "compileall", "-q", str(ROOT / "snoworm")], check=True, stdout=subprocess.DEVNULL
+    )
     snoworm = _snoworm_command()
     scenario = str(SC / "tow6_uniform.yaml")
     with tempfile.TemporaryDirectory(prefix="snoworm-bench-") as tmp:
-        cases = {   # key: (command, floor key)
+        cases = {  # key: (command, floor key)
             "floor_help": ([sys.executable, "-c", "import numpy, yaml, click"], None),
             "help": (snoworm + ["--help"], "floor_help"),
             "floor_run": ([sys.executable, "-c", "import scipy.integrate"], None),
@@ -373,21 +473,26 @@ def bench_startup(repeats, report):
         best = {k: np.inf for k in cases}
         for rnd in range(repeats + 1):
             for key, (cmd, _) in cases.items():
-                cmd = [f"{c}{rnd}" if c.startswith(tmp) else c for c in cmd]   # a new --out folder each round
+                cmd = [f"{c}{rnd}" if c.startswith(tmp) else c for c in cmd]  # a new --out folder each round
                 t0 = time.perf_counter()
                 subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-                if rnd:     # round 0 warms the disk cache and the bytecode
+                if rnd:  # round 0 warms the disk cache and the bytecode
                     best[key] = min(best[key], time.perf_counter() - t0)
-    labels = {"help": "snoworm --help", "run": "snoworm run tow6_uniform.yaml --no-plot --out D",
-              "run_plots": "snoworm run tow6_uniform.yaml --out D (3 PNG plots)"}
+    labels = {
+        "help": "snoworm --help",
+        "run": "snoworm run tow6_uniform.yaml --no-plot --out D",
+        "run_plots": "snoworm run tow6_uniform.yaml --out D (3 PNG plots)",
+    }
     out = {}
     for key, (cmd, _floor) in cases.items():
         out[key] = {"wall_s": best[key], "command": labels.get(key) or f"python -c {cmd[-1]!r}"}
     for key, (_, floor) in cases.items():
         if floor:
             out[key].update(floor=floor, ratio=best[key] / best[floor])
-            report(f"  {out[key]['command']:50s} {best[key]:6.3f} s   floor {out[floor]['command']:50s} "
-                   f"{best[floor]:6.3f} s   ratio {out[key]['ratio']:.2f}")
+            report(
+                f"  {out[key]['command']:50s} {best[key]:6.3f} s   floor {out[floor]['command']:50s} "
+                f"{best[floor]:6.3f} s   ratio {out[key]['ratio']:.2f}"
+            )
     return out
 
 
@@ -411,15 +516,22 @@ def _values(res) -> dict:
     v = {}
     if "scenarios" in res:
         sc = res["scenarios"]
-        v.update(tow6_uniform_rtf=sc["tow6_uniform"]["rtf"], inchworm6_rtf=sc["inchworm6"]["rtf"],
-                 inchworm6_tight_err=sc["inchworm6"]["tight_scaled_err"],
-                 steady_rel_err=max(max(r["rel_err_vs_tight"].values()) for r in sc.values() if "rel_err_vs_tight" in r))
+        v.update(
+            tow6_uniform_rtf=sc["tow6_uniform"]["rtf"],
+            inchworm6_rtf=sc["inchworm6"]["rtf"],
+            inchworm6_tight_err=sc["inchworm6"]["tight_scaled_err"],
+            steady_rel_err=max(max(r["rel_err_vs_tight"].values()) for r in sc.values() if "rel_err_vs_tight" in r),
+        )
     if "scaling" in res:
         v["rhs_n48_over_n6"] = res["scaling"][48]["numpy_rhs_us"] / res["scaling"][6]["numpy_rhs_us"]
     if "sweep" in res:
         sw = res["sweep"]
-        v.update(sweep_2proc_speedup=sw["2 processes"]["speedup"], sweep_batched_speedup=sw[sw["batched_big"]]["speedup"],
-                 sweep_batched_2proc_speedup=sw[sw["batched_big_2proc"]]["speedup"], batched_rel_err=sw["batched_rel_err"])
+        v.update(
+            sweep_2proc_speedup=sw["2 processes"]["speedup"],
+            sweep_batched_speedup=sw[sw["batched_big"]]["speedup"],
+            sweep_batched_2proc_speedup=sw[sw["batched_big_2proc"]]["speedup"],
+            batched_rel_err=sw["batched_rel_err"],
+        )
     if "baseline" in res:
         v["traverse_patch_speedup"] = res["baseline"]["runs"]["traverse_patch"]["speedup_wall"]
         v["inching_sweep_speedup"] = res["baseline"]["inching_sweep"]["speedup"]
@@ -427,8 +539,10 @@ def _values(res) -> dict:
         v["sweep10k_peak_MB"] = res["memory"]["peak_MB"]
     v.update(res.get("processes", {}))
     if "controllers" in res:
-        v.update(controller_tow6_rtf=res["controllers"]["controller_tow6"]["rtf"],
-                 simulator_step_rtf=res["controllers"]["simulator_step"]["rtf"])
+        v.update(
+            controller_tow6_rtf=res["controllers"]["controller_tow6"]["rtf"],
+            simulator_step_rtf=res["controllers"]["simulator_step"]["rtf"],
+        )
     if "startup" in res:
         v.update(startup_values(res["startup"]))
     if "rl" in res:
@@ -451,30 +565,61 @@ def main(argv=None):
         lines.append(s)
 
     cores = os.cpu_count()
-    report(f"snoworm benchmarks: {platform.python_version()}, numpy {np.__version__}, {cores} cores, "
-           f"{'quick' if args.quick else 'full'} run{'' if args.only is None else ' of ' + ', '.join(args.only)}")
+    report(
+        f"snoworm benchmarks: {platform.python_version()}, numpy {np.__version__}, {cores} cores, "
+        f"{'quick' if args.quick else 'full'} run{'' if args.only is None else ' of ' + ', '.join(args.only)}"
+    )
     repeats = 2 if args.quick else 3
     res = {"cores": cores, "python": platform.python_version(), "numpy": np.__version__, "quick": args.quick}
     steps = [
-        ("scenarios", "Scenarios (default tolerances; reference: rtol 1e-9, atol_scale 1e-3):",
-         lambda: bench_scenarios(repeats, report)),
-        ("scaling", "Cost growth with N (tow6_uniform with N segments, 33.3 N tow per segment, 20 s):",
-         lambda: bench_scaling(report, repeats)),
-        ("sweep", "Sweep throughput (tow6_uniform over terrain.xt x tow.force_N):",
-         lambda: bench_sweep(*((8, 5, 5, 40) if args.quick else (20, 10, 5, 100)), report)),
-        ("baseline", f"Against {args.baseline} (child processes, interleaved; inching sweep "
-                     f"{'20 cases of 6 s' if args.quick else '100 cases of 30 s'}):",
-         lambda: baseline_section(args.baseline, args.quick, report)),
-        ("memory", "Sweep memory (frostyboy_case3 over terrain.xt x mode.speed_mps, batched 500, child process):",
-         lambda: bench_memory(*((40, 25) if args.quick else (100, 100)), report)),
-        ("processes", f"Whole processes (best of {1 if args.quick else 2}):",
-         lambda: bench_processes(1 if args.quick else 2, report)),
-        ("controllers", "Controllers (issue 14: solver restarted at every control period / step):",
-         lambda: bench_controllers(repeats, report)),
-        ("startup", "Start-up (whole processes, byte-compiled, against their import floors, interleaved, best of "
-                    f"{repeats + 2} rounds):", lambda: bench_startup(repeats + 2, report)),
-        ("rl", "Gymnasium environments (issue 27: tow6_uniform, dt 0.1 s, random actions, interleaved, best of "
-               f"{repeats} rounds):", lambda: bench_rl(repeats, report)),
+        (
+            "scenarios",
+            "Scenarios (default tolerances; reference: rtol 1e-9, atol_scale 1e-3):",
+            lambda: bench_scenarios(repeats, report),
+        ),
+        (
+            "scaling",
+            "Cost growth with N (tow6_uniform with N segments, 33.3 N tow per segment, 20 s):",
+            lambda: bench_scaling(report, repeats),
+        ),
+        (
+            "sweep",
+            "Sweep throughput (tow6_uniform over terrain.xt x tow.force_N):",
+            lambda: bench_sweep(*((8, 5, 5, 40) if args.quick else (20, 10, 5, 100)), report),
+        ),
+        (
+            "baseline",
+            f"Against {args.baseline} (child processes, interleaved; inching sweep "
+            f"{'20 cases of 6 s' if args.quick else '100 cases of 30 s'}):",
+            lambda: baseline_section(args.baseline, args.quick, report),
+        ),
+        (
+            "memory",
+            "Sweep memory (frostyboy_case3 over terrain.xt x mode.speed_mps, batched 500, child process):",
+            lambda: bench_memory(*((40, 25) if args.quick else (100, 100)), report),
+        ),
+        (
+            "processes",
+            f"Whole processes (best of {1 if args.quick else 2}):",
+            lambda: bench_processes(1 if args.quick else 2, report),
+        ),
+        (
+            "controllers",
+            "Controllers (issue 14: solver restarted at every control period / step):",
+            lambda: bench_controllers(repeats, report),
+        ),
+        (
+            "startup",
+            "Start-up (whole processes, byte-compiled, against their import floors, interleaved, best of "
+            f"{repeats + 2} rounds):",
+            lambda: bench_startup(repeats + 2, report),
+        ),
+        (
+            "rl",
+            "Gymnasium environments (issue 27: tow6_uniform, dt 0.1 s, random actions, interleaved, best of "
+            f"{repeats} rounds):",
+            lambda: bench_rl(repeats, report),
+        ),
     ]
     for key, title, fn in steps:
         if key in only:
@@ -482,8 +627,10 @@ def main(argv=None):
             res[key] = fn()
     values = _values(res)
     if "memory" in res and res["memory"]["cases"] < 10_000:
-        report(f"  (memory measured on {res['memory']['cases']} cases; rows are ~1 kB each, so 10,000 cases add "
-               f"~{(10_000 - res['memory']['cases']) * 1e-3:.0f} MB at most to the figure below)")
+        report(
+            f"  (memory measured on {res['memory']['cases']} cases; rows are ~1 kB each, so 10,000 cases add "
+            f"~{(10_000 - res['memory']['cases']) * 1e-3:.0f} MB at most to the figure below)"
+        )
     report("")
     report(f"Targets ({cores} cores):")
     res["targets"] = {}

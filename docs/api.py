@@ -5,6 +5,7 @@ docstrings); any warning pdoc raises (a broken cross-reference, a docstring it c
 import failing) is printed and makes the build fail (exit status 1).  ``make docs`` runs it into
 ``out/docs``; tests/test_docs.py runs it in the test suite.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -31,7 +32,7 @@ def modules() -> list:
     named here.
     """
     names = ["snoworm"] + [m.name for m in pkgutil.walk_packages(snoworm.__path__, "snoworm.")]
-    walked, out = set(), []     # walked: packages whose submodules pdoc reaches by itself
+    walked, out = set(), []  # walked: packages whose submodules pdoc reaches by itself
     for name in names:
         if name in SKIP:
             continue
@@ -58,6 +59,8 @@ if __name__ == "__main__":
     for p in problems:
         print(p, file=sys.stderr)
     pages = sum(1 for p in out.rglob("*.html") if p.name not in ("index.html", "search.html"))
-    print(f"API reference of {pages} modules in {out}/index.html"
-          + (f"; {len(problems)} warning(s): failed" if problems else ""))
+    print(
+        f"API reference of {pages} modules in {out}/index.html"
+        + (f"; {len(problems)} warning(s): failed" if problems else "")
+    )
     sys.exit(1 if problems else 0)

@@ -101,15 +101,27 @@ fig  # shown inline in a notebook
 
 # %%
 out = Path(tempfile.mkdtemp(prefix="snoworm-tutorial-")) / "sweep"
-table = snoworm.run_sweep(sc.with_({"simulation.duration_s": 3.0}), ["terrain.xt=0.6:1.0:3", "tow.force_N=0,200"],
-                          out_dir=out, plot=False, series="netcdf")
+table = snoworm.run_sweep(
+    sc.with_({"simulation.duration_s": 3.0}),
+    ["terrain.xt=0.6:1.0:3", "tow.force_N=0,200"],
+    out_dir=out,
+    plot=False,
+    series="netcdf",
+)
 df = table.to_pandas()
 grid = df.pivot(index="tow.force_N", columns="terrain.xt", values="mean_speed_mps")
 print(grid.round(3))
 
 fig2 = Figure(figsize=(6, 3.5), layout="constrained")
-plotting.plot_sweep_heatmap([f"{x:g}" for x in grid.columns], [f"{f:g}" for f in grid.index], grid.to_numpy(),
-                            "terrain.xt", "tow.force_N", "mean speed [m/s]", ax=fig2.subplots())
+plotting.plot_sweep_heatmap(
+    [f"{x:g}" for x in grid.columns],
+    [f"{f:g}" for f in grid.index],
+    grid.to_numpy(),
+    "terrain.xt",
+    "tow.force_N",
+    "mean speed [m/s]",
+    ax=fig2.subplots(),
+)
 fig2
 
 # %% [markdown]
@@ -129,7 +141,7 @@ assert again.rows == table.rows
 series = again.series()
 v_end = series["v_mps"].isel(time=-1).mean("segment")
 print(v_end.round(3).to_pandas())
-assert int(series["ok"].sum()) == len(df)          # every case's series is there
+assert int(series["ok"].sum()) == len(df)  # every case's series is there
 
 # %% [markdown]
 # To keep a figure: `plotting.save(fig2, "heatmap.pdf")` (png at 200 dpi, pdf with TrueType

@@ -6,6 +6,7 @@ calling the same class every period.  Both give the same link force.
 
 Run: ``python examples/controller.py [OUT_DIR]`` (default: a new temporary folder).
 """
+
 import sys
 import tempfile
 from pathlib import Path

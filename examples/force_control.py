@@ -2,6 +2,7 @@
 
 Run: ``python examples/force_control.py [OUT_DIR]`` (default: a new temporary folder).
 """
+
 import sys
 import tempfile
 from importlib.resources import files
@@ -17,6 +18,8 @@ res = snoworm.simulate(sc)
 links = res.links_frame()
 late = links[links["t_s"] >= res.t[-1] - 1.0].groupby("link")["force_N"].mean()
 print(f"{sc.name}: link forces over the last second [N]:", ", ".join(f"{f:.1f}" for f in late))
-paths = [plotting.save(res.plot("force_diagram"), out / "force_diagram.png"),
-         plotting.save(res.plot("speeds"), out / "speeds.png")]
+paths = [
+    plotting.save(res.plot("force_diagram"), out / "force_diagram.png"),
+    plotting.save(res.plot("speeds"), out / "speeds.png"),
+]
 print(f"wrote {len(paths)} files to {out}")

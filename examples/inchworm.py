@@ -2,6 +2,7 @@
 
 Run: ``python examples/inchworm.py [OUT_DIR]`` (default: a new temporary folder).
 """
+
 import sys
 import tempfile
 from importlib.resources import files
@@ -17,8 +18,10 @@ sc = snoworm.load_scenario(files("snoworm") / "scenarios" / "inchworm6.yaml").wi
 res = snoworm.simulate(sc)
 
 phases = [e for e in res.events if e.get("kind") == "phase_change"]
-print(f"{sc.name}: {len(phases)} gait phase changes, distance {res.summary()['distance_m']:.2f} m "
-      f"on X_t = {sc.terrain.xt:g} (rolling is immobilised below about 0.59)")
+print(
+    f"{sc.name}: {len(phases)} gait phase changes, distance {res.summary()['distance_m']:.2f} m "
+    f"on X_t = {sc.terrain.xt:g} (rolling is immobilised below about 0.59)"
+)
 # the paper's Fig 5: one panel per group of segments moving together, on a figure of our own
 fig = Figure(figsize=(8, 6), layout="constrained")
 res.plot("groups", fig=fig)

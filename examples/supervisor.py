@@ -5,6 +5,7 @@ scenario (100 s simulated, about a minute of computing) also inches out of the p
 on; here the patch is moved close to the start and the run stopped after the switch to inching,
 so the example takes seconds.
 """
+
 import sys
 import tempfile
 from importlib.resources import files
@@ -14,9 +15,9 @@ import snoworm
 from snoworm import plotting
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="snoworm-supervisor-"))
-sc = snoworm.load_scenario(files("snoworm") / "scenarios" / "traverse_patch.yaml").with_({
-    "terrain.patches": [{"start_m": 2.0, "end_m": 8.0, "xt": 0.3, "ramp_m": 0.5}],
-    "simulation.duration_s": 12.0})
+sc = snoworm.load_scenario(files("snoworm") / "scenarios" / "traverse_patch.yaml").with_(
+    {"terrain.patches": [{"start_m": 2.0, "end_m": 8.0, "xt": 0.3, "ramp_m": 0.5}], "simulation.duration_s": 12.0}
+)
 res = snoworm.simulate(sc)
 
 for e in res.events:

@@ -2,6 +2,7 @@
 
 Run: ``python examples/uniform.py [OUT_DIR]`` (default: a new temporary folder).
 """
+
 import sys
 import tempfile
 from importlib.resources import files
@@ -17,8 +18,10 @@ res = snoworm.simulate(sc)
 
 # the links carry the tow: the last link's tension approaches the tow force
 final = res.links["force_N"][-1]
-print(f"{sc.name}: mean speed {res.summary()['mean_speed_mps']:.3f} m/s; final link forces [N]:",
-      ", ".join(f"{f:.1f}" for f in final))
+print(
+    f"{sc.name}: mean speed {res.summary()['mean_speed_mps']:.3f} m/s; final link forces [N]:",
+    ", ".join(f"{f:.1f}" for f in final),
+)
 paths = res.write(out / "run", plot=False)
 paths.append(plotting.save(res.plot("forces"), out / "forces.png"))
 print(f"wrote {len(paths)} files to {out}")

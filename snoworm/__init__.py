@@ -20,6 +20,7 @@ import snoworm.env                  -> registers the Gymnasium env "snoworm/Snow
 
 The layers and their modules are described in docs/architecture.md.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -31,21 +32,53 @@ from ._version import __version__
 #: ``import snoworm`` and the command line start without SciPy, the sweeps or matplotlib; a
 #: command pays only for the modules it uses (``snoworm --help`` imports none of them).
 _EXPORTS = {
-    "BatchMember": "simulation.driver", "SolverError": "simulation.guard", "simulate": "simulation.driver",
+    "BatchMember": "simulation.driver",
+    "SolverError": "simulation.guard",
+    "simulate": "simulation.driver",
     "simulate_batch": "simulation.driver",
     "OutputError": "infra.folders",
-    "Mode": "modes", "register_mode": "modes",
-    "Result": "results.result", "ResultFileError": "results.result", "load_result": "results.result",
-    "Scenario": "config.scenario", "ScenarioError": "config.scenario", "load_scenario": "config.scenario",
-    "scenario_from_dict": "config.scenario", "shipped_scenarios": "config.scenario",
+    "Mode": "modes",
+    "register_mode": "modes",
+    "Result": "results.result",
+    "ResultFileError": "results.result",
+    "load_result": "results.result",
+    "Scenario": "config.scenario",
+    "ScenarioError": "config.scenario",
+    "load_scenario": "config.scenario",
+    "scenario_from_dict": "config.scenario",
+    "shipped_scenarios": "config.scenario",
     "ModeConfig": "config.mode_registry",
-    "Observation": "simulation.stepwise", "Simulator": "simulation.stepwise",
-    "SweepTable": "studies.sweep", "load_sweep": "studies.sweep", "run_sweep": "studies.sweep",
+    "Observation": "simulation.stepwise",
+    "Simulator": "simulation.stepwise",
+    "SweepTable": "studies.sweep",
+    "load_sweep": "studies.sweep",
+    "run_sweep": "studies.sweep",
 }
 
-__all__ = ["__version__", "BatchMember", "Mode", "ModeConfig", "Observation", "OutputError", "Result", "ResultFileError", "Scenario",
-           "ScenarioError", "Simulator", "SolverError", "SweepTable", "load_result", "load_scenario", "load_sweep",
-           "register_mode", "run_sweep", "scenario_from_dict", "shipped_scenarios", "simulate", "simulate_batch"]
+__all__ = [
+    "__version__",
+    "BatchMember",
+    "Mode",
+    "ModeConfig",
+    "Observation",
+    "OutputError",
+    "Result",
+    "ResultFileError",
+    "Scenario",
+    "ScenarioError",
+    "Simulator",
+    "SolverError",
+    "SweepTable",
+    "load_result",
+    "load_scenario",
+    "load_sweep",
+    "register_mode",
+    "run_sweep",
+    "scenario_from_dict",
+    "shipped_scenarios",
+    "simulate",
+    "simulate_batch",
+]
 
 if TYPE_CHECKING:  # for type checkers and editors; at run time the names come from __getattr__
     from . import modes as modes
@@ -63,7 +96,7 @@ if TYPE_CHECKING:  # for type checkers and editors; at run time the names come f
 def __getattr__(name: str):
     """Import a public name's module on first access (``snoworm.simulate``, ``from snoworm import
     Result``) and keep the name, so later lookups are plain attribute reads."""
-    if name == "modes":         # the modes package (its registries import a built-in mode when looked up)
+    if name == "modes":  # the modes package (its registries import a built-in mode when looked up)
         return importlib.import_module(".modes", __name__)
     try:
         module = _EXPORTS[name]

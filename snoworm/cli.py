@@ -6,6 +6,7 @@ shares (error handling, exit statuses, common options, progress, logging) is in
 :mod:`snoworm.commands.common`; the study commands (ground truth, calibration, mobility map,
 paper) are in :mod:`snoworm.commands.studies`.
 """
+
 from __future__ import annotations
 
 import os
@@ -69,15 +70,23 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
     from .config.scenario import load_scenario  # lazy: start-up
     from .infra.folders import check_output_folder  # lazy: start-up
     from .simulation.driver import simulate  # lazy: start-up
-    out_dir = os.path.abspath(out_dir)          # once: a controller's os.chdir does not move it
+
+    out_dir = os.path.abspath(out_dir)  # once: a controller's os.chdir does not move it
     sc = load_scenario(scenario, sets)
     code_check(sc, allow_code, "running")
     check_output_folder(out_dir, overwrite)
     from .modes.codeload import allow_code as allowed  # lazy: start-up
+
     with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar, allowed(allow_code):
         res = simulate(sc, progress=bar.set)
-    paths = res.write(out_dir, plot=not no_plot, plot_format=plot_format, overwrite=overwrite, figure_size=figure_size,
-                      command=command_line())
+    paths = res.write(
+        out_dir,
+        plot=not no_plot,
+        plot_format=plot_format,
+        overwrite=overwrite,
+        figure_size=figure_size,
+        command=command_line(),
+    )
     echo_run(sc.name, res, paths, out_dir)
 
 
@@ -92,43 +101,78 @@ def validate(scenario, sets, allow_code):
     Nothing of the scenario runs: a controller is checked statically (the file or module exists,
     parses and defines the class) and against --allow-code as `snoworm run` would."""
     from .config.scenario import load_scenario  # lazy: start-up
+
     sc = load_scenario(scenario, sets)
     code_check(sc, allow_code)
-    click.echo(f"{scenario}: valid ({sc.vehicle.segments} segments, mode {sc.mode.type}, "
-               f"{sc.simulation.duration_s:g} s)")
+    click.echo(
+        f"{scenario}: valid ({sc.vehicle.segments} segments, mode {sc.mode.type}, {sc.simulation.duration_s:g} s)"
+    )
 
 
 @main.command()
 @click.argument("scenario", type=click.Path(dir_okay=False))
-@click.option("--set", "sets", multiple=True, metavar="KEY=SPEC", required=True,
-              help="A swept scenario key and its values: a list (tow.force_N=0,100,200) or an inclusive "
-                   "range START:STOP:COUNT (terrain.xt=0.3:1.0:15 gives 15 values). Repeat for a grid "
-                   "(first key slowest); a single value just overrides the key.")
-@out_option("Directory for sweep.json, summary.csv and sweep.png / heatmap.png. Re-running the same "
-            "command resumes an interrupted sweep there.")
-@click.option("-j", "--jobs", default=1, show_default=True, type=click.IntRange(min=1),
-              help="Local worker processes.")
-@click.option("--scheduler", metavar="ADDRESS", default=None,
-              help="Run the cases on a Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 "
-                   "(needs pip install 'snoworm[dask]'); overrides -j.")
-@click.option("--zip", "zip_", is_flag=True,
-              help="Pair the --set values element by element (equal lengths) instead of a full grid.")
+@click.option(
+    "--set",
+    "sets",
+    multiple=True,
+    metavar="KEY=SPEC",
+    required=True,
+    help="A swept scenario key and its values: a list (tow.force_N=0,100,200) or an inclusive "
+    "range START:STOP:COUNT (terrain.xt=0.3:1.0:15 gives 15 values). Repeat for a grid "
+    "(first key slowest); a single value just overrides the key.",
+)
+@out_option(
+    "Directory for sweep.json, summary.csv and sweep.png / heatmap.png. Re-running the same "
+    "command resumes an interrupted sweep there."
+)
+@click.option("-j", "--jobs", default=1, show_default=True, type=click.IntRange(min=1), help="Local worker processes.")
+@click.option(
+    "--scheduler",
+    metavar="ADDRESS",
+    default=None,
+    help="Run the cases on a Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 "
+    "(needs pip install 'snoworm[dask]'); overrides -j.",
+)
+@click.option(
+    "--zip",
+    "zip_",
+    is_flag=True,
+    help="Pair the --set values element by element (equal lengths) instead of a full grid.",
+)
 @click.option("--save-cases", is_flag=True, help="Also write each case's time series to DIR/cases/<case_id>/.")
-@click.option("--series", type=click.Choice(["folders", "netcdf"]), default="folders", show_default=True,
-              help="With --save-cases: each case's time series in its own folder DIR/cases/<case_id>/, or every "
-                   "case in one netCDF file DIR/series.nc (dims: swept keys x time x segment/link; needs "
-                   "pip install 'snoworm[data]').")
+@click.option(
+    "--series",
+    type=click.Choice(["folders", "netcdf"]),
+    default="folders",
+    show_default=True,
+    help="With --save-cases: each case's time series in its own folder DIR/cases/<case_id>/, or every "
+    "case in one netCDF file DIR/series.nc (dims: swept keys x time x segment/link; needs "
+    "pip install 'snoworm[data]').",
+)
 @click.option("--no-plot", is_flag=True, help="Skip sweep.png / heatmap.png.")
 @plot_format_option
 @figure_size_option
-@click.option("--batch", default=0, show_default=True, type=click.IntRange(min=0), metavar="B",
-              help="Integrate up to B cases of the same structure (uniform or force-control mode) as one stacked system "
-                   "(several times the cases/s; 100-500 is a good B); other cases run one by one.")
-@click.option("--overwrite", is_flag=True,
-              help="Replace another sweep in --out (its files are removed), or write into a non-empty folder "
-                   "snoworm did not write.")
-@click.option("--restart", is_flag=True, help="Run afresh a sweep in --out whose input files or snoworm version "
-              "changed since (its rows are removed); without it such a resume exits 2 naming the file.")
+@click.option(
+    "--batch",
+    default=0,
+    show_default=True,
+    type=click.IntRange(min=0),
+    metavar="B",
+    help="Integrate up to B cases of the same structure (uniform or force-control mode) as one stacked system "
+    "(several times the cases/s; 100-500 is a good B); other cases run one by one.",
+)
+@click.option(
+    "--overwrite",
+    is_flag=True,
+    help="Replace another sweep in --out (its files are removed), or write into a non-empty folder "
+    "snoworm did not write.",
+)
+@click.option(
+    "--restart",
+    is_flag=True,
+    help="Run afresh a sweep in --out whose input files or snoworm version "
+    "changed since (its rows are removed); without it such a resume exits 2 naming the file.",
+)
 @allow_code_option
 @handle_errors
 def sweep(scenario, sets, out_dir, no_plot, **options):
@@ -156,6 +200,7 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
     resume).
     """
     from .studies.sweep import SweepExecutionError, run_sweep  # lazy: start-up
+
     # options: jobs, scheduler, zip_, save_cases, series, plot_format, figure_size, batch, overwrite, allow_code,
     # restart
     try:

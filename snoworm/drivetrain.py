@@ -5,6 +5,7 @@ call it.  All torques are at the wheel, per wheel, with the 20 % drivetrain loss
 in.  The wheel-speed controller that commands this motor is a control law
 (:func:`snoworm.feedback.speed_pi`).
 """
+
 from __future__ import annotations
 
 import numpy as np

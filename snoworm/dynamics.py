@@ -31,6 +31,7 @@ fields per segment, interleaved so the Jacobian is banded::
 
 No code outside this module and :mod:`snoworm.model.arrays` addresses a state by a number.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -84,9 +85,16 @@ class ChainModel:
         Elevation along the track (docs/model.md section 7); None or level: level ground.
     """
 
-    def __init__(self, seg: SegmentArrays, links: LinkArrays, terrain_params: TerrainParams,
-                 profile: TerrainProfile, tow_force_N: float, force_loop: bool = False,
-                 elevation: ElevationProfile | None = None):
+    def __init__(
+        self,
+        seg: SegmentArrays,
+        links: LinkArrays,
+        terrain_params: TerrainParams,
+        profile: TerrainProfile,
+        tow_force_N: float,
+        force_loop: bool = False,
+        elevation: ElevationProfile | None = None,
+    ):
         self.seg = seg
         self.links = links
         self.tp = terrain_params
@@ -102,8 +110,10 @@ class ChainModel:
         self.layout = StateLayout(self.n, self.force_loop, self.has_joints, self.batch_shape)
         self.n_batch = self.layout.n_batch
         self.n_states = self.layout.size
+
         def col(a):
             return np.asarray(a, float)[..., None]
+
         #: per-wheel static normal load, shape (..., N, 1) (broadcasts against axle arrays)
         self.normal_force_N = col(seg.normal_force_N)
         # grade terms (docs/model.md section 7): pitch transfer 2h/b and the chord's half-length
@@ -117,7 +127,7 @@ class ChainModel:
         self._R = col(seg.wheel_radius_m)
         self._J = col(seg.wheel_inertia_kgm2)
         self._kp, self._ki = col(seg.speed_kp_Nms_per_rad), col(seg.speed_ki_Nm_per_rad)
-        self._ki_kp = self._ki / self._kp         # precomputed for feedback.speed_pi (same value)
+        self._ki_kp = self._ki / self._kp  # precomputed for feedback.speed_pi (same value)
         self._slope = col(seg.motor_slope_Nms_per_rad)
         self._wnl = col(seg.no_load_speed_radps)
         self._Tmax = col(seg.torque_limit_Nm)
@@ -125,8 +135,9 @@ class ChainModel:
         self._bands = self._fd = None
         self._prepare_kernel()
         #: the float kernel of a single short chain (None: batches and long chains use :meth:`evaluate`)
-        self.float_kernel = (floatkernel.FloatKernel(self) if not self.batch_shape and self.n <= floatkernel.MAX_SEGMENTS
-                             else None)
+        self.float_kernel = (
+            floatkernel.FloatKernel(self) if not self.batch_shape and self.n <= floatkernel.MAX_SEGMENTS else None
+        )
 
     def _prepare_kernel(self):
         """Derived constants of the kernel, computed once (micro-optimisations, same arithmetic).
@@ -136,27 +147,34 @@ class ChainModel:
         are evaluated once here (:func:`terrain.traction_coefficients` and friends).
         """
         tp, L = self.tp, self.links
+
         def z(v):
             return np.array(v, float)
+
         self._tpk = replace(tp, **{k: z(getattr(tp, k)) for k in tp.__dataclass_fields__ if k != "torque_balance"})
         self._zero = z(0.0)
         self._Fn_k, self._G_const = self.normal_force_N, None
-        if self.elevation is not None and self.elevation.is_constant:   # constant grade: constant loads
+        if self.elevation is not None and self.elevation.is_constant:  # constant grade: constant loads
             _, _, self._Fn_k, self._G_const = self.grade_terms(np.zeros(self.batch_shape + (self.n,)))
         Fn = self._Fn_k
         if getattr(self.profile, "is_constant", False) and (self.elevation is None or self._G_const is not None):
             X = self.profile(self.axle_offset_m)
             self._Xc = X
-            self._coef = (terrain.traction_coefficients(Fn, X, self._tpk),
-                          terrain.resistance_coefficients(Fn, X, self._tpk),
-                          terrain.torque_coefficient(Fn, X, self._R, self._tpk))
+            self._coef = (
+                terrain.traction_coefficients(Fn, X, self._tpk),
+                terrain.resistance_coefficients(Fn, X, self._tpk),
+                terrain.torque_coefficient(Fn, X, self._R, self._tpk),
+            )
         else:
             self._Xc = self._coef = None
         self._k_link = np.asarray(L.stiffness_N_per_m, float)
         self._c_link = np.asarray(L.damping_Ns_per_m, float)
         self._L0 = np.asarray(L.rest_spacing_m, float)
-        self._gk = (feedback.servo_gain(L.force_gain_per_s, L.stiffness_N_per_m, L.damping_Ns_per_m)
-                    if self.n > 1 else np.zeros(0))
+        self._gk = (
+            feedback.servo_gain(L.force_gain_per_s, L.stiffness_N_per_m, L.damping_Ns_per_m)
+            if self.n > 1
+            else np.zeros(0)
+        )
         self._rate_max = np.asarray(L.rate_max_mps, float)
         self._neg_rate_max = -self._rate_max
         self._k_stop, self._k_length = z(link_law.K_STOP), z(feedback.K_LENGTH)
@@ -195,16 +213,25 @@ class ChainModel:
                 raise ValueError("stacked chains need the same X_t profile, or constant profiles")
             if m.elevation != m0.elevation:
                 raise ValueError("stacked chains need the same elevation profile")
+
         def st(objs, name):
             return np.stack([np.asarray(getattr(o, name), float) for o in objs])
+
         seg = SegmentArrays(**{k: st([m.seg for m in models], k) for k in SegmentArrays.__dataclass_fields__})
         links = LinkArrays(**{k: st([m.links for m in models], k) for k in LinkArrays.__dataclass_fields__})
         if all(m.profile == m0.profile for m in models):
             profile = m0.profile
         else:
             profile = StackedConstantProfile(tuple(float(m.profile.values[0]) for m in models))
-        return cls(seg, links, m0.tp, profile, np.array([m.tow_force_N for m in models]), force_loop=m0.force_loop,
-                   elevation=m0.elevation)
+        return cls(
+            seg,
+            links,
+            m0.tp,
+            profile,
+            np.array([m.tow_force_N for m in models]),
+            force_loop=m0.force_loop,
+            elevation=m0.elevation,
+        )
 
     # ------------------------------------------------------------------ layout and terrain
     def unpack(self, y):
@@ -287,7 +314,11 @@ class ChainModel:
         cd = self._controls(ctl) if cd is None else cd
         V = v[..., None]
         # normal load per wheel and gravity along the track: constant on level ground (G None) or a constant grade
-        Fn, G = (self._Fn_k, self._G_const) if self.elevation is None or self._G_const is not None else self.grade_terms(x)[2:]
+        Fn, G = (
+            (self._Fn_k, self._G_const)
+            if self.elevation is None or self._G_const is not None
+            else self.grade_terms(x)[2:]
+        )
         X, i, Ft, Ftr, Trr = self._terrain(x, V, w * R, Fn)
         dY = np.empty_like(Y)
         T, T_spring, damper_v = self._links(Y, x, v, ctl, cd, dY)
@@ -296,8 +327,9 @@ class ChainModel:
         if self.force_loop:
             tow = np.broadcast_to(self._tow_col, T.shape[:-1] + (1,))
             Fsel = np.concatenate([T, tow], axis=-1)[..., ctl.fc_link]
-            vsp, dq = feedback.link_force_pi(Fsel, ctl.fc_ref_N, ctl.fc_sigma, Y[..., L.q], ctl.fc_nominal_mps,
-                                            ctl.fc_kp, ctl.fc_ki, ctl.fc_vmax_mps)
+            vsp, dq = feedback.link_force_pi(
+                Fsel, ctl.fc_ref_N, ctl.fc_sigma, Y[..., L.q], ctl.fc_nominal_mps, ctl.fc_kp, ctl.fc_ki, ctl.fc_vmax_mps
+            )
             dY[..., L.q] = dq * ctl.fc_active * ctl.motor_on
             sp = np.where(ctl.fc_active > 0, vsp, sp)
             w_ref = (sp / self.seg.wheel_radius_m)[..., None]
@@ -305,7 +337,7 @@ class ChainModel:
             w_ref = cd["w_ref"]
         T_lo, T_hi = drivetrain.motor_envelope(w, self._slope, self._wnl, self._Tmax)
         Tm, dI = feedback.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on_mask"], self._ki_kp)
-        if cd["torque"] is not None:           # direct torque commands (a controller's wheel_torque_Nm)
+        if cd["torque"] is not None:  # direct torque commands (a controller's wheel_torque_Nm)
             Tm, dI = feedback.direct_torque(cd["torque_cmd"], T_lo, T_hi, cd["torque"], Tm, dI)
         reaction = terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)
         dY[..., L.omega] = (Tm - reaction) / self._J
@@ -322,17 +354,43 @@ class ChainModel:
         dY[..., L.v] = (wheel_net + Fl if G is None else wheel_net + Fl + G) / self._m
         if not outputs:
             return dY, None
-        return dY, self._outputs(X=X, i=i, Ft=Ft, Ftr=Ftr, Trr=Trr, Tm=Tm, T=T, wheel_net=wheel_net, Fl=Fl, sp=sp, x=x,
-                                 w=w, reaction=reaction, T_spring=T_spring, damper_v=damper_v, V=V, G=G, Fn=Fn)
+        return dY, self._outputs(
+            X=X,
+            i=i,
+            Ft=Ft,
+            Ftr=Ftr,
+            Trr=Trr,
+            Tm=Tm,
+            T=T,
+            wheel_net=wheel_net,
+            Fl=Fl,
+            sp=sp,
+            x=x,
+            w=w,
+            reaction=reaction,
+            T_spring=T_spring,
+            damper_v=damper_v,
+            V=V,
+            G=G,
+            Fn=Fn,
+        )
 
     def _outputs(self, *, X, i, Ft, Ftr, Trr, Tm, T, wheel_net, Fl, sp, x, w, reaction, T_spring, damper_v, V, G, Fn):
         """The named quantities of :meth:`evaluate` for the results, from its intermediates."""
         nw = self.wheels_per_axle[..., None]
         return {
-            "X": np.broadcast_to(X, Ft.shape), "slip": i, "traction_axle_N": Ft * nw,
-            "resistance_axle_N": Ftr * nw, "resistance_torque_Nm": Trr, "motor_torque_Nm": Tm,
-            "link_force_N": T, "wheel_net_N": wheel_net, "link_net_N": Fl,
-            "speed_sp_mps": np.broadcast_to(sp, x.shape), "omega": w, "reaction_torque_Nm": reaction,
+            "X": np.broadcast_to(X, Ft.shape),
+            "slip": i,
+            "traction_axle_N": Ft * nw,
+            "resistance_axle_N": Ftr * nw,
+            "resistance_torque_Nm": Trr,
+            "motor_torque_Nm": Tm,
+            "link_force_N": T,
+            "wheel_net_N": wheel_net,
+            "link_net_N": Fl,
+            "speed_sp_mps": np.broadcast_to(sp, x.shape),
+            "omega": w,
+            "reaction_torque_Nm": reaction,
             "link_spring_N": T_spring,
             "link_damper_W": link_law.damper_power_W(damper_v, self._c_link) if self.n > 1 else T,
             # power dissipated at the wheel-terrain contact: what the wheels take from the
@@ -349,7 +407,7 @@ class ChainModel:
         """
         tp, R = self._tpk, self._R
         i = terrain.slip(wm, V, tp.slip_eps_mps)
-        if self._coef is not None:          # X_t constant: position-independent factors precomputed
+        if self._coef is not None:  # X_t constant: position-independent factors precomputed
             c_t, c_r, c_q = self._coef
             X = self._Xc
         else:
@@ -395,23 +453,37 @@ class ChainModel:
         end stops (:func:`snoworm.links.actuator_rate_mps`); locked (inactive) joints and fixed
         links do not move.
         """
-        if not cd["any_active"]:               # every joint locked in this interval
+        if not cd["any_active"]:  # every joint locked in this interval
             return s * self._zero
         gk = self._gk
         if cd["any_force"]:
             mag = feedback.joint_force_command_N(
-                ctl.joint_ff_N, ctl.joint_limit_N, self._zero,
-                kv=ctl.joint_kv if cd["any_kv"] else None, v_target_mps=ctl.joint_vtarget_mps,
+                ctl.joint_ff_N,
+                ctl.joint_limit_N,
+                self._zero,
+                kv=ctl.joint_kv if cd["any_kv"] else None,
+                v_target_mps=ctl.joint_vtarget_mps,
                 v_mover_mps=v[..., ctl.joint_mover] if cd["any_kv"] else None,
                 ka=ctl.joint_ka if cd["any_ka"] else None,
-                v_anchor_mps=v[..., ctl.joint_anchor] if cd["any_ka"] else None)
+                v_anchor_mps=v[..., ctl.joint_anchor] if cd["any_ka"] else None,
+            )
             rate = feedback.joint_force_rate_mps(rel, T_spring, cd["neg_dir"], mag, gk)
         if cd["any_length"]:
-            rate_l = feedback.joint_length_rate_mps(s, ctl.joint_sref_m, ctl.joint_vtarget_mps, cd["neg_vt"], rel,
-                                                   T_spring, ctl.joint_limit_N, gk, self._k_length)
+            rate_l = feedback.joint_length_rate_mps(
+                s,
+                ctl.joint_sref_m,
+                ctl.joint_vtarget_mps,
+                cd["neg_vt"],
+                rel,
+                T_spring,
+                ctl.joint_limit_N,
+                gk,
+                self._k_length,
+            )
             rate = np.where(cd["length_mode"], rate_l, rate) if cd["any_force"] else rate_l
-        rate = link_law.actuator_rate_mps(rate, s, self._rate_max, self._neg_rate_max, self._stroke_min,
-                                          self._stroke_max, self._k_stop)
+        rate = link_law.actuator_rate_mps(
+            rate, s, self._rate_max, self._neg_rate_max, self._stroke_min, self._stroke_max, self._k_stop
+        )
         return rate * cd["active"]
 
     def rhs(self, t, y, ctl: Controls):
@@ -426,4 +498,3 @@ class ChainModel:
             return fk(y, ctl)
         dY, _ = self.evaluate(y.reshape(self.layout.shape), ctl)
         return dY.reshape(-1)
-

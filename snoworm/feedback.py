@@ -6,12 +6,21 @@ right-hand side; their settings for an integration interval come from a mode as
 :class:`~snoworm.model.inputs.Controls`.  Which law acts where is decided by the model
 (:mod:`snoworm.dynamics`); none of them knows about the chain.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["K_LENGTH", "speed_pi", "direct_torque", "link_force_pi", "servo_gain", "joint_force_command_N",
-           "joint_force_rate_mps", "joint_length_rate_mps"]
+__all__ = [
+    "K_LENGTH",
+    "speed_pi",
+    "direct_torque",
+    "link_force_pi",
+    "servo_gain",
+    "joint_force_command_N",
+    "joint_force_rate_mps",
+    "joint_length_rate_mps",
+]
 
 #: Gain of the length servo of a length-commanded prismatic joint [1/s].
 K_LENGTH = 20.0
@@ -105,8 +114,9 @@ def servo_gain(force_gain_per_s, stiffness_N_per_m, damping_Ns_per_m):
     return gk0 / (1.0 + damping_Ns_per_m * gk0)
 
 
-def joint_force_command_N(ff_N, limit_N, zero, kv=None, v_target_mps=None, v_mover_mps=None, ka=None,
-                          v_anchor_mps=None):
+def joint_force_command_N(
+    ff_N, limit_N, zero, kv=None, v_target_mps=None, v_mover_mps=None, ka=None, v_anchor_mps=None
+):
     """Magnitude of a joint's force command (paper section 5.1, Eqs. 4-5).
 
     ``|F| = clip(F_ff + K_v (v_target - v_mover) - K_a max(0, -v_anchor), 0, F_lim)``: a
@@ -132,8 +142,9 @@ def joint_force_rate_mps(rel_mps, spring_N, neg_dir, magnitude_N, gain):
     return rel_mps + (spring_N - neg_dir * magnitude_N) * gain
 
 
-def joint_length_rate_mps(extension_m, ref_m, v_target_mps, neg_v_target_mps, rel_mps, spring_N, limit_N, gain,
-                          k_length):
+def joint_length_rate_mps(
+    extension_m, ref_m, v_target_mps, neg_v_target_mps, rel_mps, spring_N, limit_N, gain, k_length
+):
     """Extension rate of a length-commanded joint: a rate-limited servo to ``s_ref``.
 
     ``ds/dt = clip(K_LENGTH (s_ref - s), -v_target, v_target)``, backed off where the link force

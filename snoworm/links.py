@@ -10,6 +10,7 @@ tension.  A fixed link is the same law with the actuator locked at zero extensio
 and soft end stops at its stroke limits) are here; what it is *commanded* to do is a control law
 (:mod:`snoworm.feedback`).  Pure NumPy, vectorised over links and batch members.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -58,8 +59,9 @@ def damper_power_W(damper_speed_mps, damping_Ns_per_m):
     return damping_Ns_per_m * damper_speed_mps**2
 
 
-def actuator_rate_mps(rate_cmd_mps, extension_m, rate_max_mps, neg_rate_max_mps, stroke_min_m, stroke_max_m,
-                      k_stop_per_s):
+def actuator_rate_mps(
+    rate_cmd_mps, extension_m, rate_max_mps, neg_rate_max_mps, stroke_min_m, stroke_max_m, k_stop_per_s
+):
     """Extension rate the actuator can deliver for a commanded rate [m/s].
 
     The command is clipped to the rate limit ``[-rate_max, rate_max]`` and to the soft end stops

@@ -20,6 +20,7 @@ right-hand side stays smooth inside a solver step).  The work of the along-track
 grade patches, an elevation table, a route file); the laws that use the grade (the normal load
 and the gravity force) are in :mod:`snoworm.terrain`, composed by ``ChainModel.grade_terms``.
 """
+
 from __future__ import annotations
 
 import math
@@ -83,8 +84,10 @@ class ElevationProfile:
         if self.is_constant:
             return np.full(np.shape(np.asarray(s_m) + half_base_m), math.sin(math.radians(self.grade_deg)))
         h = np.maximum(half_base_m, MIN_HALF_BASE_M)
-        return (np.interp(s_m + h, self.positions_m, self.elevations_m)
-                - np.interp(s_m - h, self.positions_m, self.elevations_m)) / (2.0 * h)
+        return (
+            np.interp(s_m + h, self.positions_m, self.elevations_m)
+            - np.interp(s_m - h, self.positions_m, self.elevations_m)
+        ) / (2.0 * h)
 
     def mean_elevation(self, s_m, half_base_m):
         """Mean of ``z`` over ``[s - h, s + h]`` [m]: the potential-energy height of a segment.
@@ -107,7 +110,7 @@ class ElevationProfile:
         slope = np.zeros(len(P))
         if len(P) > 1:
             slope[:-1] = np.diff(Z) / np.diff(P)
-        inside = (s >= P[0])
+        inside = s >= P[0]
         return np.where(inside, cum[j] + Z[j] * ds + 0.5 * slope[j] * ds * ds, Z[0] * (s - P[0]))
 
     def max_abs_grade_deg(self) -> float:
@@ -143,7 +146,7 @@ def grade_patch_profile(base_grade_deg: float, patches) -> ElevationProfile:
     if not patches:
         return ElevationProfile.constant(base_grade_deg)
     sb = math.sin(math.radians(base_grade_deg))
-    knots = []                                     # (position, sin of the grade after it)
+    knots = []  # (position, sin of the grade after it)
     for start, end, grade, ramp in patches:
         sp = math.sin(math.radians(grade))
         r = float(ramp)

@@ -10,6 +10,7 @@ the normal loads are those of :func:`snoworm.terrain.normal_load_N`).  These are
 kernels as the dynamic simulation (:mod:`snoworm.terrain`), so the two agree to solver tolerance.
 Forces and torques per wheel are the means over the two axles (they differ with pitch load transfer).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -21,9 +22,19 @@ from . import terrain
 from .slope import MAX_GRADE_DEG
 from .terrain import TerrainParams
 
-__all__ = ["SteadyState", "Immobilised", "steady_state", "max_drawbar_N", "net_force_per_segment_N",
-           "immobilisation_limit_xt", "segment_geometry", "state_at_slip", "peak_slip", "max_grade_deg",
-           "axle_loads_N"]
+__all__ = [
+    "SteadyState",
+    "Immobilised",
+    "steady_state",
+    "max_drawbar_N",
+    "net_force_per_segment_N",
+    "immobilisation_limit_xt",
+    "segment_geometry",
+    "state_at_slip",
+    "peak_slip",
+    "max_grade_deg",
+    "axle_loads_N",
+]
 
 
 class Immobilised(ValueError):
@@ -75,8 +86,9 @@ def axle_loads_N(seg, grade_deg: float = 0.0):
     return Fn[..., 0], Fn[..., 1], terrain.gravity_force_N(seg.mass_kg, seg.gravity_mps2, np.sin(th))
 
 
-def net_force_per_segment_N(i, X, wheel_speed_mps, seg, tp: TerrainParams, moving: bool = False,
-                            grade_deg: float = 0.0):
+def net_force_per_segment_N(
+    i, X, wheel_speed_mps, seg, tp: TerrainParams, moving: bool = False, grade_deg: float = 0.0
+):
     """Drawbar a segment develops at slip ``i`` on grade ``grade_deg`` (vectorised over ``i`` and ``X``).
 
     With ``moving=True`` the resistance takes its full forward-motion value ``sgn(V) = 1``
@@ -99,7 +111,7 @@ def _state(i, X, wheel_speed_mps, seg, tp, grade_deg=0.0):
     n_w, F_n, R = segment_geometry(seg)
     V = wheel_speed_mps * (1.0 - i)
     G = 0.0
-    if grade_deg != 0.0:           # per axle loads on the grade: forces and torque are the axles' means
+    if grade_deg != 0.0:  # per axle loads on the grade: forces and torque are the axles' means
         Ff, Fr, G = axle_loads_N(seg, grade_deg)
         F_n = np.array([Ff, Fr], float)
     Ft = terrain.traction_force(i, F_n, X, tp)
@@ -121,9 +133,12 @@ def state_at_slip(i, X, wheel_speed_mps, seg, tp: TerrainParams) -> SteadyState:
 
 def peak_slip(X, wheel_speed_mps, seg, tp, grade_deg: float = 0.0):
     """Slip at which a segment's drawbar in forward motion peaks (the stable branch lies below it)."""
-    res = minimize_scalar(lambda i: -net_force_per_segment_N(i, X, wheel_speed_mps, seg, tp, moving=True,
-                                                             grade_deg=grade_deg),
-                          bounds=(0.0, 1.0), method="bounded", options={"xatol": 1e-10})
+    res = minimize_scalar(
+        lambda i: -net_force_per_segment_N(i, X, wheel_speed_mps, seg, tp, moving=True, grade_deg=grade_deg),
+        bounds=(0.0, 1.0),
+        method="bounded",
+        options={"xatol": 1e-10},
+    )
     return float(res.x)
 
 
@@ -147,6 +162,7 @@ def max_grade_deg(X, seg, tp: TerrainParams, wheel_speed_mps: float, drawbar_N: 
     cannot even downhill at ``-MAX_GRADE_DEG``.  The motor torque limit is not applied: check
     ``steady_state(..., grade_deg=...).torque_Nm`` against it.
     """
+
     def f(g):
         return max_drawbar_N(X, seg, tp, wheel_speed_mps, grade_deg=g) - drawbar_N
 
@@ -157,8 +173,16 @@ def max_grade_deg(X, seg, tp: TerrainParams, wheel_speed_mps: float, drawbar_N: 
     return float(brentq(f, -MAX_GRADE_DEG, MAX_GRADE_DEG, xtol=1e-9))
 
 
-def steady_state(X, seg, tp: TerrainParams, *, drawbar_N: float = 0.0, wheel_speed_mps: float | None = None,
-                 ground_speed_mps: float | None = None, grade_deg: float = 0.0) -> SteadyState:
+def steady_state(
+    X,
+    seg,
+    tp: TerrainParams,
+    *,
+    drawbar_N: float = 0.0,
+    wheel_speed_mps: float | None = None,
+    ground_speed_mps: float | None = None,
+    grade_deg: float = 0.0,
+) -> SteadyState:
     """Steady slip, speed and torque of one segment at terrain ``X``, drawbar ``drawbar_N`` and grade ``grade_deg``.
 
     Give either the wheel speed ``R_w w`` (the controller's set-point) or the ground speed.
@@ -177,6 +201,7 @@ def steady_state(X, seg, tp: TerrainParams, *, drawbar_N: float = 0.0, wheel_spe
 
         def g(i):
             return net_force_per_segment_N(i, X, V / (1.0 - i), seg, tp, grade_deg=grade_deg) - drawbar_N
+
         i_hi = min(peak_slip(X, V, seg, tp, grade_deg), 1.0 - 1e-9)
         if net_force_per_segment_N(i_hi, X, V, seg, tp, moving=True, grade_deg=grade_deg) < drawbar_N:
             raise Immobilised(f"drawbar {drawbar_N:.1f} N exceeds the maximum on X_t = {X:g}")
@@ -187,6 +212,7 @@ def steady_state(X, seg, tp: TerrainParams, *, drawbar_N: float = 0.0, wheel_spe
 
     def f(i):
         return net_force_per_segment_N(i, X, w, seg, tp, grade_deg=grade_deg) - drawbar_N
+
     d_max = float(net_force_per_segment_N(i_hi, X, w, seg, tp, moving=True, grade_deg=grade_deg))
     if d_max < drawbar_N:
         raise Immobilised(f"drawbar {drawbar_N:.1f} N exceeds the maximum {d_max:.1f} N on X_t = {X:g}")

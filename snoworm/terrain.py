@@ -9,6 +9,7 @@ Sign conventions: forward is positive.  ``V`` is the wheel's longitudinal ground
 ``omega`` its spin rate [rad/s] (positive rolling forward), ``F_n`` its normal load [N].
 Forces returned are per wheel, positive forward on the vehicle.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -333,8 +334,15 @@ def patch_profile(base_xt: float, patches) -> TerrainProfile:
     return TerrainProfile(tuple(float(p) for p in P), tuple(float(v) for v in V))
 
 
-def random_profile(mean: float, std: float, correlation_length_m: float, seed: int, length_m: float,
-                   min_xt: float, start_m: float = 0.0) -> TerrainProfile:
+def random_profile(
+    mean: float,
+    std: float,
+    correlation_length_m: float,
+    seed: int,
+    length_m: float,
+    min_xt: float,
+    start_m: float = 0.0,
+) -> TerrainProfile:
     """A seeded random X_t profile: Gaussian-filtered white noise (a stationary Gaussian process).
 
     White noise on a grid of spacing ``correlation_length_m / 8`` is convolved with a Gaussian
@@ -368,7 +376,7 @@ def random_profile(mean: float, std: float, correlation_length_m: float, seed: i
     noise = rng.standard_normal(n + 2 * half)
     r = np.arange(-half, half + 1) * dx
     kern = np.exp(-0.5 * (r / sigma_k) ** 2)
-    kern /= np.sqrt(np.sum(kern**2))           # unit variance of the filtered noise
+    kern /= np.sqrt(np.sum(kern**2))  # unit variance of the filtered noise
     field_ = np.convolve(noise, kern, mode="valid")[:n]
     xt = np.clip(mean + std * field_, min_xt, 1.0)
     pos = start_m + dx * np.arange(n)

@@ -1,4 +1,5 @@
 """Shared test helpers."""
+
 import functools
 import os
 from pathlib import Path
@@ -35,6 +36,7 @@ def _close_pyplot_figures():
     """Figures drawn without ax/fig are pyplot's (as in a notebook): release them after each test."""
     yield
     import sys
+
     if "matplotlib.pyplot" in sys.modules:
         sys.modules["matplotlib.pyplot"].close("all")
 
@@ -54,6 +56,7 @@ def model_for(path, overrides=(), force_loop=None):
     m = sc.chain_model
     if force_loop is not None and force_loop != m.force_loop:
         from snoworm.dynamics import ChainModel
+
         m = ChainModel(m.seg, m.links, m.tp, m.profile, m.tow_force_N, force_loop=force_loop)
     return m
 
@@ -76,13 +79,23 @@ def busy_controls(m, rng):
     n = m.n
     c = Controls.rolling(n, np.ones(n), rng.uniform(0, 2, n))
     links = np.arange(n - 1)
-    return c.with_(fc_active=np.r_[np.ones(n - 1), 0.0], fc_link=np.r_[links, n - 1], fc_sigma=np.ones(n),
-                   fc_ref_N=rng.uniform(-100, 100, n), fc_nominal_mps=np.full(n, 1.8), fc_kp=np.full(n, 0.01),
-                   fc_ki=np.full(n, 0.02), fc_vmax_mps=np.full(n, 3.0),
-                   joint_active=np.ones(n - 1), joint_dir=rng.choice([-1.0, 1.0], n - 1),
-                   joint_ff_N=np.full(n - 1, 200.0), joint_kv=np.full(n - 1, 500.0),
-                   joint_vtarget_mps=np.full(n - 1, 0.3), joint_limit_N=np.full(n - 1, 390.0),
-                   joint_mover=np.minimum(links + rng.integers(0, 2, n - 1), n - 1))
+    return c.with_(
+        fc_active=np.r_[np.ones(n - 1), 0.0],
+        fc_link=np.r_[links, n - 1],
+        fc_sigma=np.ones(n),
+        fc_ref_N=rng.uniform(-100, 100, n),
+        fc_nominal_mps=np.full(n, 1.8),
+        fc_kp=np.full(n, 0.01),
+        fc_ki=np.full(n, 0.02),
+        fc_vmax_mps=np.full(n, 3.0),
+        joint_active=np.ones(n - 1),
+        joint_dir=rng.choice([-1.0, 1.0], n - 1),
+        joint_ff_N=np.full(n - 1, 200.0),
+        joint_kv=np.full(n - 1, 500.0),
+        joint_vtarget_mps=np.full(n - 1, 0.3),
+        joint_limit_N=np.full(n - 1, 390.0),
+        joint_mover=np.minimum(links + rng.integers(0, 2, n - 1), n - 1),
+    )
 
 
 # ------------------------------------------------------ batched runs (test_simulation_driver.py, test_performance.py)
@@ -90,8 +103,15 @@ def busy_controls(m, rng):
 
 def assert_metrics_close(a, b, rel=1e-3):
     """Summary metrics agree within 0.1 % (with absolute floors for values near zero)."""
-    floors = {"distance_m": 1e-4, "mean_speed_mps": 1e-4, "late_speed_mps": 1e-4, "mean_slip": 1e-4,
-              "max_slip": 1e-4, "max_link_force_N": 1e-2, "energy_per_m_J": 1e-2}
+    floors = {
+        "distance_m": 1e-4,
+        "mean_speed_mps": 1e-4,
+        "late_speed_mps": 1e-4,
+        "mean_slip": 1e-4,
+        "max_slip": 1e-4,
+        "max_link_force_N": 1e-2,
+        "energy_per_m_J": 1e-2,
+    }
     for k, floor in floors.items():
         if a[k] is None or b[k] is None:
             assert a[k] is b[k], k
@@ -105,7 +125,7 @@ def assert_metrics_close(a, b, rel=1e-3):
 # ------------------------------------------------------------------ traverse_patch runs
 # (session scope: shared by test_modes_supervisor.py and test_results_energy.py)
 
-UNIFORM = 'mode={type: uniform, speed_mps: 1.8, start_time_s: 0.5}'
+UNIFORM = "mode={type: uniform, speed_mps: 1.8, start_time_s: 0.5}"
 
 
 @pytest.fixture(scope="session")
@@ -118,8 +138,9 @@ def traverse():
 @pytest.fixture(scope="session")
 def stuck():
     """The same vehicle and route, rolling only (uniform mode)."""
-    sc = load_scenario(SCENARIOS / "traverse_patch.yaml", [UNIFORM, "simulation.duration_s=30",
-                                                           "simulation.output_dt_s=0.01"])
+    sc = load_scenario(
+        SCENARIOS / "traverse_patch.yaml", [UNIFORM, "simulation.duration_s=30", "simulation.output_dt_s=0.01"]
+    )
     return simulate(sc)
 
 
@@ -134,6 +155,7 @@ def traverse_raw(**terrain):
 def frostyboy():
     """(segment, terrain parameters) of the frostyboy set (ground truth and calibration tests)."""
     from snoworm.studies import groundtruth
+
     return groundtruth.vehicle_model("frostyboy")
 
 
@@ -141,5 +163,5 @@ def frostyboy():
 def data():
     """The shipped FrostyBoy field data (paper Table 2)."""
     from snoworm.studies import field_data
-    return field_data.read_field_data()
 
+    return field_data.read_field_data()

@@ -1,4 +1,5 @@
 """Controllers used by the tests (importable as ``tests.controller_helpers:Name``)."""
+
 import numpy as np
 
 

@@ -1,5 +1,6 @@
 """Readability checks of a drawn figure, shared by the plotting tests: print width, text sizes,
 labels that do not overlap one another, everything inside the figure."""
+
 from matplotlib.text import Text
 
 #: The smallest text allowed at print size [pt] (the usual journal minimum).
@@ -17,8 +18,13 @@ def _labels(fig):
     for i, a in enumerate(fig.axes):
         if not a.get_visible():
             continue
-        for name, t in (("xlabel", a.xaxis.label), ("ylabel", a.yaxis.label), ("title", a.title),
-                        ("ltitle", a._left_title), ("rtitle", a._right_title)):
+        for name, t in (
+            ("xlabel", a.xaxis.label),
+            ("ylabel", a.yaxis.label),
+            ("title", a.title),
+            ("ltitle", a._left_title),
+            ("rtitle", a._right_title),
+        ):
             if _visible_text(t):
                 out.append((f"axes{i}.{name}:{t.get_text()!r}", t))
         for axis in (a.xaxis, a.yaxis) if a.axison else ():
@@ -30,8 +36,9 @@ def _labels(fig):
                             out.append((f"axes{i}.tick:{t.get_text()!r}", t))
         if a.get_legend() is not None and a.get_legend().get_visible():
             out.append((f"axes{i}.legend", a.get_legend()))
-            out += [(f"axes{i}.legend.text:{t.get_text()!r}", t) for t in a.get_legend().get_texts()
-                    if _visible_text(t)]
+            out += [
+                (f"axes{i}.legend.text:{t.get_text()!r}", t) for t in a.get_legend().get_texts() if _visible_text(t)
+            ]
         for t in a.texts:
             if _visible_text(t):
                 out.append((f"axes{i}.text:{t.get_text()!r}", t))
@@ -61,8 +68,8 @@ def problems(fig, width_in=None, min_pt=MIN_PT):
         if b.x0 < page.x0 - 1 or b.y0 < page.y0 - 1 or b.x1 > page.x1 + 1 or b.y1 > page.y1 + 1:
             bad.append(f"{name} sticks out of the figure")
     for i, (n1, b1) in enumerate(boxes):
-        for n2, b2 in boxes[i + 1:]:
-            if n2.startswith(n1 + ".") or n1.startswith(n2 + "."):      # a legend and its own texts
+        for n2, b2 in boxes[i + 1 :]:
+            if n2.startswith(n1 + ".") or n1.startswith(n2 + "."):  # a legend and its own texts
                 continue
             w = min(b1.x1, b2.x1) - max(b1.x0, b2.x0)
             h = min(b1.y1, b2.y1) - max(b1.y0, b2.y0)

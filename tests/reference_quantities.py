@@ -20,11 +20,12 @@ by newtons), so for them the end values are replaced by averages over the last `
 run, which hold several hand-overs and are well conditioned.  The net forces of gait runs jump
 by the full hold force at every hand-over, so only their whole-run average is compared.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
-_trapezoid = getattr(np, "trapezoid", None) or np.trapz     # numpy < 2 names it trapz
+_trapezoid = getattr(np, "trapezoid", None) or np.trapz  # numpy < 2 names it trapz
 
 #: Modes that switch gait phases at state events (their runs end inside a hand-over).
 GAIT_MODES = ("inchworm", "supervisor")
@@ -35,11 +36,17 @@ FLOORS = {"m": 0.01, "mps": 0.01, "J": 1.0, "N": 10.0}
 #: quantity -> how its scale is taken: a unit (its own largest magnitude, floored) or the key of
 #: the run's largest force of that kind.
 SCALES = {
-    "distance_m": "m", "x_last_m": "m", "mean_speed_mps": "mps", "total_energy_J": "J",
-    "max_abs_link_force_N": "N", "mean_link_force_N": "max_abs_link_force_N",
+    "distance_m": "m",
+    "x_last_m": "m",
+    "mean_speed_mps": "mps",
+    "total_energy_J": "J",
+    "max_abs_link_force_N": "N",
+    "mean_link_force_N": "max_abs_link_force_N",
     "mean_net_force_N": "max_abs_net_force_N",
-    "window_speed_mps": "mps", "window_link_force_N": "max_abs_link_force_N",
-    "final_speed_mps": "mps", "final_link_forces_N": "max_abs_link_force_N",
+    "window_speed_mps": "mps",
+    "window_link_force_N": "max_abs_link_force_N",
+    "final_speed_mps": "mps",
+    "final_link_forces_N": "max_abs_link_force_N",
     "final_net_forces_N": "max_abs_net_force_N",
 }
 #: Compared only for runs that are not gait runs (see the module docstring).
@@ -69,16 +76,22 @@ def quantities(res) -> dict:
     s = res.summary()
     t, seg, lnk = res.t, res.segments, res.links
     return {
-        "distance_m": s["distance_m"], "x_last_m": seg["x_m"][-1].tolist(),
-        "mean_speed_mps": _time_mean(t, seg["v_mps"]), "total_energy_J": s["energy"]["total_J"],
+        "distance_m": s["distance_m"],
+        "x_last_m": seg["x_m"][-1].tolist(),
+        "mean_speed_mps": _time_mean(t, seg["v_mps"]),
+        "total_energy_J": s["energy"]["total_J"],
         "max_abs_link_force_N": s["max_abs_link_force_N"],
         "max_abs_net_force_N": float(np.max(np.abs(seg["net_force_N"]))),
-        "mean_link_force_N": _time_mean(t, lnk["force_N"]), "mean_net_force_N": _time_mean(t, seg["net_force_N"]),
+        "mean_link_force_N": _time_mean(t, lnk["force_N"]),
+        "mean_net_force_N": _time_mean(t, seg["net_force_N"]),
         "window_speed_mps": _time_mean(t, seg["v_mps"], WINDOW),
         "window_link_force_N": _time_mean(t, lnk["force_N"], WINDOW),
-        "final_speed_mps": s["final_speed_mps"], "final_link_forces_N": s["final_link_forces_N"],
+        "final_speed_mps": s["final_speed_mps"],
+        "final_link_forces_N": s["final_link_forces_N"],
         "final_net_forces_N": s["final_net_forces_N"],
-        "nfev": s["solver"]["nfev"], "njev": s["solver"]["njev"], "intervals": s["solver"]["intervals"],
+        "nfev": s["solver"]["nfev"],
+        "njev": s["solver"]["njev"],
+        "intervals": s["solver"]["intervals"],
         "n_t": int(t.size),
     }
 

@@ -1,4 +1,5 @@
 """Shared constants and helpers of the sweep tests (tests/test_sweep_*.py)."""
+
 from __future__ import annotations
 
 import csv

@@ -8,6 +8,7 @@
 * An import inside a function is only for an optional or slow-to-import dependency (or in the
   CLI, for start-up time), and says why in a comment on its line or the line above.
 """
+
 import ast
 import re
 import subprocess
@@ -16,7 +17,7 @@ from pathlib import Path
 
 try:
     import tomllib
-except ModuleNotFoundError:     # Python 3.10: tomli (a dependency of import-linter there)
+except ModuleNotFoundError:  # Python 3.10: tomli (a dependency of import-linter there)
     import tomli as tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -31,8 +32,22 @@ DOC_TABLE_HEADING = "## The layers, highest first"
 #: shows in a notebook or with plt.show(); files are drawn headless and never import it).
 #: ``h5netcdf``: the netCDF4 engine of sweeps' series (optional extra ``data``).
 #: ``IPython``: only inside ``NotebookFigure._ipython_display_``, which only IPython calls.
-LAZY_OK = {"dask", "distributed", "pandas", "xarray", "h5netcdf", "gymnasium", "tqdm", "matplotlib", "threadpoolctl",
-           "multiprocessing", "threading", "concurrent", "snoworm.plotting", "IPython"}
+LAZY_OK = {
+    "dask",
+    "distributed",
+    "pandas",
+    "xarray",
+    "h5netcdf",
+    "gymnasium",
+    "tqdm",
+    "matplotlib",
+    "threadpoolctl",
+    "multiprocessing",
+    "threading",
+    "concurrent",
+    "snoworm.plotting",
+    "IPython",
+}
 
 
 def _module_name(path: Path) -> str:
@@ -57,15 +72,24 @@ def _imports(path: Path):
             elif isinstance(child, ast.ImportFrom):
                 if child.level:
                     base = pkg.split(".")
-                    base = base[:len(base) - child.level + 1]
+                    base = base[: len(base) - child.level + 1]
                     mod = ".".join(base + ([child.module] if child.module else []))
                 else:
                     mod = child.module
-                for a in child.names:       # `from . import x` may import a submodule x
+                for a in child.names:  # `from . import x` may import a submodule x
                     sub = f"{mod}.{a.name}"
-                    out.append((sub if (ROOT / Path(*sub.split("."))).with_suffix(".py").exists()
-                                or (ROOT / Path(*sub.split("."))).is_dir() else mod, child.lineno, f))
+                    out.append(
+                        (
+                            sub
+                            if (ROOT / Path(*sub.split("."))).with_suffix(".py").exists()
+                            or (ROOT / Path(*sub.split("."))).is_dir()
+                            else mod,
+                            child.lineno,
+                            f,
+                        )
+                    )
             visit(child, f)
+
     visit(tree, False)
     return out
 
@@ -116,6 +140,7 @@ def test_no_import_cycle():
                     break
             if len(comp) > 1:
                 cycles.append(sorted(comp))
+
     sys.setrecursionlimit(10_000)
     for v in sorted(graph):
         if v not in index:
@@ -135,9 +160,11 @@ def test_function_level_imports_are_justified():
             allowed = cli or top in LAZY_OK or mod in LAZY_OK
             text = lines[line - 1] + (lines[line - 2] if line >= 2 else "")
             if not allowed or "#" not in text:
-                bad.append(f"{p.relative_to(ROOT)}:{line} imports {mod} inside a function"
-                           + ("" if allowed else " (not an optional or slow dependency)")
-                           + ("" if "#" in text else " without a comment saying why"))
+                bad.append(
+                    f"{p.relative_to(ROOT)}:{line} imports {mod} inside a function"
+                    + ("" if allowed else " (not an optional or slow dependency)")
+                    + ("" if "#" in text else " without a comment saying why")
+                )
     assert not bad, "\n".join(bad)
 
 
@@ -163,11 +190,10 @@ def doc_tiers(text: str) -> list:
     for ln in text.split(DOC_TABLE_HEADING, 1)[1].splitlines():
         if ln.startswith("|"):
             table.append(ln)
-        elif table:             # the first table ends at its first non-table line
+        elif table:  # the first table ends at its first non-table line
             break
-    cells = [re.split(r"(?<!\\)\|", ln)[1].strip() for ln in table[2:]]   # skip header and separator
-    return [re.fullmatch(r"`(.+)`", c).group(1).replace("\\|", "|") if re.fullmatch(r"`(.+)`", c) else c
-            for c in cells]
+    cells = [re.split(r"(?<!\\)\|", ln)[1].strip() for ln in table[2:]]  # skip header and separator
+    return [re.fullmatch(r"`(.+)`", c).group(1).replace("\\|", "|") if re.fullmatch(r"`(.+)`", c) else c for c in cells]
 
 
 def layer_mismatches(tree: set, tiers: list, documented: list) -> list:
@@ -199,5 +225,5 @@ def test_layer_check_reports_each_kind_of_disagreement(tmp_path):
     (tmp_path / "pkg").mkdir()
     (tmp_path / "pkg" / "__init__.py").write_text("")
     (tmp_path / "mod.py").write_text("")
-    (tmp_path / "data").mkdir()              # a data folder is not a package
+    (tmp_path / "data").mkdir()  # a data folder is not a package
     assert tree_entries(tmp_path) == {"pkg", "mod"}

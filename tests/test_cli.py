@@ -1,4 +1,5 @@
 """The CLI contract of issue 2: files, exit codes, messages (click.testing.CliRunner)."""
+
 import json
 
 import numpy as np
@@ -20,8 +21,18 @@ def test_run_writes_contract_files(tmp_path):
     for f in ("segments.csv", "links.csv", "summary.json", "scenario.yaml", "forces.png"):
         assert (out / f).stat().st_size > 0
     head = (out / "segments.csv").read_text().splitlines()[0].split(",")
-    assert head[:10] == ["t_s", "segment", "x_m", "v_mps", "wheel_speed_mps", "slip", "traction_N",
-                         "resistance_N", "net_force_N", "motor_torque_Nm"]
+    assert head[:10] == [
+        "t_s",
+        "segment",
+        "x_m",
+        "v_mps",
+        "wheel_speed_mps",
+        "slip",
+        "traction_N",
+        "resistance_N",
+        "net_force_N",
+        "motor_torque_Nm",
+    ]
     assert (out / "links.csv").read_text().splitlines()[0].split(",")[:4] == ["t_s", "link", "force_N", "length_m"]
     s = json.loads((out / "summary.json").read_text())
     assert np.allclose(s["final_link_forces_N"], np.arange(1, 6) * 200 / 6, atol=1.0)
@@ -34,12 +45,15 @@ def test_run_writes_contract_files(tmp_path):
     assert not (tmp_path / "o2" / "forces.png").exists()
 
 
-@pytest.mark.parametrize("sets, words", [
-    (["vehicle.segments=0"], "vehicle.segments"),
-    (["terrain.xt=-0.3"], "terrain.xt"),
-    (["tow.forc_N=3"], "Did you mean 'force_N'"),
-    (["notakey"], "KEY=VALUE"),
-])
+@pytest.mark.parametrize(
+    "sets, words",
+    [
+        (["vehicle.segments=0"], "vehicle.segments"),
+        (["terrain.xt=-0.3"], "terrain.xt"),
+        (["tow.forc_N=3"], "Did you mean 'force_N'"),
+        (["notakey"], "KEY=VALUE"),
+    ],
+)
 def test_bad_input_exit_2_no_traceback_nothing_written(tmp_path, sets, words):
     out = tmp_path / "o"
     args = ["run", SCENARIOS / "tow6_uniform.yaml", "--out", out]
@@ -63,10 +77,12 @@ def test_validate_ok():
 
 def test_solver_failure_exit_1_nothing_written(tmp_path, monkeypatch):
     import importlib
+
     S = importlib.import_module("snoworm.simulation.driver")
 
     def boom(sc, progress=None):
         raise S.SolverError("solve_ivp (LSODA) failed near t = 3 s: test")
+
     monkeypatch.setattr(S, "simulate", boom)
     out = tmp_path / "o"
     r = run("run", SCENARIOS / "tow6_uniform.yaml", "--out", out)
@@ -78,6 +94,7 @@ def _controller_scenario(tmp_path, body):
     import textwrap
 
     import yaml
+
     (tmp_path / "c.py").write_text(textwrap.dedent(body))
     raw = yaml.safe_load((SCENARIOS / "tow6_uniform.yaml").read_text())
     raw["mode"] = {"type": "controller", "controller": "c.py:C", "period_s": 0.1, "params": {}}
@@ -88,7 +105,9 @@ def _controller_scenario(tmp_path, body):
 
 
 def test_controller_raising_exit_1_user_frames_nothing_written(tmp_path):
-    p = _controller_scenario(tmp_path, """
+    p = _controller_scenario(
+        tmp_path,
+        """
         class C:
             def __init__(self, params, scenario):
                 pass
@@ -96,7 +115,8 @@ def test_controller_raising_exit_1_user_frames_nothing_written(tmp_path):
                 if obs.t_s > 0.45:
                     raise ValueError("gain schedule exhausted")
                 return {}
-    """)
+    """,
+    )
     out = tmp_path / "o"
     r = run("run", p, "--out", out)
     assert r.exit_code == 1
@@ -106,30 +126,60 @@ def test_controller_raising_exit_1_user_frames_nothing_written(tmp_path):
 
 
 def test_controller_bad_command_exit_1_and_bad_class_exit_2(tmp_path):
-    p = _controller_scenario(tmp_path, """
+    p = _controller_scenario(
+        tmp_path,
+        """
         class C:
             def __init__(self, params, scenario):
                 pass
             def __call__(self, obs):
                 return {"wheel_speed_mps": [1.0] * 6, "brake": 1}
-    """)
+    """,
+    )
     out = tmp_path / "o"
     r = run("run", p, "--out", out)
     assert r.exit_code == 1 and "'brake'" in r.output and "t = 0 s" in r.output and not out.exists()
     r = run("run", p, "--out", out, "--set", "mode.controller=c.py:D")
     assert r.exit_code == 2 and "no class 'D'" in r.output and "Traceback" not in r.output
+
+
 def test_plot_format_and_sweep_series(tmp_path):
-    r = run("run", SCENARIOS / "pi3_equal.yaml", "--out", tmp_path / "r", "--set", "simulation.duration_s=1",
-            "--plot-format", "pdf")
+    r = run(
+        "run",
+        SCENARIOS / "pi3_equal.yaml",
+        "--out",
+        tmp_path / "r",
+        "--set",
+        "simulation.duration_s=1",
+        "--plot-format",
+        "pdf",
+    )
     assert r.exit_code == 0, r.output
     pdfs = sorted(p.name for p in (tmp_path / "r").glob("*.pdf"))
     assert pdfs == ["force_diagram.pdf", "forces.pdf", "positions.pdf", "speeds.pdf"]
     assert not list((tmp_path / "r").glob("*.png"))
-    r = run("sweep", SCENARIOS / "tow6_uniform.yaml", "--set", "tow.force_N=0,100", "--set", "simulation.duration_s=1",
-            "--out", tmp_path / "s", "--series", "netcdf", "--plot-format", "svg")
+    r = run(
+        "sweep",
+        SCENARIOS / "tow6_uniform.yaml",
+        "--set",
+        "tow.force_N=0,100",
+        "--set",
+        "simulation.duration_s=1",
+        "--out",
+        tmp_path / "s",
+        "--series",
+        "netcdf",
+        "--plot-format",
+        "svg",
+    )
     assert r.exit_code == 0, r.output
-    assert sorted(p.name for p in (tmp_path / "s").iterdir()) == [".snoworm-manifest.json", "series.nc", "summary.csv", "sweep.json",
-                                                                "sweep.svg"]
+    assert sorted(p.name for p in (tmp_path / "s").iterdir()) == [
+        ".snoworm-manifest.json",
+        "series.nc",
+        "summary.csv",
+        "sweep.json",
+        "sweep.svg",
+    ]
     r = run("run", SCENARIOS / "pi3_equal.yaml", "--out", tmp_path / "x", "--plot-format", "jpg")
     assert r.exit_code == 2 and "'jpg' is not one of 'png', 'pdf', 'svg'" in r.output
 
@@ -138,8 +188,19 @@ def test_figure_size_column_pdfs_for_journals(tmp_path):
     """--figure-size column --plot-format pdf: every PDF 3.5 in (252 pt) wide, TrueType fonts,
     no Type 3 font; the sweep's SVG keeps its text as <text>; a bad size is exit 2, one line."""
     import re
-    r = run("run", SCENARIOS / "inchworm6.yaml", "--out", tmp_path / "r", "--set", "simulation.duration_s=3",
-            "--plot-format", "pdf", "--figure-size", "column")
+
+    r = run(
+        "run",
+        SCENARIOS / "inchworm6.yaml",
+        "--out",
+        tmp_path / "r",
+        "--set",
+        "simulation.duration_s=3",
+        "--plot-format",
+        "pdf",
+        "--figure-size",
+        "column",
+    )
     assert r.exit_code == 0, r.output
     pdfs = sorted((tmp_path / "r").glob("*.pdf"))
     assert [p.name for p in pdfs] == ["forces.pdf", "positions.pdf", "speeds.pdf"]
@@ -147,8 +208,20 @@ def test_figure_size_column_pdfs_for_journals(tmp_path):
         data = p.read_bytes()
         width = float(re.search(rb"/MediaBox \[\s*0 0 ([0-9.]+) ", data).group(1))
         assert width == pytest.approx(3.5 * 72, abs=0.01) and b"/Subtype /Type3" not in data and b"/FontFile2" in data
-    r = run("sweep", SCENARIOS / "tow6_uniform.yaml", "--set", "tow.force_N=0,100", "--set", "simulation.duration_s=1",
-            "--out", tmp_path / "s", "--plot-format", "svg", "--figure-size", "3.5x4")
+    r = run(
+        "sweep",
+        SCENARIOS / "tow6_uniform.yaml",
+        "--set",
+        "tow.force_N=0,100",
+        "--set",
+        "simulation.duration_s=1",
+        "--out",
+        tmp_path / "s",
+        "--plot-format",
+        "svg",
+        "--figure-size",
+        "3.5x4",
+    )
     assert r.exit_code == 0, r.output
     svg = (tmp_path / "s" / "sweep.svg").read_text(encoding="utf-8")
     assert "<text" in svg and 'width="252pt"' in svg and 'height="288pt"' in svg

@@ -3,6 +3,7 @@
 Each command of tests/test_cli.py goes through these; here they are checked on a bare command
 so that each mapping (exception -> message and exit status) is seen on its own.
 """
+
 import logging
 import os
 import signal
@@ -44,19 +45,23 @@ def _cli(exc=None, seen=None):
         if exc is not None:
             raise exc
         click.echo(f"ok {out_dir}")
+
     return group
 
 
-@pytest.mark.parametrize("exc, code, text", [
-    (ScenarioError("tow.force_N: must be finite."), EXIT_INPUT, "Error: tow.force_N: must be finite.\n"),
-    (OutputError("out/ is not empty."), EXIT_INPUT, "Error: out/ is not empty.\n"),
-    (SolverError("every method failed"), EXIT_SOLVER, "Error: solver failure: every method failed\n"),
-    (ControllerError("the controller raised"), EXIT_SOLVER, "Error: the controller raised\n"),
-    (RecursionError(), EXIT_INPUT, "nested too deeply"),
-    (KeyboardInterrupt(), 130, "interrupted; nothing half-written"),
-    (Terminated(), 143, "interrupted; nothing half-written"),
-    (ZeroDivisionError("boom"), EXIT_SOLVER, "internal error (ZeroDivisionError: boom). This is a bug"),
-])
+@pytest.mark.parametrize(
+    "exc, code, text",
+    [
+        (ScenarioError("tow.force_N: must be finite."), EXIT_INPUT, "Error: tow.force_N: must be finite.\n"),
+        (OutputError("out/ is not empty."), EXIT_INPUT, "Error: out/ is not empty.\n"),
+        (SolverError("every method failed"), EXIT_SOLVER, "Error: solver failure: every method failed\n"),
+        (ControllerError("the controller raised"), EXIT_SOLVER, "Error: the controller raised\n"),
+        (RecursionError(), EXIT_INPUT, "nested too deeply"),
+        (KeyboardInterrupt(), 130, "interrupted; nothing half-written"),
+        (Terminated(), 143, "interrupted; nothing half-written"),
+        (ZeroDivisionError("boom"), EXIT_SOLVER, "internal error (ZeroDivisionError: boom). This is a bug"),
+    ],
+)
 def test_each_failure_is_one_message_and_its_exit_status(monkeypatch, exc, code, text):
     monkeypatch.delenv("SNOWORM_DEBUG", raising=False)
     r = CliRunner().invoke(_cli(exc), ["cmd", "--out", "o"])
@@ -75,8 +80,8 @@ def test_a_command_knows_its_command_line_for_the_manifests():
     r = CliRunner().invoke(_cli(seen=seen), ["cmd", "--out", "res dir"])
     assert r.exit_code == 0 and r.stdout == "ok res dir\n"
     assert seen == ["snoworm cmd --out 'res dir'"]
-    assert command_line() is None                  # outside a command
-    assert not hasattr(folders, "COMMAND")         # no module global: the CLI passes it (command=)
+    assert command_line() is None  # outside a command
+    assert not hasattr(folders, "COMMAND")  # no module global: the CLI passes it (command=)
 
 
 def test_sigterm_handler_is_restored_after_the_command():
@@ -106,16 +111,24 @@ def test_logging_is_configured_once_at_the_chosen_level():
 def test_no_library_module_is_imported_at_import_time():
     """Like the CLI, the shared helpers import snoworm's modules only when a command runs (the
     package itself imports only its version string)."""
-    code = ("import sys, snoworm.commands.common; print(sorted(m for m in sys.modules if m.startswith('snoworm.') "
-            "and m not in ('snoworm.commands', 'snoworm.commands.common', 'snoworm._version')))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                         env={**os.environ, "PYTHONWARNINGS": "ignore"}).stdout
+    code = (
+        "import sys, snoworm.commands.common; print(sorted(m for m in sys.modules if m.startswith('snoworm.') "
+        "and m not in ('snoworm.commands', 'snoworm.commands.common', 'snoworm._version')))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, "PYTHONWARNINGS": "ignore"},
+    ).stdout
     assert out.strip() == "[]"
 
 
 def test_echo_scenarios_and_echo_written(capsys):
     from snoworm.commands.common import echo_scenarios, echo_written
     from snoworm.config.scenario import shipped_scenarios
+
     echo_scenarios()
     lines = capsys.readouterr().out.splitlines()
     assert [ln.split()[0] for ln in lines] == list(shipped_scenarios())

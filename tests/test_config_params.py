@@ -1,4 +1,5 @@
 """Named parameter sets with source tags (snoworm.config.params, docs/model.md sections 1, 2 and 4)."""
+
 import dataclasses
 
 import pytest
@@ -26,7 +27,7 @@ def test_sets_fill_every_physical_field(name):
     values = parameter_set(name)
     for section, cls in (("segment", SegmentConfig), ("terrain_model", TerrainModelConfig)):
         assert set(values[section]) == {f.name for f in dataclasses.fields(cls)}, section
-    link_fields = {f.name for f in dataclasses.fields(LinkConfig)} - {"type"}      # the type is the scenario's
+    link_fields = {f.name for f in dataclasses.fields(LinkConfig)} - {"type"}  # the type is the scenario's
     assert set(values["links"]) == link_fields
 
 
@@ -36,8 +37,14 @@ def test_frostyboy_values():
     s, t, lk = v["segment"], v["terrain_model"], v["links"]
     assert (s["mass_kg"], s["wheel_radius_m"], s["wheel_inertia_kgm2"], s["wheelbase_m"]) == (90.0, 0.265, 0.415, 1.094)
     assert (s["motor_slope_Nms_per_rad"], s["no_load_speed_radps"], s["torque_limit_Nm"]) == (10.0507, 18.326, 88.64)
-    assert (t["b_tF"], t["b_trF"], t["A"], t["peak_exponent_d"], t["tau0"], t["tau1"]) == (0.7, 0.165, 0.6, 2.0,
-                                                                                          0.1710, 1.7096)
+    assert (t["b_tF"], t["b_trF"], t["A"], t["peak_exponent_d"], t["tau0"], t["tau1"]) == (
+        0.7,
+        0.165,
+        0.6,
+        2.0,
+        0.1710,
+        1.7096,
+    )
     assert (lk["stiffness_N_per_m"], lk["damping_Ns_per_m"], lk["rest_spacing_m"]) == (2.0e4, 1.5e3, 1.5)
     assert parameter_sources("frostyboy")["terrain_model"]["tau0"].startswith("[fitted]")
     assert parameter_sources("frostyboy")["segment"]["mass_kg"].startswith("[Lines]")

@@ -1,4 +1,5 @@
 """Grade inputs and route files (snoworm.config.routes): validation messages and what they compile to."""
+
 import math
 
 import pytest
@@ -22,16 +23,19 @@ def test_read_route_with_comments_and_extra_columns(tmp_path):
     assert float(prof.sin_grade(5.0, 0.5)) == pytest.approx(0.1)
 
 
-@pytest.mark.parametrize("text, fragment", [
-    ("distance_m,elevation_m\n0,0\n1,0\n", "lacks xt"),
-    ("distance_m,elevation_m,xt\n0,0,0.9\n10,abc,0.9\n", "line 3, column 2 (elevation_m): expected a number"),
-    ("distance_m,elevation_m,xt\n0,0,0.9\n0,1,0.9\n", "line 3: distances must increase strictly"),
-    ("distance_m,elevation_m,xt\n0,0,0.9\n10,9,0.9\n", "over the 40 deg limit"),
-    ("distance_m,elevation_m,xt\n0,0,0.9\n10,1,1.5\n", "line 3, column 3 (xt): X_t must be in (0, 1]"),
-    ("distance_m,elevation_m,xt\n0,0,0.9\n10,nan,0.9\n", "expected a finite number"),
-    ("distance_m,elevation_m,xt\n0,0,0.9\n", "at least two rows"),
-    ("distance_m,elevation_m,xt\n0,0,0.9\n10,1\n", "line 3, column 3 (xt): missing"),
-])
+@pytest.mark.parametrize(
+    "text, fragment",
+    [
+        ("distance_m,elevation_m\n0,0\n1,0\n", "lacks xt"),
+        ("distance_m,elevation_m,xt\n0,0,0.9\n10,abc,0.9\n", "line 3, column 2 (elevation_m): expected a number"),
+        ("distance_m,elevation_m,xt\n0,0,0.9\n0,1,0.9\n", "line 3: distances must increase strictly"),
+        ("distance_m,elevation_m,xt\n0,0,0.9\n10,9,0.9\n", "over the 40 deg limit"),
+        ("distance_m,elevation_m,xt\n0,0,0.9\n10,1,1.5\n", "line 3, column 3 (xt): X_t must be in (0, 1]"),
+        ("distance_m,elevation_m,xt\n0,0,0.9\n10,nan,0.9\n", "expected a finite number"),
+        ("distance_m,elevation_m,xt\n0,0,0.9\n", "at least two rows"),
+        ("distance_m,elevation_m,xt\n0,0,0.9\n10,1\n", "line 3, column 3 (xt): missing"),
+    ],
+)
 def test_route_errors_name_file_line_and_column(tmp_path, text, fragment):
     p = _write(tmp_path, text)
     with pytest.raises(ScenarioError) as e:
@@ -45,24 +49,33 @@ def test_route_relative_to_the_scenario_folder(tmp_path):
     (tmp_path / "s.yaml").write_text(
         "name: r\nvehicle: {parameter_set: frostyboy, segments: 2, links: {type: fixed}}\n"
         "terrain: {route: hill.csv}\ntow: {force_N: 0}\nmode: {type: uniform, speed_mps: 1.0, start_time_s: 0}\n"
-        "simulation: {duration_s: 1}\n")
+        "simulation: {duration_s: 1}\n"
+    )
     sc = load_scenario(tmp_path / "s.yaml")
     assert sc.terrain.files() == [str((tmp_path / "hill.csv").resolve())]
     assert sc.terrain.compile()(25.0) == pytest.approx(0.75)
     assert float(sc.terrain.elevation_profile().elevation(25.0)) == pytest.approx(2.5)
-    assert sc.to_dict()["terrain"]["route"] == str((tmp_path / "hill.csv").resolve())   # re-runnable from the output
+    assert sc.to_dict()["terrain"]["route"] == str((tmp_path / "hill.csv").resolve())  # re-runnable from the output
 
 
-@pytest.mark.parametrize("sets, fragment", [
-    (["terrain.grade_deg=45"], "terrain.grade_deg"),
-    (["terrain.grade_deg=5", "terrain.elevation=[[0,0],[10,1]]"], "at most one of 'grade_deg', 'elevation'"),
-    (["terrain.grade_patches=[{start_m: 0, end_m: 5, grade_deg: 3}]"], "give 'grade_deg'"),
-    (["terrain.elevation=[[0,0],[0,1]]"], "distances must increase strictly"),
-    (["terrain.elevation=[[0,0],[10,8]]"], "over the 40 deg limit"),
-    (["terrain.grade_deg=30", "vehicle.segment.com_height_m=1.5"], "vehicle.segment.com_height_m: segment 0 tips"),
-    (["terrain.grade_deg=0", "terrain.grade_patches=[{start_m: 0, end_m: 5, grade_deg: 3}, "
-      "{start_m: 4, end_m: 9, grade_deg: 3}]"], "grade_patches[1]: overlaps"),
-])
+@pytest.mark.parametrize(
+    "sets, fragment",
+    [
+        (["terrain.grade_deg=45"], "terrain.grade_deg"),
+        (["terrain.grade_deg=5", "terrain.elevation=[[0,0],[10,1]]"], "at most one of 'grade_deg', 'elevation'"),
+        (["terrain.grade_patches=[{start_m: 0, end_m: 5, grade_deg: 3}]"], "give 'grade_deg'"),
+        (["terrain.elevation=[[0,0],[0,1]]"], "distances must increase strictly"),
+        (["terrain.elevation=[[0,0],[10,8]]"], "over the 40 deg limit"),
+        (["terrain.grade_deg=30", "vehicle.segment.com_height_m=1.5"], "vehicle.segment.com_height_m: segment 0 tips"),
+        (
+            [
+                "terrain.grade_deg=0",
+                "terrain.grade_patches=[{start_m: 0, end_m: 5, grade_deg: 3}, {start_m: 4, end_m: 9, grade_deg: 3}]",
+            ],
+            "grade_patches[1]: overlaps",
+        ),
+    ],
+)
 def test_grade_validation_messages(sets, fragment):
     with pytest.raises(ScenarioError) as e:
         load_scenario("tow6_uniform", sets)

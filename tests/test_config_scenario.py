@@ -1,5 +1,6 @@
 """Scenarios (snoworm.config.scenario): every shipped scenario is valid; bad input fails naming the field and the fix;
 Scenario.with_ and to_dict; the mode-config registry and cached properties."""
+
 import dataclasses
 import json
 
@@ -35,21 +36,24 @@ def base():
     return read_yaml(SCENARIOS / "tow6_uniform.yaml")
 
 
-@pytest.mark.parametrize("overrides, field, words", [
-    ([("vehicle.segment.mass_kg", -90)], "vehicle.segment.mass_kg", "greater than 0"),
-    ([("terrain.xt", 0)], "terrain.xt", "greater than 0"),
-    ([("vehicle.segments", 0)], "vehicle.segments", "at least 1"),
-    ([("vehicle.segments", 2.5)], "vehicle.segments", "whole number"),
-    ([("tow.force_N", "heavy")], "tow.force_N", "number"),
-    ([("vehicle.segmnets", 3)], "vehicle.segmnets", "Did you mean 'segments'"),
-    ([("terrain.model.b_tf", 0.7)], "terrain.model.b_tf", "Did you mean 'b_tF'"),
-    ([("mode.type", "inchworn")], "mode.type", "unknown mode"),
-    ([("mode.start_time_s", [1, 2])], "mode.start_time_s", "one per segment"),
-    ([("simulation.method", "Euler")], "simulation.method", "must be one of"),
-    ([("vehicle.parameter_set", "frostyboi")], "vehicle.parameter_set", "Did you mean 'frostyboy'"),
-    ([("terrain.profile", [[0, 0.9], [0, 0.5]])], "terrain.profile[1]", "increase"),
-    ([("vehicle.links.stroke_max_m", -1)], "vehicle.links.stroke_max_m", "greater than stroke_min_m"),
-])
+@pytest.mark.parametrize(
+    "overrides, field, words",
+    [
+        ([("vehicle.segment.mass_kg", -90)], "vehicle.segment.mass_kg", "greater than 0"),
+        ([("terrain.xt", 0)], "terrain.xt", "greater than 0"),
+        ([("vehicle.segments", 0)], "vehicle.segments", "at least 1"),
+        ([("vehicle.segments", 2.5)], "vehicle.segments", "whole number"),
+        ([("tow.force_N", "heavy")], "tow.force_N", "number"),
+        ([("vehicle.segmnets", 3)], "vehicle.segmnets", "Did you mean 'segments'"),
+        ([("terrain.model.b_tf", 0.7)], "terrain.model.b_tf", "Did you mean 'b_tF'"),
+        ([("mode.type", "inchworn")], "mode.type", "unknown mode"),
+        ([("mode.start_time_s", [1, 2])], "mode.start_time_s", "one per segment"),
+        ([("simulation.method", "Euler")], "simulation.method", "must be one of"),
+        ([("vehicle.parameter_set", "frostyboi")], "vehicle.parameter_set", "Did you mean 'frostyboy'"),
+        ([("terrain.profile", [[0, 0.9], [0, 0.5]])], "terrain.profile[1]", "increase"),
+        ([("vehicle.links.stroke_max_m", -1)], "vehicle.links.stroke_max_m", "greater than stroke_min_m"),
+    ],
+)
 def test_bad_values_name_the_field(overrides, field, words):
     with pytest.raises(ScenarioError) as exc:
         scenario_from_dict(apply_overrides(base(), overrides))
@@ -90,8 +94,11 @@ def test_model_file_is_merged(tmp_path):
 @given(xt=st.floats(0.05, 1.0), tow=st.floats(-500, 500), n=st.integers(1, 12), speed=st.floats(0, 5))
 def test_round_trip_property(xt, tow, n, speed):
     """Any valid scenario survives dump -> load unchanged (the resolved scenario re-runs identically)."""
-    sc = scenario_from_dict(apply_overrides(base(), [("terrain.xt", xt), ("tow.force_N", tow),
-                                                     ("vehicle.segments", n), ("mode.speed_mps", speed)]))
+    sc = scenario_from_dict(
+        apply_overrides(
+            base(), [("terrain.xt", xt), ("tow.force_N", tow), ("vehicle.segments", n), ("mode.speed_mps", speed)]
+        )
+    )
     assert scenario_from_dict(yaml.safe_load(dump_scenario(sc))) == sc
 
 
@@ -101,6 +108,7 @@ def test_shipped_scenarios_run(path):
     import numpy as np
 
     from snoworm import simulate
+
     sc = load_scenario(path, ["simulation.duration_s=3"])
     res = simulate(sc)
     n = sc.vehicle.segments
@@ -111,20 +119,24 @@ def test_shipped_scenarios_run(path):
 
 # ------------------------------------------------------------------ Scenario.with_, to_dict, cached properties
 
+
 def test_with_returns_a_validated_new_scenario():
     sc = load_scenario(SCENARIOS / "tow6_uniform.yaml")
     new = sc.with_({"tow.force_N": 150, "terrain.xt": 0.7}, name="lighter")
     assert (new.tow.force_N, new.terrain.xt, new.name) == (150.0, 0.7, "lighter")
-    assert (sc.tow.force_N, sc.terrain.xt, sc.name) == (200.0, 0.9, "tow6_uniform")     # the original is unchanged
+    assert (sc.tow.force_N, sc.terrain.xt, sc.name) == (200.0, 0.9, "tow6_uniform")  # the original is unchanged
     assert new.vehicle == sc.vehicle and new.mode == sc.mode
-    assert new.chain_model.tow_force_N == 150.0                # built from the new values
+    assert new.chain_model.tow_force_N == 150.0  # built from the new values
 
 
-@pytest.mark.parametrize("changes, match", [
-    ({"terrain.xt": -1}, r"^terrain\.xt: must be greater than 0"),
-    ({"vehicle.segmnets": 3}, r"Did you mean 'segments'"),
-    ({"mode.speed_mps": [1.8, 1.8]}, r"^mode\.speed_mps: give one speed for all segments or 6"),
-])
+@pytest.mark.parametrize(
+    "changes, match",
+    [
+        ({"terrain.xt": -1}, r"^terrain\.xt: must be greater than 0"),
+        ({"vehicle.segmnets": 3}, r"Did you mean 'segments'"),
+        ({"mode.speed_mps": [1.8, 1.8]}, r"^mode\.speed_mps: give one speed for all segments or 6"),
+    ],
+)
 def test_with_raises_like_a_scenario_file(changes, match):
     sc = load_scenario(SCENARIOS / "tow6_uniform.yaml")
     with pytest.raises(ScenarioError, match=match):
@@ -136,18 +148,19 @@ def test_to_dict_round_trips(path):
     sc = load_scenario(path)
     d = sc.to_dict()
     assert scenario_from_dict(d, base_dir=path.parent) == sc
-    assert yaml.safe_load(yaml.safe_dump(d)) == d               # plain YAML-able data
+    assert yaml.safe_load(yaml.safe_dump(d)) == d  # plain YAML-able data
 
 
 def test_cached_properties_are_built_once():
     sc = load_scenario(SCENARIOS / "pi3_equal.yaml")
     assert sc.chain_model is sc.chain_model
-    assert sc.mode_plan is sc.mode_plan and sc.mode_plan is not None     # force control prepares a plan
+    assert sc.mode_plan is sc.mode_plan and sc.mode_plan is not None  # force control prepares a plan
     assert load_scenario(SCENARIOS / "tow6_uniform.yaml").mode_plan is None
 
 
 def test_mode_configs_registry_holds_the_built_in_modes():
     from snoworm.config.mode_registry import MODES
+
     assert {"uniform", "force_control", "inchworm", "supervisor"} <= set(MODES)
     sc = load_scenario(SCENARIOS / "inchworm6.yaml")
     assert type(sc.mode) is MODES.config_class("inchworm")
@@ -175,9 +188,12 @@ def _vehicle_file(tmp_path, text):
 
 
 def test_a_vehicle_file_based_on_a_named_set_carries_every_source(tmp_path):
-    path = _vehicle_file(tmp_path, "name: my_rover\nbase: frostyboy\nsegment:\n"
-                                   "  mass_kg: {value: 120.0, source: '[field data] weighed 2026-01'}\n"
-                                   "  wheel_radius_m: 0.3\n")
+    path = _vehicle_file(
+        tmp_path,
+        "name: my_rover\nbase: frostyboy\nsegment:\n"
+        "  mass_kg: {value: 120.0, source: '[field data] weighed 2026-01'}\n"
+        "  wheel_radius_m: 0.3\n",
+    )
     sc = load_scenario(path)
     assert sc.vehicle.segment.mass_kg == 120.0 and sc.vehicle.segment.wheel_radius_m == 0.3
     src = sc.sources
@@ -188,8 +204,10 @@ def test_a_vehicle_file_based_on_a_named_set_carries_every_source(tmp_path):
     assert len(src) == n_values
     # the written scenario.yaml loads back with the same values and sources; summary.json has them
     res_dir = tmp_path / "out"
-    r = CliRunner().invoke(__import__("snoworm.cli", fromlist=["main"]).main,
-                           ["run", str(path), "--out", str(res_dir), "--no-plot", "--set", "simulation.duration_s=1"])
+    r = CliRunner().invoke(
+        __import__("snoworm.cli", fromlist=["main"]).main,
+        ["run", str(path), "--out", str(res_dir), "--no-plot", "--set", "simulation.duration_s=1"],
+    )
     assert r.exit_code == 0, r.output
     text = (res_dir / "scenario.yaml").read_text()
     assert "#   vehicle.segment.mass_kg: [field data] weighed 2026-01" in text
@@ -204,22 +222,25 @@ def test_scenario_values_and_sources_notes_are_tagged(tmp_path):
     assert sc.sources["vehicle.segment.mass_kg"] == "[Lines] incl. wheels"
     noted = sc.with_({"sources": {"vehicle.segment.mass_kg": "[field data] scale"}})
     assert noted.sources["vehicle.segment.mass_kg"] == "[field data] scale"
-    changed = noted.with_({"vehicle.segment.mass_kg": 95.0})      # the note no longer applies
+    changed = noted.with_({"vehicle.segment.mass_kg": 95.0})  # the note no longer applies
     assert changed.sources["vehicle.segment.mass_kg"] == "[user] scenario"
     with pytest.raises(ScenarioError, match=r"sources.vehicle.segment.mass_kg: a source must start with"):
         sc.with_({"sources": {"vehicle.segment.mass_kg": "weighed"}})
 
 
-@pytest.mark.parametrize("text, words", [
-    ("segment:\n  mass_kg: 100\n", "missing wheel_radius_m"),                      # no base: every value
-    ("base: frostyboy\nsegment:\n  mas_kg: 100\n", "Did you mean 'mass_kg'"),
-    ("base: frostyboi\n", "base: unknown set"),
-    ("base: frostyboy\nsegment: [1, 2]\n", "expected a mapping"),
-    ("base: frostyboy\nsegment:\n  mass_kg: {value: 1, source: guessed}\n", "a source must start with"),
-    ("base: frostyboy\nsegment:\n  mass_kg: -5\n", "vehicle.segment.mass_kg"),
-    ("- 1\n", "must hold a mapping"),
-    ("base: frostyboy\nwheels: 4\n", "unknown key 'wheels'"),
-])
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("segment:\n  mass_kg: 100\n", "missing wheel_radius_m"),  # no base: every value
+        ("base: frostyboy\nsegment:\n  mas_kg: 100\n", "Did you mean 'mass_kg'"),
+        ("base: frostyboi\n", "base: unknown set"),
+        ("base: frostyboy\nsegment: [1, 2]\n", "expected a mapping"),
+        ("base: frostyboy\nsegment:\n  mass_kg: {value: 1, source: guessed}\n", "a source must start with"),
+        ("base: frostyboy\nsegment:\n  mass_kg: -5\n", "vehicle.segment.mass_kg"),
+        ("- 1\n", "must hold a mapping"),
+        ("base: frostyboy\nwheels: 4\n", "unknown key 'wheels'"),
+    ],
+)
 def test_bad_vehicle_files_are_bad_input(tmp_path, text, words):
     path = _vehicle_file(tmp_path, text)
     with pytest.raises(ScenarioError, match="parameter_set|mass_kg") as err:
@@ -238,6 +259,7 @@ def test_copy_tree_copies_every_level_and_leaves_the_original_alone():
     import numpy as np
 
     from snoworm.config.scenario import _copy_tree
+
     shared = {"k": [1, 2]}
     data = {"a": shared, "b": shared, "c": [{"x": 1.5, "s": "t", "n": None}], "arr": np.arange(3.0)}
     out = _copy_tree(data)
@@ -247,12 +269,12 @@ def test_copy_tree_copies_every_level_and_leaves_the_original_alone():
     out["arr"][0] = 9.0
     assert data == {"a": {"k": [1, 2]}, "b": {"k": [1, 2]}, "c": [{"x": 1.5, "s": "t", "n": None}], "arr": data["arr"]}
     assert data["arr"][0] == 0.0
-    assert out["b"]["k"] == [1, 2]          # a YAML alias's two places are two copies
+    assert out["b"]["k"] == [1, 2]  # a YAML alias's two places are two copies
 
 
 def test_override_of_an_aliased_section_changes_only_the_named_place():
     raw = {"a": {"v": 1}}
-    raw["b"] = raw["a"]                    # what a YAML alias gives
+    raw["b"] = raw["a"]  # what a YAML alias gives
     out = apply_overrides(raw, [("a.v", 2)])
     assert out["a"]["v"] == 2 and out["b"]["v"] == 1 and raw["a"]["v"] == 1
 
@@ -262,7 +284,7 @@ def test_the_origin_keeps_the_folder_and_the_notes_through_edits(tmp_path, monke
     sc = load_scenario(path)
     assert sc.origin.base_dir == tmp_path and sc.sources["vehicle.segment.mass_kg"] == "[user] rover.yaml"
     noted = sc.with_({"sources": {"vehicle.segment.wheel_radius_m": "[field data] tape"}})
-    assert noted.origin.base_dir == tmp_path                 # with_ validates from the same folder
+    assert noted.origin.base_dir == tmp_path  # with_ validates from the same folder
     # dataclasses.replace keeps the notes and the parameter set's tags (before: they were lost)
     edited = dataclasses.replace(noted, description="edited")
     assert edited.sources == noted.sources

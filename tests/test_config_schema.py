@@ -1,4 +1,5 @@
 """Declarative validation of configs (snoworm.config.schema): on construction, on replace, from mappings."""
+
 import dataclasses
 from pathlib import Path
 
@@ -31,13 +32,14 @@ class Probe(Config):
 
 # ------------------------------------------------------------------ validation on construction
 
+
 def test_replace_validates_and_names_the_field(sc):
     with pytest.raises(ScenarioError, match=r"^terrain\.xt: must be greater than 0"):
         dataclasses.replace(sc.terrain, xt=-1)
     with pytest.raises(ScenarioError, match=r"^vehicle\.links\.stroke_max_m: must be greater than stroke_min_m"):
-        dataclasses.replace(sc.vehicle.links, stroke_max_m=-1)          # a rule across fields (_check)
+        dataclasses.replace(sc.vehicle.links, stroke_max_m=-1)  # a rule across fields (_check)
     with pytest.raises(ScenarioError, match=r"^tow\.force_N: expected a number"):
-        dataclasses.replace(sc, tow={"force_N": "heavy"})               # a nested mapping is built and checked
+        dataclasses.replace(sc, tow={"force_N": "heavy"})  # a nested mapping is built and checked
 
 
 def test_direct_construction_validates():
@@ -62,13 +64,14 @@ def test_numpy_scalars_and_arrays_accepted(sc):
     assert type(t.force_N) is float and t.force_N == 150.0
     v = dataclasses.replace(sc.vehicle, segments=np.int64(3))
     assert type(v.segments) is int and v.segments == 3
-    p = Probe(count=np.int64(2), ratio=np.float32(0.25), values=np.array([0.5, 1.5]), kind=np.str_("b"),
-              limit=np.array(3.0))
+    p = Probe(
+        count=np.int64(2), ratio=np.float32(0.25), values=np.array([0.5, 1.5]), kind=np.str_("b"), limit=np.array(3.0)
+    )
     assert (p.count, p.ratio, p.values, p.kind, p.limit) == (2, 0.25, (0.5, 1.5), "b", 3.0)
     assert type(p.values) is tuple and all(type(x) is float for x in p.values)
     m = dataclasses.replace(sc.mode, speed_mps=np.full(6, 1.7))
     assert m.speed_mps == (1.7,) * 6
-    assert Probe(count=1, values=2.0).values == (2.0,)                  # a scalar where a list is expected
+    assert Probe(count=1, values=2.0).values == (2.0,)  # a scalar where a list is expected
 
 
 def test_optional_field():
@@ -79,6 +82,7 @@ def test_optional_field():
 
 # ------------------------------------------------------------------ build from mappings
 
+
 def test_build_unknown_key_suggests():
     with pytest.raises(ScenarioError, match=r"^tow\.force_n: unknown key\. Did you mean 'force_N'\?"):
         build(TowConfig, {"force_n": 1.0}, "tow")
@@ -86,24 +90,27 @@ def test_build_unknown_key_suggests():
         build(Probe, {"cuont": 1}, "probe")
 
 
-@pytest.mark.parametrize("data, path, match", [
-    ({}, "tow", r"^tow\.force_N: is required but missing"),
-    ([1, 2], "tow", r"^tow: expected a mapping of keys, got list"),
-    ({"force_N": "heavy"}, "tow", r"^tow\.force_N: expected a number.*got the text 'heavy'"),
-    ({"force_N": [1.0]}, "tow", r"^tow\.force_N: expected a number"),
-])
+@pytest.mark.parametrize(
+    "data, path, match",
+    [
+        ({}, "tow", r"^tow\.force_N: is required but missing"),
+        ([1, 2], "tow", r"^tow: expected a mapping of keys, got list"),
+        ({"force_N": "heavy"}, "tow", r"^tow\.force_N: expected a number.*got the text 'heavy'"),
+        ({"force_N": [1.0]}, "tow", r"^tow\.force_N: expected a number"),
+    ],
+)
 def test_build_error_paths(data, path, match):
     with pytest.raises(ScenarioError, match=match):
         build(TowConfig, data, path)
 
 
 def test_build_uses_given_path_and_defaults():
-    s = build(SimulationConfig, {"duration_s": "2.5"}, "simulation")      # a numeric string converts
+    s = build(SimulationConfig, {"duration_s": "2.5"}, "simulation")  # a numeric string converts
     assert s.duration_s == 2.5 and s.method == "LSODA" and s.max_step_s is None
     with pytest.raises(ScenarioError, match=r"^numerics\.rtol: must be less than 1"):
         build(SimulationConfig, {"duration_s": 1, "rtol": 2}, "numerics")
     with pytest.raises(ScenarioError, match=r"^tow\.force_N: is required"):
-        build(TowConfig, None, "tow")                                  # None is an empty mapping
+        build(TowConfig, None, "tow")  # None is an empty mapping
 
 
 def test_suggest():
@@ -120,11 +127,19 @@ def test_dump_round_trips_through_build():
 
 # ------------------------------------------------------------------ domains (issue 15)
 
+
 def test_whole_numbers_reject_nan_inf_and_fractions():
     from snoworm.config.schema import check_field
     from snoworm.config.sections import VehicleConfig
-    for bad, needle in ((float("nan"), "finite"), (float("inf"), "finite"), (2.5, "whole number"),
-                        (10**400, "finite"), ([3], "expected a number"), ({"a": 1}, "expected a number")):
+
+    for bad, needle in (
+        (float("nan"), "finite"),
+        (float("inf"), "finite"),
+        (2.5, "whole number"),
+        (10**400, "finite"),
+        ([3], "expected a number"),
+        ({"a": 1}, "expected a number"),
+    ):
         with pytest.raises(ScenarioError, match=needle):
             check_field(VehicleConfig, "segments", bad)
     assert check_field(VehicleConfig, "segments", 6.0) == 6
@@ -133,6 +148,7 @@ def test_whole_numbers_reject_nan_inf_and_fractions():
 def test_check_field_uses_the_declared_domain():
     from snoworm.config.schema import check_field
     from snoworm.config.sections import TerrainConfig
+
     assert check_field(TerrainConfig, "xt", "0.5", "--xt") == 0.5
     with pytest.raises(ScenarioError, match=r"^--xt: must be at most 1 .*allowed range is \(0, 1\]"):
         check_field(TerrainConfig, "xt", 1.5, "--xt")
@@ -142,6 +158,7 @@ def test_check_field_uses_the_declared_domain():
 
 def test_domain_text_marks_open_and_closed_ends():
     from snoworm.config.schema import domain_text
+
     assert domain_text({"gt": 0, "le": 1}) == "(0, 1]"
     assert domain_text({"ge": -1e6, "le": 1e6}) == "[-1e+06, 1e+06]"
     assert domain_text({"gt": 0}) == "(0, inf)"
@@ -150,6 +167,7 @@ def test_domain_text_marks_open_and_closed_ends():
 
 def test_messages_quote_at_most_about_100_characters():
     from snoworm.config.schema import quote
+
     huge = "x" * 2_000_000
     with pytest.raises(ScenarioError) as exc:
         build(SimulationConfig, {"duration_s": huge}, "simulation")
@@ -168,7 +186,7 @@ def test_a_huge_unknown_key_is_cut_in_the_message():
 
 
 def test_values_are_converted_before_the_frozen_object_is_made():
-    tow = TowConfig(force_N=3)                      # an int, converted to a float before construction
+    tow = TowConfig(force_N=3)  # an int, converted to a float before construction
     assert type(tow.force_N) is float and tow.force_N == 3.0
     again = dataclasses.replace(tow, force_N=np.int64(5))
     assert type(again.force_N) is float and again.force_N == 5.0
@@ -191,5 +209,5 @@ def test_an_internal_field_is_no_setting(sc):
     assert "origin" not in dump(sc) and sc.origin is not None
     with pytest.raises(ScenarioError, match=r"^origin: unknown key"):
         build(type(sc), {**dump(sc), "origin": None})
-    assert dataclasses.replace(sc, origin=None) == sc           # not compared
-    assert dataclasses.replace(sc, description="x").origin is sc.origin      # kept by edits
+    assert dataclasses.replace(sc, origin=None) == sc  # not compared
+    assert dataclasses.replace(sc, description="x").origin is sc.origin  # kept by edits

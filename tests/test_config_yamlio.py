@@ -1,4 +1,5 @@
 """snoworm.config.yamlio: hostile or broken YAML gives a short ScenarioError; ordinary YAML reads as safe_load."""
+
 import codecs
 import os
 import time
@@ -39,6 +40,7 @@ def billion_laughs(levels=9, fan=9) -> str:
 
 # --- quote -----------------------------------------------------------------------------------
 
+
 def test_quote_short_values_are_plain_repr():
     assert quote("abc") == "'abc'"
     assert quote(3.5) == "3.5"
@@ -56,7 +58,7 @@ def test_quote_cuts_long_string_and_gives_total_length():
 def test_quote_bounds_containers_and_huge_ints():
     assert len(quote(list(range(10**6)))) < 130
     assert len(quote({"k": "v" * 10**6})) < 130
-    assert len(quote(16 ** 10**5)) < 130  # beyond Python's int-to-str digit limit: no ValueError
+    assert len(quote(16**10**5)) < 130  # beyond Python's int-to-str digit limit: no ValueError
 
 
 # --- ordinary input behaves as yaml.safe_load ------------------------------------------------
@@ -91,10 +93,12 @@ def test_shipped_scenarios_read_as_safe_load(scenario_path):
     assert read_yaml(path) == yaml.safe_load(path.read_text(encoding="utf-8"))
 
 
-scalars = (st.integers(-2**63, 2**63) | st.floats(allow_nan=False) | st.text(max_size=20) | st.booleans()
-           | st.none())
-documents = st.recursive(scalars, lambda inner: st.lists(inner, max_size=4)
-                         | st.dictionaries(st.text(max_size=8), inner, max_size=4), max_leaves=25)
+scalars = st.integers(-(2**63), 2**63) | st.floats(allow_nan=False) | st.text(max_size=20) | st.booleans() | st.none()
+documents = st.recursive(
+    scalars,
+    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=8), inner, max_size=4),
+    max_leaves=25,
+)
 
 
 @settings(max_examples=150, deadline=None)
@@ -117,25 +121,32 @@ def test_arbitrary_text_loads_or_gives_scenario_error(text):
 
 # --- tags, duplicate keys ----------------------------------------------------------------------
 
-@pytest.mark.parametrize("text, tag", [
-    ("a: !!python/object/apply:os.system ['echo pwned']\n", "python/object/apply:os.system"),
-    ("!!python/object:collections.OrderedDict {}\n", "python/object:collections.OrderedDict"),
-    ("a: !!python/name:os.system\n", "python/name:os.system"),
-    ("a: !custom 3\n", "!custom"),
-    ("%TAG !p! tag:yaml.org,2002:python/\n---\na: !p!object:os.system {}\n", "python/object:os.system"),
-])
+
+@pytest.mark.parametrize(
+    "text, tag",
+    [
+        ("a: !!python/object/apply:os.system ['echo pwned']\n", "python/object/apply:os.system"),
+        ("!!python/object:collections.OrderedDict {}\n", "python/object:collections.OrderedDict"),
+        ("a: !!python/name:os.system\n", "python/name:os.system"),
+        ("a: !custom 3\n", "!custom"),
+        ("%TAG !p! tag:yaml.org,2002:python/\n---\na: !p!object:os.system {}\n", "python/object:os.system"),
+    ],
+)
 def test_unknown_tags_are_refused_and_named(text, tag):
     msg = load_error(text)
     assert "unknown tag" in msg and tag in msg and "line " in msg
 
 
-@pytest.mark.parametrize("text, key, line", [
-    ("a: 1\nb: 2\na: 3\n", "'a'", 3),
-    ("tow:\n  force_N: 0\nmode:\n  type: uniform\n  speed: 1\n  type: supervisor\n", "'type'", 6),
-    ("outer: [{x: 1, x: 2}]\n", "'x'", 1),
-    ("1: one\ntrue: also one\n", "True", 2),  # 1 == True: PyYAML would keep one entry
-    ("d:\n  <<: {x: 1, x: 2}\n", "'x'", 2),
-])
+@pytest.mark.parametrize(
+    "text, key, line",
+    [
+        ("a: 1\nb: 2\na: 3\n", "'a'", 3),
+        ("tow:\n  force_N: 0\nmode:\n  type: uniform\n  speed: 1\n  type: supervisor\n", "'type'", 6),
+        ("outer: [{x: 1, x: 2}]\n", "'x'", 1),
+        ("1: one\ntrue: also one\n", "True", 2),  # 1 == True: PyYAML would keep one entry
+        ("d:\n  <<: {x: 1, x: 2}\n", "'x'", 2),
+    ],
+)
 def test_duplicate_keys_are_refused_with_key_and_line(text, key, line):
     msg = load_error(text)
     assert f"duplicate key {key}" in msg and f"line {line}," in msg
@@ -143,6 +154,7 @@ def test_duplicate_keys_are_refused_with_key_and_line(text, key, line):
 
 
 # --- alias bombs, recursion, depth -------------------------------------------------------------
+
 
 def test_billion_laughs_is_refused_fast():
     text = billion_laughs()  # 9**9 = 387 420 489 leaves once expanded; about 300 bytes of text
@@ -205,13 +217,17 @@ def test_recursion_error_becomes_depth_message(monkeypatch):
 
 # --- syntax and value errors -------------------------------------------------------------------
 
-@pytest.mark.parametrize("text, line, column", [
-    ("a: 1\n b: 2\n", 2, 3),
-    ("a: [1, 2\nb: 3\n", 2, 2),
-    ("a:\n\tb: 1\n", 2, 1),
-    ("a: 'unterminated\n", 2, 1),
-    ("a: 1\n---\nb: 2\n", 2, 1),
-])
+
+@pytest.mark.parametrize(
+    "text, line, column",
+    [
+        ("a: 1\n b: 2\n", 2, 3),
+        ("a: [1, 2\nb: 3\n", 2, 2),
+        ("a:\n\tb: 1\n", 2, 1),
+        ("a: 'unterminated\n", 2, 1),
+        ("a: 1\n---\nb: 2\n", 2, 1),
+    ],
+)
 def test_syntax_errors_give_line_column_and_hint(text, line, column):
     msg = load_error(text)
     assert msg.startswith(f"in.yaml, line {line}, column {column}: not valid YAML")
@@ -222,17 +238,43 @@ def test_control_character_is_refused_with_line():
     assert load_error("a: 1\nb: \x01\n").startswith("in.yaml, line 2: character #x0001")
 
 
-@pytest.mark.parametrize("text", ["a: !!timestamp 2020-13-45\n", "a: !!timestamp soon\n", "a: !!int abc\n",
-                                  "a: !!float abc\n", "a: !!int ''\n", "a: !!bool maybe\n", "a: !!binary é\n",
-                                  "a: !!omap [a]\n", "? [a, b]\n: 1\n", "<<: 5\n"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "a: !!timestamp 2020-13-45\n",
+        "a: !!timestamp soon\n",
+        "a: !!int abc\n",
+        "a: !!float abc\n",
+        "a: !!int ''\n",
+        "a: !!bool maybe\n",
+        "a: !!binary é\n",
+        "a: !!omap [a]\n",
+        "? [a, b]\n: 1\n",
+        "<<: 5\n",
+    ],
+)
 def test_values_a_tag_cannot_read_give_scenario_error(text):
     # PyYAML itself raises ValueError, KeyError, IndexError or AttributeError for several of these
     msg = load_error(text)
     assert msg.startswith("in.yaml, line 1") and "NoneType" not in msg and "Traceback" not in msg
 
 
-STANDARD_TAGS = ["!!bool", "!!null", "!!int", "!!float", "!!binary", "!!timestamp", "!!omap", "!!pairs", "!!set",
-                 "!!str", "!!seq", "!!map", "!!merge", "!!value"]
+STANDARD_TAGS = [
+    "!!bool",
+    "!!null",
+    "!!int",
+    "!!float",
+    "!!binary",
+    "!!timestamp",
+    "!!omap",
+    "!!pairs",
+    "!!set",
+    "!!str",
+    "!!seq",
+    "!!map",
+    "!!merge",
+    "!!value",
+]
 
 
 @settings(max_examples=300, deadline=None)
@@ -255,14 +297,17 @@ def test_absurdly_long_integers_are_refused_fast():
 BIG = "v" * 2_000_000
 
 
-@pytest.mark.parametrize("text", [
-    f"? {BIG}\n: 1\n? {BIG}\n: 2\n",  # duplicate key
-    f"a: *{BIG}\n",  # undefined alias: PyYAML's own message echoes the name
-    f"a: !{BIG}!x 1\n",  # undefined tag handle
-    f"a: !!python/object:{BIG} {{}}\n",  # unknown tag
-    f"a: !!int {BIG}\n",  # value the tag cannot read
-    f"a: !!timestamp {BIG}\n",
-])
+@pytest.mark.parametrize(
+    "text",
+    [
+        f"? {BIG}\n: 1\n? {BIG}\n: 2\n",  # duplicate key
+        f"a: *{BIG}\n",  # undefined alias: PyYAML's own message echoes the name
+        f"a: !{BIG}!x 1\n",  # undefined tag handle
+        f"a: !!python/object:{BIG} {{}}\n",  # unknown tag
+        f"a: !!int {BIG}\n",  # value the tag cannot read
+        f"a: !!timestamp {BIG}\n",
+    ],
+)
 def test_messages_quote_at_most_about_100_characters(text):
     msg = load_error(text)
     assert len(msg) < 400, msg[:500]
@@ -274,6 +319,7 @@ def test_oversized_text_is_refused_before_parsing():
 
 
 # --- files -------------------------------------------------------------------------------------
+
 
 def test_read_yaml_reads_utf8_with_and_without_bom(tmp_path):
     text = "name: Frosty Böy\nterrain: {xt: 0.9}\n"
@@ -341,22 +387,34 @@ def test_read_yaml_errors_name_the_file(tmp_path):
 
 def test_controller_paths_from_cwd(tmp_path, monkeypatch):
     from snoworm.config.yamlio import controller_paths_from_cwd
+
     monkeypatch.chdir(tmp_path)
-    ov = controller_paths_from_cwd([("mode.controller", "ctl.py:C"), ("mode.controller", "pkg.mod:C"),
-                                    ("mode", {"type": "controller", "controller": "sub/c.py:D"}),
-                                    ("tow.force_N", "x.py:C")])
-    assert ov == [("mode.controller", f"{tmp_path / 'ctl.py'}:C"), ("mode.controller", "pkg.mod:C"),
-                  ("mode", {"type": "controller", "controller": f"{tmp_path / 'sub' / 'c.py'}:D"}),
-                  ("tow.force_N", "x.py:C")]
+    ov = controller_paths_from_cwd(
+        [
+            ("mode.controller", "ctl.py:C"),
+            ("mode.controller", "pkg.mod:C"),
+            ("mode", {"type": "controller", "controller": "sub/c.py:D"}),
+            ("tow.force_N", "x.py:C"),
+        ]
+    )
+    assert ov == [
+        ("mode.controller", f"{tmp_path / 'ctl.py'}:C"),
+        ("mode.controller", "pkg.mod:C"),
+        ("mode", {"type": "controller", "controller": f"{tmp_path / 'sub' / 'c.py'}:D"}),
+        ("tow.force_N", "x.py:C"),
+    ]
 
 
 def test_set_controller_on_a_shipped_scenario_is_taken_from_the_working_directory(tmp_path, monkeypatch):
     """`snoworm run tow6_uniform --set mode=...controller: ctl.py:Go` finds ./ctl.py (not one in the
     installed package); a scenario file of the user's keeps its own folder as the base."""
     from snoworm import load_scenario
-    (tmp_path / "ctl.py").write_text("class Go:\n    def __init__(self, params, scenario):\n        self.n = "
-                                     "scenario.vehicle.segments\n    def __call__(self, obs):\n        return "
-                                     "{'wheel_speed_mps': [1.0] * self.n}\n")
+
+    (tmp_path / "ctl.py").write_text(
+        "class Go:\n    def __init__(self, params, scenario):\n        self.n = "
+        "scenario.vehicle.segments\n    def __call__(self, obs):\n        return "
+        "{'wheel_speed_mps': [1.0] * self.n}\n"
+    )
     monkeypatch.chdir(tmp_path)
     sc = load_scenario("tow6_uniform", ["mode={type: controller, controller: 'ctl.py:Go', period_s: 0.1}"])
     assert sc.mode.controller == f"{tmp_path / 'ctl.py'}:Go"
@@ -364,6 +422,7 @@ def test_set_controller_on_a_shipped_scenario_is_taken_from_the_working_director
     own.mkdir()
     (own / "ctl.py").write_text((tmp_path / "ctl.py").read_text())
     from snoworm.config.scenario import scenario_path
+
     (own / "s.yaml").write_text(Path(scenario_path("tow6_uniform")).read_text())
     sc = load_scenario(own / "s.yaml", ["mode={type: controller, controller: 'ctl.py:Go', period_s: 0.1}"])
-    assert sc.mode.controller == f"{own / 'ctl.py'}:Go"           # the user's file: its own folder
+    assert sc.mode.controller == f"{own / 'ctl.py'}:Go"  # the user's file: its own folder

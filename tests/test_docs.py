@@ -4,6 +4,7 @@ Both run in a fresh interpreter, as a user would.  The tutorial runs as a script
 non-default matplotlib backend set first, which must survive it, and as a notebook in a fresh
 kernel, where its figures must show inline.
 """
+
 import subprocess
 import sys
 from pathlib import Path
@@ -15,10 +16,15 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_api_reference_builds_without_warnings(tmp_path):
     out = tmp_path / "docs"
-    r = subprocess.run([sys.executable, str(ROOT / "docs" / "api.py"), str(out)], capture_output=True, text=True,
-                       timeout=600, cwd=tmp_path)
+    r = subprocess.run(
+        [sys.executable, str(ROOT / "docs" / "api.py"), str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=tmp_path,
+    )
     assert r.returncode == 0, r.stdout + r.stderr
-    assert r.stderr == ""                     # no warnings
+    assert r.stderr == ""  # no warnings
     page = (out / "snoworm" / "results" / "result.html").read_text(encoding="utf-8")
     for name in ("to_pandas", "to_xarray", "load_result", "SEGMENT_COLUMNS"):
         assert name in page, name
@@ -35,24 +41,29 @@ def test_tutorial_runs_and_keeps_the_backend(tmp_path):
         "matplotlib.use('svg')\n"
         f"g = runpy.run_path({str(ROOT / 'docs' / 'tutorial.py')!r}, run_name='__main__')\n"
         "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
-        "print('figures', type(g['fig']).__name__, type(g['fig2']).__name__, len(g['df']))\n")
+        "print('figures', type(g['fig']).__name__, type(g['fig2']).__name__, len(g['df']))\n"
+    )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "figures Figure Figure 6" in r.stdout
-    assert list(tmp_path.iterdir()) == []     # it wrote nothing in the working directory
+    assert list(tmp_path.iterdir()) == []  # it wrote nothing in the working directory
 
 
 def _percent_to_notebook(path):
     """The percent-format script as a notebook (jupytext's rules for ``# %%`` and
     ``# %% [markdown]`` cells), without needing jupytext."""
     import nbformat
+
     cells, kind, lines = [], None, []
 
     def flush():
         text = "\n".join(lines).strip("\n")
         if kind == "markdown":
-            cells.append(nbformat.v4.new_markdown_cell("\n".join(ln[2:] if ln.startswith("# ") else ln.lstrip("#")
-                                                                for ln in text.splitlines())))
+            cells.append(
+                nbformat.v4.new_markdown_cell(
+                    "\n".join(ln[2:] if ln.startswith("# ") else ln.lstrip("#") for ln in text.splitlines())
+                )
+            )
         elif kind == "code" and text:
             cells.append(nbformat.v4.new_code_cell(text))
 
@@ -72,23 +83,28 @@ def test_tutorial_as_a_notebook_shows_its_figures(tmp_path, monkeypatch):
     fails.  No `%matplotlib inline` anywhere: the kernel's default backend does it."""
     pytest.importorskip("nbclient")
     from nbclient import NotebookClient
-    monkeypatch.delenv("MPLBACKEND", raising=False)      # the kernel picks its own inline backend
+
+    monkeypatch.delenv("MPLBACKEND", raising=False)  # the kernel picks its own inline backend
     nb = _percent_to_notebook(ROOT / "docs" / "tutorial.py")
     assert "%matplotlib" not in "".join(c.source for c in nb.cells)
     NotebookClient(nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}).execute()
-    plot_cells = [c for c in nb.cells if c.cell_type == "code" and c.source.splitlines()[-1].split("#")[0].strip()
-                  in ("fig", "fig2") or c.source.splitlines()[-1].startswith(("res.plot(", "plotting.compare(",
-                                                                               "table.plot("))]
+    plot_cells = [
+        c
+        for c in nb.cells
+        if c.cell_type == "code"
+        and c.source.splitlines()[-1].split("#")[0].strip() in ("fig", "fig2")
+        or c.source.splitlines()[-1].startswith(("res.plot(", "plotting.compare(", "table.plot("))
+    ]
     assert len(plot_cells) >= 5
     for c in plot_cells:
         images = [o for o in c.outputs if "image/png" in o.get("data", {})]
         assert len(images) == 1, (c.source.splitlines()[-1], [o.get("output_type") for o in c.outputs])
     errors = [o for c in nb.cells for o in c.get("outputs", ()) if o.get("output_type") == "error"]
     assert not errors
-    sweep = next(c for c in nb.cells if "run_sweep(" in c.source)        # a bar in the notebook, not log lines
+    sweep = next(c for c in nb.cells if "run_sweep(" in c.source)  # a bar in the notebook, not log lines
     bar = "".join(o.get("text", "") for o in sweep.outputs if o.get("name") == "stderr")
     assert "sweep:" in bar and "6/6 cases" in bar and "100%" in bar
-    assert list(tmp_path.iterdir()) == []     # it wrote nothing in the working directory
+    assert list(tmp_path.iterdir()) == []  # it wrote nothing in the working directory
 
 
 def test_readme_figure_is_made_by_the_command_it_names(tmp_path):
@@ -96,14 +112,31 @@ def test_readme_figure_is_made_by_the_command_it_names(tmp_path):
     --out out/inchworm6 --figure-size column`: the command is there, and running it gives a PNG
     of the same pixel size (3.5 in at 200 dpi: 700 px wide)."""
     import struct
+
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     assert "`snoworm run inchworm6 --out out/inchworm6 --figure-size column`" in readme
     assert "docs/figures/inchworm6_speeds_column.png" in readme
     committed = (ROOT / "docs" / "figures" / "inchworm6_speeds_column.png").read_bytes()
-    r = subprocess.run([sys.executable, "-m", "snoworm", "run", "inchworm6", "--out", str(tmp_path / "inchworm6"),
-                        "--figure-size", "column"], capture_output=True, text=True, timeout=600)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "snoworm",
+            "run",
+            "inchworm6",
+            "--out",
+            str(tmp_path / "inchworm6"),
+            "--figure-size",
+            "column",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert r.returncode == 0, r.stderr
     made = (tmp_path / "inchworm6" / "speeds.png").read_bytes()
+
     def size(png):
         return struct.unpack(">II", png[16:24])
+
     assert size(made) == size(committed) and size(made)[0] == 700

@@ -2,6 +2,7 @@
 
 The named state layout is in test_model_arrays.py; the Jacobian pattern and banded finite
 differences are in test_model_jacobian.py."""
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -24,9 +25,12 @@ def test_internal_link_forces_cancel(seed):
 def test_stacked_model_is_the_members_side_by_side(scenario_path):
     """ChainModel.stack: same derivatives and block-banded Jacobian as each member alone."""
     from snoworm.dynamics import ChainModel
+
     rng = np.random.default_rng(3)
-    ms = [model_for(scenario_path("tow6_uniform"), [("terrain.xt", xt), ("tow.force_N", f)])
-          for xt, f in [(0.7, 0.0), (0.9, 200.0), (1.0, 50.0)]]
+    ms = [
+        model_for(scenario_path("tow6_uniform"), [("terrain.xt", xt), ("tow.force_N", f)])
+        for xt, f in [(0.7, 0.0), (0.9, 200.0), (1.0, 50.0)]
+    ]
     big = ChainModel.stack(ms)
     ys = [random_state(m, rng) for m in ms]
     ctls = [Controls.rolling(6, np.ones(6), rng.uniform(0, 2, 6)) for _ in ms]
@@ -37,13 +41,15 @@ def test_stacked_model_is_the_members_side_by_side(scenario_path):
     for b, m in enumerate(ms):
         # the same laws on arrays of another shape: equal to rounding (SIMD loops may split differently)
         np.testing.assert_allclose(f[b], m.rhs(0.0, ys[b], ctls[b]), rtol=1e-13, atol=1e-9)
-        np.testing.assert_allclose(J[:, b * n:(b + 1) * n], m.jacobian_banded(0.0, ys[b], ctls[b]),
-                                   rtol=1e-7, atol=1e-6)
+        np.testing.assert_allclose(
+            J[:, b * n : (b + 1) * n], m.jacobian_banded(0.0, ys[b], ctls[b]), rtol=1e-7, atol=1e-6
+        )
     assert big.bandwidths() == ms[0].bandwidths()
 
 
 def test_direct_torque_replaces_the_speed_pi_only_where_commanded():
     from snoworm.drivetrain import motor_envelope
+
     m = model_for(SCENARIOS / "tow6_uniform.yaml")
     y = random_state(m, np.random.default_rng(7))
     Y = m.unpack(y)
@@ -54,5 +60,5 @@ def test_direct_torque_replaces_the_speed_pi_only_where_commanded():
     lo, hi = motor_envelope(Y[0, m.layout.omega], m._slope[0], m._wnl[0], m._Tmax[0])
     np.testing.assert_allclose(out1["motor_torque_Nm"][0], np.clip(12.0, lo, hi), rtol=1e-15)
     np.testing.assert_array_equal(out1["motor_torque_Nm"][1:], out0["motor_torque_Nm"][1:])
-    np.testing.assert_array_equal(dY1[0, m.layout.integral], 0.0)          # the PI integral frozen there
+    np.testing.assert_array_equal(dY1[0, m.layout.integral], 0.0)  # the PI integral frozen there
     np.testing.assert_array_equal(dY1[1:, m.layout.integral], dY0[1:, m.layout.integral])

@@ -1,6 +1,7 @@
 """The single Gymnasium environment (snoworm.env.single, registered by snoworm.env): registration,
 normalised spaces, gymnasium's checkers (without warnings: pytest turns warnings into errors),
 seeding, bounded memory, the API's errors."""
+
 import subprocess
 import sys
 import tracemalloc
@@ -24,12 +25,12 @@ def short6():
 
 def test_registered_and_made_with_a_scenario_name_path_or_object(short6):
     assert ENV_ID in gymnasium.registry
-    env = gymnasium.make(ENV_ID)                         # default: the shipped tow6_uniform, dt 0.1 s
+    env = gymnasium.make(ENV_ID)  # default: the shipped tow6_uniform, dt 0.1 s
     assert env.spec.max_episode_steps == 200 and isinstance(env.unwrapped, SnowormEnv)
     env = gymnasium.make(ENV_ID, scenario=str(SCENARIOS / "inchworm2.yaml"), dt_s=0.25)
     assert env.unwrapped.scenario.name == "inchworm2"
     assert env.spec.max_episode_steps == int(np.ceil(env.unwrapped.scenario.simulation.duration_s / 0.25))
-    env = gymnasium.make(ENV_ID, scenario=short6, dt_s=0.3)   # 1 s in steps of 0.3 s: the 4th reaches it
+    env = gymnasium.make(ENV_ID, scenario=short6, dt_s=0.3)  # 1 s in steps of 0.3 s: the 4th reaches it
     assert env.spec.max_episode_steps == 4
     env.reset(seed=0)
     flags = [env.step(env.action_space.sample())[3] for _ in range(4)]
@@ -39,20 +40,23 @@ def test_registered_and_made_with_a_scenario_name_path_or_object(short6):
 
 
 def test_import_snoworm_stays_light_and_the_module_form_registers():
-    code = ("import sys, snoworm\n"
-            "assert 'gymnasium' not in sys.modules and 'numpy' not in sys.modules, sorted(sys.modules)\n"
-            "import gymnasium\n"
-            "env = gymnasium.make('snoworm.env:snoworm/Snoworm-v0', scenario='tow6_uniform')\n"
-            "print(env.spec.id, env.spec.max_episode_steps)\n")
+    code = (
+        "import sys, snoworm\n"
+        "assert 'gymnasium' not in sys.modules and 'numpy' not in sys.modules, sorted(sys.modules)\n"
+        "import gymnasium\n"
+        "env = gymnasium.make('snoworm.env:snoworm/Snoworm-v0', scenario='tow6_uniform')\n"
+        "print(env.spec.id, env.spec.max_episode_steps)\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["snoworm/Snoworm-v0", "200"]
 
 
 def test_gymnasium_checkers_pass_without_warnings(short6):
     from gymnasium.utils.env_checker import check_env
-    check_env(gymnasium.make(ENV_ID, scenario=short6).unwrapped)     # with a spec: render and close checks too
-    check_env(SnowormEnv(short6), skip_render_check=True)            # no spec, no render modes to check
-    env = gymnasium.make(ENV_ID, scenario=short6)                    # the passive checker wraps it
+
+    check_env(gymnasium.make(ENV_ID, scenario=short6).unwrapped)  # with a spec: render and close checks too
+    check_env(SnowormEnv(short6), skip_render_check=True)  # no spec, no render modes to check
+    env = gymnasium.make(ENV_ID, scenario=short6)  # the passive checker wraps it
     env.reset(seed=1)
     done = False
     while not done:
@@ -71,7 +75,7 @@ def test_spaces_are_normalised_and_map_onto_the_vehicle(short6):
     obs, info = env.reset(seed=3)
     assert obs.dtype == np.float32 and ob.contains(obs) and info["t_s"] == 0.0
     m = env.sim.model
-    a = np.array([-1, -0.5, 0, 0.5, 1, 3], np.float32)        # 3 is clipped to 1
+    a = np.array([-1, -0.5, 0, 0.5, 1, 3], np.float32)  # 3 is clipped to 1
     env.step(a)
     lim = m.seg.torque_limit_Nm
     np.testing.assert_allclose(env.sim.commands.torque, np.array([-1, -0.5, 0, 0.5, 1, 1]) * lim, rtol=1e-12)
@@ -88,8 +92,8 @@ def test_observation_is_the_physical_observation_scaled(short6):
     obs, *_ = env.step(np.full(6, 0.2, np.float32))
     phys = env.observation
     vec = np.concatenate([getattr(phys, f) for f in OBSERVATION_FIELDS]) / env.core.scale
-    np.testing.assert_allclose(obs[:-1], vec, rtol=1e-6, atol=1e-7)        # float32 rounding
-    assert obs[-1] == pytest.approx(0.1 / 1.0)                               # t / duration
+    np.testing.assert_allclose(obs[:-1], vec, rtol=1e-6, atol=1e-7)  # float32 rounding
+    assert obs[-1] == pytest.approx(0.1 / 1.0)  # t / duration
     assert phys.t_s == pytest.approx(0.1) and np.all(np.isfinite(vec))
 
 
@@ -116,14 +120,14 @@ def test_terminated_when_immobilised_and_stepping_on_needs_a_reset(short6):
         env.step(np.zeros(6, np.float32))
     env.reset()
     for _ in range(8):
-        obs, r, terminated, truncated, info = env.step(-np.ones(6, np.float32))    # wheels held at zero speed
+        obs, r, terminated, truncated, info = env.step(-np.ones(6, np.float32))  # wheels held at zero speed
         if terminated:
             break
     assert terminated and info["t_s"] == pytest.approx(1.0)
     with pytest.raises(ResetNeeded, match="terminated or truncated"):
         env.step(np.zeros(6, np.float32))
     env.reset()
-    env.step(np.zeros(6, np.float32))                                       # a reset makes it usable again
+    env.step(np.zeros(6, np.float32))  # a reset makes it usable again
 
 
 def test_reset_seed_seeds_the_action_space_and_reproduces_episodes(short6):
@@ -134,9 +138,10 @@ def test_reset_seed_seeds_the_action_space_and_reproduces_episodes(short6):
         for _ in range(5):
             out.append(env.step(env.action_space.sample())[0])
         return np.array(out)
+
     a, b, c = episode(7), episode(7), episode(8)
-    np.testing.assert_array_equal(a, b)         # same code path, same inputs: the same numbers
-    assert not np.array_equal(a[1:], c[1:])     # another seed samples other actions
+    np.testing.assert_array_equal(a, b)  # same code path, same inputs: the same numbers
+    assert not np.array_equal(a[1:], c[1:])  # another seed samples other actions
 
 
 def test_bad_actions_and_options_are_refused(short6):
@@ -145,13 +150,19 @@ def test_bad_actions_and_options_are_refused(short6):
     for bad, msg in ((0.5, r"shape \(6,\)"), (np.zeros(5), r"shape \(6,\)"), (np.full(6, np.nan), "finite")):
         with pytest.raises(ValueError, match=msg):
             env.step(bad)
-    for kw, msg in (({"dt_s": float("nan")}, "dt_s"), ({"dt_s": -0.1}, "dt_s"), ({"dt_s": True}, "dt_s"),
-                    ({"energy_weight": -1.0}, "energy_weight"), ({"stall_time_s": 0.0}, "stall_time_s"),
-                    ({"stall_speed_mps": float("inf")}, "stall_speed_mps"),
-                    ({"action_keys": ("joint_force_N",)}, "prismatic"),
-                    ({"action_keys": ("wheel_speed_mps", "wheel_torque_Nm")}, "same actuator"),
-                    ({"action_keys": ("wheel_sped",)}, "cannot be an action"), ({"render_mode": "human"}, "render"),
-                    ({"scenario": 3}, "scenario")):
+    for kw, msg in (
+        ({"dt_s": float("nan")}, "dt_s"),
+        ({"dt_s": -0.1}, "dt_s"),
+        ({"dt_s": True}, "dt_s"),
+        ({"energy_weight": -1.0}, "energy_weight"),
+        ({"stall_time_s": 0.0}, "stall_time_s"),
+        ({"stall_speed_mps": float("inf")}, "stall_speed_mps"),
+        ({"action_keys": ("joint_force_N",)}, "prismatic"),
+        ({"action_keys": ("wheel_speed_mps", "wheel_torque_Nm")}, "same actuator"),
+        ({"action_keys": ("wheel_sped",)}, "cannot be an action"),
+        ({"render_mode": "human"}, "render"),
+        ({"scenario": 3}, "scenario"),
+    ):
         with pytest.raises(ValueError, match=msg):
             SnowormEnv(**({"scenario": short6} | kw))
 
@@ -162,7 +173,7 @@ def test_memory_per_episode_is_bounded(short6):
     env = SnowormEnv(short6.with_({"simulation.duration_s": 300.0}), dt_s=0.1)
     env.reset(seed=0)
     action = np.full(6, 0.3, np.float32)
-    for _ in range(50):                          # past the start-up transient and the caches' first fill
+    for _ in range(50):  # past the start-up transient and the caches' first fill
         env.step(action)
     tracemalloc.start()
     try:
@@ -180,5 +191,5 @@ def test_observation_carries_the_grade_under_each_segment(short6):
     env = SnowormEnv(short6.with_({"terrain.grade_deg": 6.0}))
     obs, _ = env.reset(seed=0)
     j = OBSERVATION_FIELDS.index("grade_deg") * 6
-    np.testing.assert_allclose(obs[j:j + 6], 6.0 / 90.0, rtol=1e-6)          # float32
+    np.testing.assert_allclose(obs[j : j + 6], 6.0 / 90.0, rtol=1e-6)  # float32
     np.testing.assert_allclose(env.observation.grade_deg, 6.0, rtol=1e-12)

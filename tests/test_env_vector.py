@@ -1,6 +1,7 @@
 """The native vector environment (snoworm.env.vector): one stacked solve per control period, checked
 against gymnasium's own SyncVectorEnv of single environments, Gymnasium 1.x NEXT_STEP autoreset,
 per-member solver failures."""
+
 import numpy as np
 import pytest
 
@@ -61,7 +62,7 @@ def test_members_match_gymnasiums_sync_vector_env_of_single_envs(short6):
         np.testing.assert_array_equal(te1, te2)
         np.testing.assert_array_equal(tr1, tr2)
         truncations += int(tr1.sum())
-    assert truncations == B                 # every member truncated at 1 s (step 10), then reset and went on
+    assert truncations == B  # every member truncated at 1 s (step 10), then reset and went on
 
 
 def test_a_member_matches_the_single_env_with_the_same_seed_and_actions(short6):
@@ -92,12 +93,12 @@ def test_next_step_autoreset_is_per_member(short6):
     sc = short6.with_({"simulation.duration_s": 5.0})
     vec = SnowormVectorEnv(3, sc, stall_time_s=0.3)
     obs0, _ = vec.reset(seed=0)
-    go = np.array([-1.0, 0.4, 0.4], np.float32)             # member 0: wheels held at zero speed: it stalls
+    go = np.array([-1.0, 0.4, 0.4], np.float32)  # member 0: wheels held at zero speed: it stalls
     for _ in range(3):
         obs, rew, term, trunc, info = vec.step(np.tile(go[:, None], 6))
     assert term.tolist() == [True, False, False] and not trunc.any()
     obs, rew, term, trunc, info = vec.step(np.tile(go[:, None], 6))
-    np.testing.assert_array_equal(obs[0], obs0[0])          # member 0 starts again, its action ignored
+    np.testing.assert_array_equal(obs[0], obs0[0])  # member 0 starts again, its action ignored
     assert rew[0] == 0.0 and not term[0] and not trunc[0] and info["t_s"].tolist() == pytest.approx([0.0, 0.4, 0.4])
     obs, rew, term, trunc, info = vec.step(np.tile(go[:, None], 6))
     assert info["t_s"].tolist() == pytest.approx([0.1, 0.5, 0.5])
@@ -121,14 +122,14 @@ def test_a_failing_member_is_reported_and_reset_while_the_others_go_on(short6):
     a = np.full((3, 6), 0.3, np.float32)
     vec.step(a)
     t_before = vec._t.copy()
-    vec._y[1, 1] = np.nan                           # member 1's state is broken: its solve must fail
+    vec._y[1, 1] = np.nan  # member 1's state is broken: its solve must fail
     obs, rew, term, trunc, info = vec.step(a)
     assert info["solver_failure"].tolist() == [False, True, False] and info["_solver_error"].tolist() == [0, 1, 0]
     assert "member" in info["solver_error"][1] or "failed" in info["solver_error"][1]
     assert trunc.tolist() == [False, True, False] and rew[1] == 0.0
     assert info["t_s"].tolist() == pytest.approx([t_before[0] + 0.1, t_before[1], t_before[2] + 0.1])
     assert np.all(np.isfinite(obs[[0, 2]]))
-    obs, rew, term, trunc, info = vec.step(a)       # NEXT_STEP: member 1 starts again
+    obs, rew, term, trunc, info = vec.step(a)  # NEXT_STEP: member 1 starts again
     assert info["t_s"].tolist() == pytest.approx([0.3, 0.0, 0.3]) and not info["solver_failure"].any()
     assert vec.stats["solver_failures"] == 1 and vec.stats["member_solves"] == 3
 
@@ -144,8 +145,11 @@ def test_errors_and_seeding(short6):
     for bad in (np.zeros(6), np.zeros((2, 5)), np.full((2, 6), np.nan)):
         with pytest.raises(ValueError, match="action"):
             vec.step(bad)
-    for kw, msg in (({"num_envs": 0}, "num_envs"), ({"max_episode_steps": 0}, "max_episode_steps"),
-                    ({"dt_s": -1.0}, "dt_s")):
+    for kw, msg in (
+        ({"num_envs": 0}, "num_envs"),
+        ({"max_episode_steps": 0}, "max_episode_steps"),
+        ({"dt_s": -1.0}, "dt_s"),
+    ):
         with pytest.raises(ValueError, match=msg):
             SnowormVectorEnv(**({"num_envs": 2, "scenario": short6} | kw))
 
@@ -153,6 +157,7 @@ def test_errors_and_seeding(short6):
 def test_memory_stays_bounded_over_many_periods(short6):
     """300 periods of 4 members (autoresets included): traced memory grows by less than 128 kB."""
     import tracemalloc
+
     vec = SnowormVectorEnv(4, short6)
     vec.reset(seed=0)
     a = np.full((4, 6), 0.3, np.float32)

@@ -2,6 +2,7 @@
 
 docs/model.md section 4 (controllers) and section 5 (force control, inchworm joints).
 """
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -41,12 +42,12 @@ def test_pi_fast_path_is_the_masked_law():
     T1, dI1 = feedback.speed_pi(w_ref, w, integ, kp, ki, lo, hi, None, ki / kp)
     np.testing.assert_allclose(T1, T0, rtol=1e-14, atol=1e-12)
     np.testing.assert_allclose(dI1, dI0, rtol=1e-14, atol=1e-12)
-    assert np.any(T0 == hi) or np.any(T0 == lo)      # the sample reaches the envelope's clip too
+    assert np.any(T0 == hi) or np.any(T0 == lo)  # the sample reaches the envelope's clip too
 
 
 # ------------------------------------------------------------------ link-force PI (force control, Figs 8-11)
 
-KP_F, KI_F, VNOM, VMAX = 0.01, 0.02, 1.8, 3.0     # [m/(s N)], [m/(s^2 N)], [m/s], [m/s]
+KP_F, KI_F, VNOM, VMAX = 0.01, 0.02, 1.8, 3.0  # [m/(s N)], [m/(s^2 N)], [m/s], [m/s]
 
 
 def test_link_force_pi_unsaturated_hand_values():
@@ -63,7 +64,7 @@ def test_link_force_pi_unsaturated_hand_values():
 def test_link_force_pi_setpoint_clipped_to_0_vmax():
     F = np.array([-1e4, 0.0, 1e4])
     vsp, _ = feedback.link_force_pi(F, 0.0, 1.0, 0.0, VNOM, KP_F, KI_F, VMAX)
-    np.testing.assert_allclose(vsp, [VMAX, VNOM, 0.0], rtol=0, atol=1e-12)   # never negative, never above vmax
+    np.testing.assert_allclose(vsp, [VMAX, VNOM, 0.0], rtol=0, atol=1e-12)  # never negative, never above vmax
 
 
 @pytest.mark.parametrize("q, sign", [(5.0, -1.0), (-5.0, 1.0)])
@@ -83,23 +84,31 @@ ZERO = np.array(0.0)
 
 
 def test_joint_force_command_clipped_to_0_limit():
-    np.testing.assert_allclose(feedback.joint_force_command_N(np.array([-50.0, 200.0, 900.0]), 390.0, ZERO),
-                               [0.0, 200.0, 390.0], rtol=0, atol=0)
+    np.testing.assert_allclose(
+        feedback.joint_force_command_N(np.array([-50.0, 200.0, 900.0]), 390.0, ZERO),
+        [0.0, 200.0, 390.0],
+        rtol=0,
+        atol=0,
+    )
 
 
 def test_joint_force_command_optional_terms():
     # speed loop only: 200 + 500 * (0.3 - 0.1) = 300 N
-    assert feedback.joint_force_command_N(200.0, 390.0, ZERO, kv=500.0, v_target_mps=0.3,
-                                         v_mover_mps=0.1) == pytest.approx(300.0, rel=1e-12)
+    assert feedback.joint_force_command_N(
+        200.0, 390.0, ZERO, kv=500.0, v_target_mps=0.3, v_mover_mps=0.1
+    ) == pytest.approx(300.0, rel=1e-12)
     # anchor term only: the anchor slides back at 0.05 m/s -> 200 - 1000 * 0.05 = 150 N
-    assert feedback.joint_force_command_N(200.0, 390.0, ZERO, ka=1000.0,
-                                         v_anchor_mps=-0.05) == pytest.approx(150.0, rel=1e-12)
+    assert feedback.joint_force_command_N(200.0, 390.0, ZERO, ka=1000.0, v_anchor_mps=-0.05) == pytest.approx(
+        150.0, rel=1e-12
+    )
     # an anchor moving forward does not change the command
-    assert feedback.joint_force_command_N(200.0, 390.0, ZERO, ka=1000.0,
-                                         v_anchor_mps=0.05) == pytest.approx(200.0, rel=1e-12)
+    assert feedback.joint_force_command_N(200.0, 390.0, ZERO, ka=1000.0, v_anchor_mps=0.05) == pytest.approx(
+        200.0, rel=1e-12
+    )
     # both terms: 200 + 100 - 50 = 250 N; gains None: the feed-forward alone
-    assert feedback.joint_force_command_N(200.0, 390.0, ZERO, kv=500.0, v_target_mps=0.3, v_mover_mps=0.1,
-                                         ka=1000.0, v_anchor_mps=-0.05) == pytest.approx(250.0, rel=1e-12)
+    assert feedback.joint_force_command_N(
+        200.0, 390.0, ZERO, kv=500.0, v_target_mps=0.3, v_mover_mps=0.1, ka=1000.0, v_anchor_mps=-0.05
+    ) == pytest.approx(250.0, rel=1e-12)
     assert feedback.joint_force_command_N(200.0, 390.0, ZERO) == pytest.approx(200.0, rel=1e-12)
 
 
@@ -122,8 +131,13 @@ def test_joint_length_rate_hand_values():
 
 
 @settings(max_examples=200, deadline=None)
-@given(s=st.floats(-0.1, 0.4), ref=st.floats(0.0, 0.3), vt=st.floats(0.01, 1.0), frac=st.floats(-1.0, 1.0),
-       limit=st.floats(10.0, 400.0))
+@given(
+    s=st.floats(-0.1, 0.4),
+    ref=st.floats(0.0, 0.3),
+    vt=st.floats(0.01, 1.0),
+    frac=st.floats(-1.0, 1.0),
+    limit=st.floats(10.0, 400.0),
+)
 def test_joint_length_rate_bounded_by_v_target(s, ref, vt, frac, limit):
     """With the link force inside its limits (|T_spring| <= F_lim, no relative motion) the rate
     never exceeds the rate target, and it moves s towards the reference."""
@@ -139,4 +153,4 @@ def test_direct_torque_clips_to_envelope_and_freezes_the_integral():
     T, dI = feedback.direct_torque(np.array([1e3, -1e3, 20.0]), lo, hi, np.array([True, True, False]), T_pi, dI_pi)
     np.testing.assert_allclose(T, [hi[0], lo[1], 7.0])
     np.testing.assert_array_equal(dI, [0.0, 0.0, 3.0])
-    assert T[0] == pytest.approx(TMAX) and hi[2] < TMAX      # the envelope falls with speed
+    assert T[0] == pytest.approx(TMAX) and hi[2] < TMAX  # the envelope falls with speed

@@ -1,4 +1,5 @@
 """snoworm.infra.csvwriter: cell formatting, CSV text, atomic writing."""
+
 from __future__ import annotations
 
 import math
@@ -11,19 +12,22 @@ from snoworm.infra import csvwriter
 from snoworm.infra.csvwriter import FULL, SHORT, CellFormat, csv_text, format_cell, write_csv
 
 
-@pytest.mark.parametrize("value, short, full", [
-    (None, "", ""),
-    (True, "1", "true"),
-    (np.bool_(False), "0", "false"),
-    (3, "3", "3"),
-    (np.int64(-7), "-7", "-7"),
-    (0.1 + 0.2, "0.3", "0.30000000000000004"),
-    (np.float64(1234567.0), "1.23457e+06", "1234567.0"),
-    (-0.0, "-0", "-0.0"),
-    (math.nan, "nan", "nan"),
-    ("a,b", "a,b", "a,b"),
-    ([1.5, {"b": 1, "a": 2}], '[1.5,{"a":2,"b":1}]', '[1.5,{"a":2,"b":1}]'),
-])
+@pytest.mark.parametrize(
+    "value, short, full",
+    [
+        (None, "", ""),
+        (True, "1", "true"),
+        (np.bool_(False), "0", "false"),
+        (3, "3", "3"),
+        (np.int64(-7), "-7", "-7"),
+        (0.1 + 0.2, "0.3", "0.30000000000000004"),
+        (np.float64(1234567.0), "1.23457e+06", "1234567.0"),
+        (-0.0, "-0", "-0.0"),
+        (math.nan, "nan", "nan"),
+        ("a,b", "a,b", "a,b"),
+        ([1.5, {"b": 1, "a": 2}], '[1.5,{"a":2,"b":1}]', '[1.5,{"a":2,"b":1}]'),
+    ],
+)
 def test_format_cell(value, short, full):
     assert format_cell(value, SHORT) == short
     assert format_cell(value, FULL) == full
@@ -44,12 +48,14 @@ def test_write_csv_is_atomic(tmp_path, monkeypatch):
     def rows():
         yield [2.0]
         raise RuntimeError("computation failed half way")
+
     with pytest.raises(RuntimeError):
         write_csv(path, ["a"], rows())
-    assert path.read_text() == "a\n1\n"                      # the old file is untouched
+    assert path.read_text() == "a\n1\n"  # the old file is untouched
 
     def no_disk(fd):
         raise OSError("disk full")
+
     monkeypatch.setattr(csvwriter.atomic_write_text.__globals__["os"], "fsync", no_disk)
     fresh = tmp_path / "new.csv"
     with pytest.raises(OSError, match="disk full"):
@@ -57,4 +63,4 @@ def test_write_csv_is_atomic(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="disk full"):
         write_csv(path, ["a"], [[3.0]])
     assert not fresh.exists() and path.read_text() == "a\n1\n"
-    assert sorted(os.listdir(tmp_path)) == ["t.csv"]        # no temporary file left behind
+    assert sorted(os.listdir(tmp_path)) == ["t.csv"]  # no temporary file left behind

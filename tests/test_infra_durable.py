@@ -1,4 +1,5 @@
 """Durable output folders (snoworm.infra.durable): every staged file is on disk before the folder appears."""
+
 import errno
 import os
 
@@ -41,22 +42,24 @@ def test_every_staged_file_is_synced_to_disk_before_the_folder_appears(tmp_path,
     def rename(src, dst):
         events.append("rename")
         return real_rename(src, dst)
+
     monkeypatch.setattr(folders.os, "fsync", fsync)
     monkeypatch.setattr(folders.os, "rename", rename)
     with output_folder(tmp_path / "run", command="test") as stage:
         folders.atomic_write_text(stage / "summary.json", "{}\n")
-        (stage / "plot.png").write_bytes(b"png")                   # a file written by another writer
-        assert synced == []                                         # deferred to the commit
+        (stage / "plot.png").write_bytes(b"png")  # a file written by another writer
+        assert synced == []  # deferred to the commit
     assert sorted(synced) == sorted([MANIFEST, "plot.png", "summary.json"])
-    assert events[-1] == "rename" and "rename" not in events[:-1]   # all synced, then the folder appears
+    assert events[-1] == "rename" and "rename" not in events[:-1]  # all synced, then the folder appears
     synced.clear()
     folders.atomic_write_text(tmp_path / "alone.txt", "x")
-    assert len(synced) == 1                                         # not in a stage: synced at once
+    assert len(synced) == 1  # not in a stage: synced at once
 
 
 def test_a_failed_sync_at_the_commit_writes_nothing(tmp_path, monkeypatch):
     def no_disk(fd):
         raise OSError(errno.EIO, os.strerror(errno.EIO))
+
     monkeypatch.setattr(folders.os, "fsync", no_disk)
     with pytest.raises(OutputError, match="Input/output error"):
         _write(tmp_path / "run", ["segments.csv"])

@@ -1,4 +1,5 @@
 """Atomic file writing (snoworm.infra.folders): a reader never sees a half-written file."""
+
 import pytest
 
 from snoworm.infra.folders import atomic_path, atomic_write_text
@@ -6,7 +7,7 @@ from snoworm.infra.folders import atomic_path, atomic_write_text
 
 def test_atomic_write_text_writes_and_replaces(tmp_path):
     p = tmp_path / "sub" / "out.csv"
-    assert atomic_write_text(p, "a,b\n1,2\n") == p          # creates the directory
+    assert atomic_write_text(p, "a,b\n1,2\n") == p  # creates the directory
     assert p.read_text() == "a,b\n1,2\n"
     atomic_write_text(p, "new\n")
     assert p.read_text() == "new\n"
@@ -27,7 +28,7 @@ def test_failure_leaves_no_temp_file_and_the_old_file_intact(tmp_path):
 
 def test_failure_before_any_file_leaves_nothing(tmp_path):
     p = tmp_path / "new.txt"
-    with pytest.raises(KeyboardInterrupt):           # BaseException too: interrupted writes clean up
+    with pytest.raises(KeyboardInterrupt):  # BaseException too: interrupted writes clean up
         with atomic_path(p):
             raise KeyboardInterrupt
     assert list(tmp_path.iterdir()) == []
@@ -93,7 +94,7 @@ def test_output_folder_writes_a_manifest_and_the_umask_modes(tmp_path, umask022)
     assert man["snoworm_version"] == folders.__version__
     assert mode(out) == 0o755 and mode(out / "segments.csv") == 0o644
     assert folder_state(out) == "snoworm"
-    assert sorted(os.listdir(tmp_path)) == ["run"]                 # no staging folder left
+    assert sorted(os.listdir(tmp_path)) == ["run"]  # no staging folder left
 
 
 def test_an_earlier_runs_files_never_remain_beside_the_new_ones(tmp_path):
@@ -112,7 +113,7 @@ def test_a_foreign_folder_is_refused_naming_it_and_overwrite(tmp_path):
         _write(out, ["a.csv"])
     assert str(out) in str(err.value) and "--overwrite" in str(err.value)
     assert sorted(os.listdir(tmp_path)) == ["mine"] and os.listdir(out) == ["notes.txt"]
-    with output_folder(out, overwrite=True) as stage:              # overwrite: same-named replaced, others kept
+    with output_folder(out, overwrite=True) as stage:  # overwrite: same-named replaced, others kept
         atomic_write_text(stage / "a.csv", "new")
     assert sorted(os.listdir(out)) == sorted(["notes.txt", "a.csv", MANIFEST])
     assert (out / "notes.txt").read_text() == "keep me"
@@ -133,7 +134,7 @@ def test_a_failure_at_any_point_leaves_no_result_files(tmp_path):
             atomic_write_text(stage / "segments.csv", "half")
             raise RuntimeError("solver failed after the first file")
     assert list(tmp_path.iterdir()) == []
-    old = _write(out, ["old.csv"])                                  # an earlier run stays whole
+    old = _write(out, ["old.csv"])  # an earlier run stays whole
     with pytest.raises(KeyboardInterrupt):
         with output_folder(old) as stage:
             atomic_write_text(stage / "new.csv", "x")
@@ -148,13 +149,14 @@ def test_disk_full_is_one_output_error_naming_the_path_and_reason(tmp_path, monk
         if str(dst).endswith("summary.json"):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         return real_replace(src, dst)
+
     monkeypatch.setattr(folders.os, "replace", full)
     out = tmp_path / "run"
     with pytest.raises(OutputError) as err:
         _write(out, ["segments.csv", "summary.json"])
     msg = str(err.value)
     assert "No space left on device" in msg and str(out) in msg and "\n" not in msg
-    assert list(tmp_path.iterdir()) == []                           # nothing half-written
+    assert list(tmp_path.iterdir()) == []  # nothing half-written
 
 
 def test_unusable_paths_are_refused_before_any_work(tmp_path):
@@ -212,10 +214,10 @@ def test_a_second_locker_is_refused_naming_the_pid_and_a_dead_holders_lock_is_ta
                 pass
         assert f"process {p.pid}" in str(err.value) and str(tmp_path) in str(err.value)
     finally:
-        p.kill()                                                    # dies holding the lock
+        p.kill()  # dies holding the lock
         p.join()
-    assert (tmp_path / LOCK).exists()                               # stale lock file left behind
-    with folder_lock(tmp_path) as lp:                               # taken over
+    assert (tmp_path / LOCK).exists()  # stale lock file left behind
+    with folder_lock(tmp_path) as lp:  # taken over
         assert lp.read_text() == str(os.getpid())
     assert not (tmp_path / LOCK).exists()
 
@@ -246,6 +248,7 @@ def test_an_unwritable_parent_stages_inside_the_output_folder(tmp_path, monkeypa
         if os.path.samefile(dir, out.parent):
             raise PermissionError(errno.EACCES, "Permission denied", str(out.parent))
         return real(prefix=prefix, dir=dir)
+
     monkeypatch.setattr(folders.tempfile, "mkdtemp", no_siblings)
     _write(out, ["a.csv"])
     _write(out, ["b.csv"])
@@ -254,9 +257,10 @@ def test_an_unwritable_parent_stages_inside_the_output_folder(tmp_path, monkeypa
 
 def test_earlier_output_note(tmp_path):
     from snoworm.infra.folders import earlier_output_note, write_manifest
+
     assert earlier_output_note(tmp_path / "none") is None
     (tmp_path / "a.csv").write_text("x\n")
-    assert earlier_output_note(tmp_path) is None                     # not snoworm's: no manifest
+    assert earlier_output_note(tmp_path) is None  # not snoworm's: no manifest
     write_manifest(tmp_path, command="snoworm run x --out d")
     note = earlier_output_note(tmp_path)
     assert note.startswith(f"note: {tmp_path} holds earlier results (snoworm run x --out d, ") and "\n" not in note

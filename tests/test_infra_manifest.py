@@ -3,6 +3,7 @@
 Every hostile folder sits beside a sentinel file OUTSIDE it; each test asserts the sentinel
 survives, and the exit status and message of the refusal.
 """
+
 from __future__ import annotations
 
 import json
@@ -50,12 +51,14 @@ def _hostile(tmp_path, sentinel, kind):
     out = tmp_path / "received"
     out.mkdir()
     (out / "summary.json").write_text("{}")
-    entries = {"absolute": [str(sentinel)],
-               "dotdot": ["../outside/thesis.tex"],
-               "dot": ["./summary.json"],
-               "nonstring": [1, None, {"a": 1}],
-               "nul": ["a\x00b"],
-               "backslash": ["..\\outside\\thesis.tex"]}
+    entries = {
+        "absolute": [str(sentinel)],
+        "dotdot": ["../outside/thesis.tex"],
+        "dot": ["./summary.json"],
+        "nonstring": [1, None, {"a": 1}],
+        "nul": ["a\x00b"],
+        "backslash": ["..\\outside\\thesis.tex"],
+    }
     if kind in entries:
         _manifest(out, entries[kind] + ["summary.json"])
     elif kind == "symlinked_subfolder":
@@ -70,7 +73,7 @@ def _hostile(tmp_path, sentinel, kind):
         other.write_text(json.dumps({"files": ["summary.json"]}))
         os.symlink(other, out / MANIFEST)
     elif kind == "oversized":
-        with open(out / MANIFEST, "wb") as fh:          # sparse: no disk used, never read
+        with open(out / MANIFEST, "wb") as fh:  # sparse: no disk used, never read
             fh.truncate(MAX_MANIFEST_BYTES + 1)
     elif kind == "not_an_object":
         (out / MANIFEST).write_text("[" * 100000)
@@ -79,8 +82,20 @@ def _hostile(tmp_path, sentinel, kind):
     return out
 
 
-KINDS = ["absolute", "dotdot", "dot", "nonstring", "nul", "backslash", "symlinked_subfolder", "fifo", "dev_zero",
-         "symlink_manifest", "oversized", "not_an_object"]
+KINDS = [
+    "absolute",
+    "dotdot",
+    "dot",
+    "nonstring",
+    "nul",
+    "backslash",
+    "symlinked_subfolder",
+    "fifo",
+    "dev_zero",
+    "symlink_manifest",
+    "oversized",
+    "not_an_object",
+]
 
 
 def _bounded(fn, *args):
@@ -92,6 +107,7 @@ def _bounded(fn, *args):
             box["value"] = fn(*args)
         except BaseException as exc:  # noqa: BLE001 - handed back to the test
             box["error"] = exc
+
     th = threading.Thread(target=target, daemon=True)
     th.start()
     th.join(30)
@@ -108,7 +124,7 @@ def test_a_hostile_manifest_makes_the_folder_foreign_and_nothing_is_touched(tmp_
     assert state == "foreign" and why
     with pytest.raises(OutputError, match="--overwrite"):
         _bounded(lambda: output_folder(out).__enter__())
-    with output_folder(out, overwrite=True) as stage:       # overwrite: same-named files only
+    with output_folder(out, overwrite=True) as stage:  # overwrite: same-named files only
         atomic_write_text(stage / "summary.json", '{"new": 1}')
     assert sentinel.read_text() == "precious"
     assert json.loads((out / "summary.json").read_text()) == {"new": 1}
@@ -125,8 +141,17 @@ def test_run_and_sweep_refuse_a_hostile_folder_with_exit_2_and_overwrite_spares_
     assert sentinel.read_text() == "precious"
     (tmp_path / "s").mkdir()
     out2 = _hostile(tmp_path / "s", sentinel, kind)
-    r = cli("sweep", "tow6_uniform", "--set", "terrain.xt=0.7", "--set", "simulation.duration_s=2", "--out", out2,
-            "--no-plot")
+    r = cli(
+        "sweep",
+        "tow6_uniform",
+        "--set",
+        "terrain.xt=0.7",
+        "--set",
+        "simulation.duration_s=2",
+        "--out",
+        out2,
+        "--no-plot",
+    )
     assert r.exit_code == 2, r.output
     assert str(out2) in r.output
     assert sentinel.read_text() == "precious"
@@ -167,7 +192,7 @@ def test_overwrite_never_removes_a_users_folder_carrying_an_outputs_name(tmp_pat
     assert r.exit_code == 2, r.output
     assert "scenario.yaml" in r.output and "did not write" in r.output
     assert (out / "scenario.yaml" / "draft.txt").read_text() == "mine"
-    assert sorted(os.listdir(out)) == ["scenario.yaml"]                 # nothing written beside it
+    assert sorted(os.listdir(out)) == ["scenario.yaml"]  # nothing written beside it
 
 
 def test_a_sweep_over_a_hostile_earlier_sweep_with_overwrite_touches_nothing_outside(tmp_path, sentinel):
@@ -177,19 +202,29 @@ def test_a_sweep_over_a_hostile_earlier_sweep_with_overwrite_touches_nothing_out
     man = json.loads((out / MANIFEST).read_text())
     man["files"].append(str(sentinel))
     (out / MANIFEST).write_text(json.dumps(man))
-    r = cli(*args, "--set", "terrain.xt=0.9", "--overwrite")              # another sweep: the old one cleared
+    r = cli(*args, "--set", "terrain.xt=0.9", "--overwrite")  # another sweep: the old one cleared
     assert r.exit_code == 0, r.output
     assert sentinel.read_text() == "precious"
 
 
 def test_a_resumed_save_cases_sweep_never_writes_through_a_planted_symlink(tmp_path, sentinel):
     out = tmp_path / "s"
-    args = ["sweep", "tow6_uniform", "--set", "terrain.xt=0.7,0.9", "--set", "simulation.duration_s=2", "--out", out,
-            "--no-plot", "--save-cases"]
+    args = [
+        "sweep",
+        "tow6_uniform",
+        "--set",
+        "terrain.xt=0.7,0.9",
+        "--set",
+        "simulation.duration_s=2",
+        "--out",
+        out,
+        "--no-plot",
+        "--save-cases",
+    ]
     assert cli(*args).exit_code == 0
     cases = sorted(os.listdir(out / "cases"))
     lines = (out / "summary.csv").read_text().splitlines(keepends=True)
-    (out / "summary.csv").write_text("".join(lines[:-1]))               # the last case "not yet run"
+    (out / "summary.csv").write_text("".join(lines[:-1]))  # the last case "not yet run"
     victim = out / "cases" / cases[-1]
     for f in os.listdir(victim):
         os.unlink(victim / f)
@@ -200,7 +235,7 @@ def test_a_resumed_save_cases_sweep_never_writes_through_a_planted_symlink(tmp_p
     assert r.exit_code == 2, r.output
     assert str(victim) in r.output and "symbolic link" in r.output
     assert sorted(os.listdir(sentinel.parent)) == before and sentinel.read_text() == "precious"
-    os.unlink(victim)                                                   # the fix: the sweep resumes
+    os.unlink(victim)  # the fix: the sweep resumes
     r = cli(*args)
     assert r.exit_code == 0, r.output
     assert folder_state(victim) == "snoworm"
@@ -208,8 +243,17 @@ def test_a_resumed_save_cases_sweep_never_writes_through_a_planted_symlink(tmp_p
 
 def test_a_summary_csv_symlink_is_never_appended_through(tmp_path, sentinel):
     out = tmp_path / "s"
-    args = ["sweep", "tow6_uniform", "--set", "terrain.xt=0.7", "--set", "simulation.duration_s=2", "--out", out,
-            "--no-plot"]
+    args = [
+        "sweep",
+        "tow6_uniform",
+        "--set",
+        "terrain.xt=0.7",
+        "--set",
+        "simulation.duration_s=2",
+        "--out",
+        out,
+        "--no-plot",
+    ]
     assert cli(*args).exit_code == 0
     os.unlink(out / "summary.csv")
     os.symlink(sentinel, out / "summary.csv")
@@ -219,10 +263,24 @@ def test_a_summary_csv_symlink_is_never_appended_through(tmp_path, sentinel):
 
 
 # ------------------------------------------------------------------ the checks themselves
-@pytest.mark.parametrize("entry,ok", [("a.csv", True), ("cases/c0/segments.csv", True), ("/etc/passwd", False),
-                                      ("../x", False), ("a/../b", False), ("./a", False), ("a//b", False), ("", False),
-                                      ("a\\b", False), ("a\x00", False), (3, False), ("x" * 5000, False),
-                                      (MANIFEST, False)])
+@pytest.mark.parametrize(
+    "entry,ok",
+    [
+        ("a.csv", True),
+        ("cases/c0/segments.csv", True),
+        ("/etc/passwd", False),
+        ("../x", False),
+        ("a/../b", False),
+        ("./a", False),
+        ("a//b", False),
+        ("", False),
+        ("a\\b", False),
+        ("a\x00", False),
+        (3, False),
+        ("x" * 5000, False),
+        (MANIFEST, False),
+    ],
+)
 def test_entry_rules(entry, ok):
     assert (entry_problem(entry) is None) == ok
 

@@ -1,4 +1,5 @@
 """snoworm.infra.pool: the process pool every study shares."""
+
 from __future__ import annotations
 
 import os
@@ -26,12 +27,12 @@ def test_pool_runs_in_two_workers_and_returns_every_result(monkeypatch):
     with ProcessExecutor(2) as pool:
         out = pool.map(_slow_square, range(6))
         unordered = sorted(r[0] for r in pool.map_unordered(_slow_square, range(5)))
-    assert [r[0] for r in out] == [0, 1, 4, 9, 16, 25]               # in task order
+    assert [r[0] for r in out] == [0, 1, 4, 9, 16, 25]  # in task order
     assert unordered == [0, 1, 4, 9, 16]
     pids = {r[1] for r in out}
     assert len(pids) == 2 and os.getpid() not in pids
-    assert {r[2] for r in out} == {"1"}                                # one BLAS thread per worker
-    assert all(k not in os.environ for k in THREAD_ENV)                # restored after close
+    assert {r[2] for r in out} == {"1"}  # one BLAS thread per worker
+    assert all(k not in os.environ for k in THREAD_ENV)  # restored after close
 
 
 def test_a_task_exception_reaches_the_caller():

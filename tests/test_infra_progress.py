@@ -1,4 +1,5 @@
 """snoworm.infra.progress: a bar on a terminal, one line per ~10 % otherwise, tqdm optional."""
+
 import io
 import sys
 
@@ -20,7 +21,7 @@ def test_lines_mode_prints_one_line_per_tenth_when_not_a_terminal():
         bar.update(info="0 failed")
     bar.close()
     lines = s.getvalue().splitlines()
-    assert len(lines) == 10                                  # 10 %, 20 %, ... 100 %, no duplicate at close
+    assert len(lines) == 10  # 10 %, 20 %, ... 100 %, no duplicate at close
     assert lines[0].startswith("sweep:  10 % (20/200 cases, 0 failed)")
     assert lines[-1].startswith("sweep: 100 % (200/200 cases")
 
@@ -28,14 +29,14 @@ def test_lines_mode_prints_one_line_per_tenth_when_not_a_terminal():
 def test_simulated_time_counts_as_floats_and_a_jump_prints_one_line():
     s = io.StringIO()
     bar = P.Progress(56.0, "traverse_patch", "s simulated", stream=s)
-    bar.set(0.5)                                             # under 10 %: nothing yet
+    bar.set(0.5)  # under 10 %: nothing yet
     assert s.getvalue() == ""
-    bar.set(30.0, 56.0)                                      # 54 %: one line, not five
-    bar.set(31.0)                                            # still in the same tenth: no line
-    bar.close()                                              # the state at the end: one more line
+    bar.set(30.0, 56.0)  # 54 %: one line, not five
+    bar.set(31.0)  # still in the same tenth: no line
+    bar.close()  # the state at the end: one more line
     lines = s.getvalue().splitlines()
     assert len(lines) == 2 and "54 % (30/56 s simulated)" in lines[0]
-    assert "55 % (31/56 s simulated)" in lines[1]            # closed where it was: no fake 100 %
+    assert "55 % (31/56 s simulated)" in lines[1]  # closed where it was: no fake 100 %
 
 
 def test_nothing_is_printed_when_off_or_when_nothing_was_done():
@@ -71,7 +72,7 @@ def test_tqdm_draws_the_bar_on_a_terminal_when_installed():
 def test_total_may_grow_and_bad_mode_is_refused():
     s = io.StringIO()
     bar = P.Progress(1, "m", stream=s)
-    bar(5, 10)                                               # callable as progress(done, total)
+    bar(5, 10)  # callable as progress(done, total)
     assert bar.total == 10 and "50 % (5/10)" in s.getvalue()
     with pytest.raises(ValueError, match="mode"):
         P.Progress(1, "m", mode="loud")
@@ -111,17 +112,17 @@ def test_a_log_gets_a_line_every_few_seconds_while_work_advances(monkeypatch):
     monkeypatch.setattr(P.time, "perf_counter", lambda: clock[0])
     s = io.StringIO()
     bar = P.Progress(2000.0, "long", "s simulated", stream=s)
-    for k in range(1, 40):                  # 1 s simulated per 1 s of wall time: under 10 % for 200 s
+    for k in range(1, 40):  # 1 s simulated per 1 s of wall time: under 10 % for 200 s
         clock[0] = float(k)
         bar.set(float(k))
     lines = s.getvalue().splitlines()
-    assert len(lines) == 39 // int(P.LINE_EVERY_S)           # one line per LINE_EVERY_S seconds of wall time
+    assert len(lines) == 39 // int(P.LINE_EVERY_S)  # one line per LINE_EVERY_S seconds of wall time
     assert lines[0].startswith("long:   0 % (5/2000 s simulated)")
     clock[0] = 100.0
-    bar.set(39.0)                                            # advanced since the last line (35 s): a line
+    bar.set(39.0)  # advanced since the last line (35 s): a line
     assert len(s.getvalue().splitlines()) == len(lines) + 1
     clock[0] = 200.0
-    bar.set(39.0)                                            # nothing new: no line
+    bar.set(39.0)  # nothing new: no line
     assert len(s.getvalue().splitlines()) == len(lines) + 1
 
 
@@ -130,5 +131,5 @@ def test_progress_never_goes_back_for_the_same_total():
     bar.set(5.0)
     bar.set(4.9)
     assert bar.value == 5.0
-    bar.set(3.0, total=3.0)                                  # a new total (a fit that ended early)
+    bar.set(3.0, total=3.0)  # a new total (a fit that ended early)
     assert bar.value == 3.0 and bar.total == 3.0

@@ -3,6 +3,7 @@
 The imports are checked in fresh interpreters, since this test process has long imported
 everything.
 """
+
 import subprocess
 import sys
 
@@ -38,37 +39,48 @@ def test_unknown_attribute_is_an_attribute_error():
 
 
 def test_import_snoworm_imports_no_heavy_module():
-    out = fresh("import sys, snoworm; print(sorted(m for m in ('numpy', 'scipy', 'matplotlib', 'yaml', "
-                "'snoworm.simulation.driver', 'snoworm.modes', 'snoworm.studies.sweep') if m in sys.modules))")
+    out = fresh(
+        "import sys, snoworm; print(sorted(m for m in ('numpy', 'scipy', 'matplotlib', 'yaml', "
+        "'snoworm.simulation.driver', 'snoworm.modes', 'snoworm.studies.sweep') if m in sys.modules))"
+    )
     assert out.strip() == "[]"
 
 
 def test_names_import_their_module_on_first_use():
-    out = fresh("import sys, snoworm\n"
-                "from snoworm import load_scenario\n"
-                "print('snoworm.config.scenario' in sys.modules, 'snoworm.studies.sweep' in sys.modules)\n"
-                "snoworm.run_sweep\n"
-                "print('snoworm.studies.sweep' in sys.modules)")
+    out = fresh(
+        "import sys, snoworm\n"
+        "from snoworm import load_scenario\n"
+        "print('snoworm.config.scenario' in sys.modules, 'snoworm.studies.sweep' in sys.modules)\n"
+        "snoworm.run_sweep\n"
+        "print('snoworm.studies.sweep' in sys.modules)"
+    )
     assert out.split() == ["True", "False", "True"]
 
 
 def test_a_scenario_finds_the_built_in_modes_without_importing_them_first():
     # snoworm.config.scenario sits below the modes: its registry imports them when first read
-    out = fresh("import sys\n"
-                "from snoworm.config.scenario import load_scenario, scenario_from_dict, read_yaml\n"
-                "print('snoworm.modes' in sys.modules)\n"
-                f"sc = load_scenario({str(SCENARIOS / 'inchworm6.yaml')!r})\n"
-                "print(type(sc.mode).__name__, 'snoworm.modes' in sys.modules)")
+    out = fresh(
+        "import sys\n"
+        "from snoworm.config.scenario import load_scenario, scenario_from_dict, read_yaml\n"
+        "print('snoworm.modes' in sys.modules)\n"
+        f"sc = load_scenario({str(SCENARIOS / 'inchworm6.yaml')!r})\n"
+        "print(type(sc.mode).__name__, 'snoworm.modes' in sys.modules)"
+    )
     assert out.split() == ["False", "InchwormConfig", "True"]
 
 
 def test_a_run_imports_only_its_own_mode():
-    out = fresh("import sys\n"
-                "from snoworm import load_scenario, simulate\n"
-                f"simulate(load_scenario({str(SCENARIOS / 'tow6_uniform.yaml')!r}, [('simulation.duration_s', 1.0)]))\n"
-                "print(sorted(m for m in sys.modules if m.startswith('snoworm.modes.')))")
+    out = fresh(
+        "import sys\n"
+        "from snoworm import load_scenario, simulate\n"
+        f"simulate(load_scenario({str(SCENARIOS / 'tow6_uniform.yaml')!r}, [('simulation.duration_s', 1.0)]))\n"
+        "print(sorted(m for m in sys.modules if m.startswith('snoworm.modes.')))"
+    )
     # codeload: the controller allowance the driver sets (no mode of its own)
-    assert out.strip() == "['snoworm.modes.base', 'snoworm.modes.codeload', 'snoworm.modes.command', 'snoworm.modes.uniform']"
+    assert (
+        out.strip()
+        == "['snoworm.modes.base', 'snoworm.modes.codeload', 'snoworm.modes.command', 'snoworm.modes.uniform']"
+    )
 
 
 def test_a_users_mode_registers_in_a_fresh_process():
@@ -93,7 +105,7 @@ class Mine(Mode):
         return Interval(np.inf, Controls.rolling(self.model.n, 1.0, 1.5), [], "mine")
 
 register_mode(Mine)
-raw = apply_overrides(read_yaml({str(SCENARIOS / 'tow6_uniform.yaml')!r}),
+raw = apply_overrides(read_yaml({str(SCENARIOS / "tow6_uniform.yaml")!r}),
                       [("mode", {{"type": "mine"}}), ("simulation.duration_s", 2.0)])
 sc = scenario_from_dict(raw)
 print(type(sc.mode).__name__, sorted(MODES), simulate(sc).summary()["distance_m"] > 0)

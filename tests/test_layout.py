@@ -13,6 +13,7 @@
 
 The offenders are listed in the assertion messages.
 """
+
 import ast
 import shutil
 import subprocess
@@ -31,14 +32,18 @@ EXEMPT = ("cli", "__main__", "_version")
 
 def modules():
     """Every module of the package as ``name`` or ``package/name`` (no ``__init__``)."""
-    return sorted(str(p.relative_to(PACKAGE).with_suffix("")) for p in PACKAGE.rglob("*.py")
-                  if p.name != "__init__.py")
+    return sorted(str(p.relative_to(PACKAGE).with_suffix("")) for p in PACKAGE.rglob("*.py") if p.name != "__init__.py")
 
 
 def defines_tests(path: Path) -> bool:
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    return any(isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef)) and n.name.startswith("test_")
-               or isinstance(n, ast.ClassDef) and n.name.startswith("Test") for n in tree.body)
+    return any(
+        isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))
+        and n.name.startswith("test_")
+        or isinstance(n, ast.ClassDef)
+        and n.name.startswith("Test")
+        for n in tree.body
+    )
 
 
 def test_every_module_has_a_test_file():
@@ -53,8 +58,11 @@ def test_every_module_has_a_test_file():
 
 
 def long_modules(package: Path = PACKAGE) -> list:
-    return [f"snoworm/{m}.py: {n} lines" for m in modules()
-            if (n := len((package / f"{m}.py").read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES]
+    return [
+        f"snoworm/{m}.py: {n} lines"
+        for m in modules()
+        if (n := len((package / f"{m}.py").read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES
+    ]
 
 
 def long_functions(package: Path = PACKAGE) -> list:
@@ -63,7 +71,7 @@ def long_functions(package: Path = PACKAGE) -> list:
         tree = ast.parse((package / f"{m}.py").read_text(encoding="utf-8"))
         for node in ast.walk(tree):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-                n = node.end_lineno - node.lineno + 1          # from ``def`` to the last line of the body
+                n = node.end_lineno - node.lineno + 1  # from ``def`` to the last line of the body
                 if n > MAX_FUNCTION_LINES:
                     long.append(f"snoworm/{m}.py:{node.lineno} {node.name}: {n} lines")
     return long
@@ -83,9 +91,14 @@ def test_the_sizes_hold_once_formatted(tmp_path):
     # no module or function is kept under a limit by joining lines: the limits hold for the code
     # as `ruff format` lays it out (run on a copy; ruff is in the test extra)
     shutil.copytree(PACKAGE, tmp_path / "snoworm", ignore=shutil.ignore_patterns("__pycache__"))
-    shutil.copy(PACKAGE.parent / "pyproject.toml", tmp_path / "pyproject.toml")     # the line length
-    r = subprocess.run([sys.executable, "-m", "ruff", "format", "--quiet", "."], cwd=tmp_path, capture_output=True,
-                       text=True, timeout=120)
+    shutil.copy(PACKAGE.parent / "pyproject.toml", tmp_path / "pyproject.toml")  # the line length
+    r = subprocess.run(
+        [sys.executable, "-m", "ruff", "format", "--quiet", "."],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert r.returncode == 0, r.stderr
     long = long_modules(tmp_path / "snoworm") + long_functions(tmp_path / "snoworm")
     assert not long, "over the size limits once formatted:\n  " + "\n  ".join(long)

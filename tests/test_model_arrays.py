@@ -1,4 +1,5 @@
 """The chain's parameter arrays and named state layout (snoworm.model.arrays, docs/model.md section 4)."""
+
 import numpy as np
 import pytest
 
@@ -7,8 +8,14 @@ from tests.conftest import model_for
 
 
 def test_layout_fields_follow_the_options():
-    assert StateLayout(3, False, False).fields == ("x_m", "v_mps", "omega_front", "omega_rear",
-                                                   "integral_front_Nm", "integral_rear_Nm")
+    assert StateLayout(3, False, False).fields == (
+        "x_m",
+        "v_mps",
+        "omega_front",
+        "omega_rear",
+        "integral_front_Nm",
+        "integral_rear_Nm",
+    )
     lay = StateLayout(3, True, True)
     assert lay.fields[-2:] == ("q_mps", "s_m")
     assert (lay.q, lay.s, lay.n_s, lay.size) == (6, 7, 8, 24)
@@ -31,8 +38,9 @@ def test_flat_index_unpack_and_per_state_agree():
 def test_segment_arrays_from_list_and_normal_force(scenario_path):
     m = model_for(scenario_path("tow6_uniform"))
     seg = m.seg
-    again = SegmentArrays.from_list([type("S", (), {n: getattr(seg, n)[k] for n in SegmentArrays.__dataclass_fields__})
-                                     for k in range(m.n)])
+    again = SegmentArrays.from_list(
+        [type("S", (), {n: getattr(seg, n)[k] for n in SegmentArrays.__dataclass_fields__}) for k in range(m.n)]
+    )
     for n in SegmentArrays.__dataclass_fields__:
         assert np.array_equal(getattr(again, n), getattr(seg, n))
     # m g / (2 n_w): half the weight per axle, shared by the axle's wheels
@@ -43,4 +51,4 @@ def test_state_layout_named(scenario_path):
     m = model_for(scenario_path("tow6_uniform"))
     assert m.layout.fields[:2] == ("x_m", "v_mps")
     Y = m.unpack(m.initial_state())
-    assert np.allclose(np.diff(Y[:, m.layout.index["x_m"]]), -1.5)   # rest spacing, leader in front
+    assert np.allclose(np.diff(Y[:, m.layout.index["x_m"]]), -1.5)  # rest spacing, leader in front

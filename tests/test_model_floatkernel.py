@@ -7,6 +7,7 @@ magnitude of the same field over the chain and the states compared (a wheel's ac
 that cancels to ~1e-7 rad/s^2 at a steady state, from torques of tens of newton-metres, is
 compared at the scale of wheel accelerations, not at its own).
 """
+
 import functools
 
 import numpy as np
@@ -49,6 +50,7 @@ def recorded(name):
         if calls[0] % 23 == 1 and len(states) < 400:
             states.append(np.array(y))
         return call(self, y, ctl)
+
     FloatKernel.__call__ = spy
     try:
         simulate(sc)
@@ -86,12 +88,17 @@ def test_float_kernel_equals_the_numpy_kernel_on_every_shipped_scenario(name):
         want += [numpy_rhs(m, y, ctl) for y in ys]
     worst = scaled_difference(m, got, want)
     assert worst <= REL, f"{name}: float kernel {worst:.2e} from the NumPy kernel"
-    assert fk._by_key                        # run on generated code (made here or shared)
+    assert fk._by_key  # run on generated code (made here or shared)
 
 
-GRADES = [[], [("terrain.grade_deg", 8.0)],
-          [("terrain.elevation", [[-20.0, 0.0], [0.0, 0.0], [10.0, 1.5], [12.0, 1.6], [30.0, 0.5]]),
-           ("terrain.patches", [{"start_m": 2.0, "end_m": 9.0, "xt": 0.4, "ramp_m": 0.5}])]]
+GRADES = [
+    [],
+    [("terrain.grade_deg", 8.0)],
+    [
+        ("terrain.elevation", [[-20.0, 0.0], [0.0, 0.0], [10.0, 1.5], [12.0, 1.6], [30.0, 0.5]]),
+        ("terrain.patches", [{"start_m": 2.0, "end_m": 9.0, "xt": 0.4, "ramp_m": 0.5}]),
+    ],
+]
 
 
 @pytest.mark.parametrize("grade", GRADES, ids=["level", "constant grade", "elevation table and patch"])
@@ -106,12 +113,18 @@ def test_every_branch_of_the_kernel_on_busy_controls(grade):
             ctl = busy_controls(m, rng)
             n = m.n
             if k % 2:
-                ctl = ctl.with_(joint_length_mode=rng.integers(0, 2, n - 1).astype(float),
-                                joint_sref_m=rng.uniform(0.0, 0.3, n - 1), joint_ka=np.full(n - 1, 800.0),
-                                joint_anchor=np.arange(1, n))
+                ctl = ctl.with_(
+                    joint_length_mode=rng.integers(0, 2, n - 1).astype(float),
+                    joint_sref_m=rng.uniform(0.0, 0.3, n - 1),
+                    joint_ka=np.full(n - 1, 800.0),
+                    joint_anchor=np.arange(1, n),
+                )
             if k % 3 == 0:
-                ctl = ctl.with_(torque_active=rng.integers(0, 2, n).astype(float), torque_cmd_Nm=rng.uniform(-30, 30, n),
-                                motor_on=rng.integers(0, 2, n).astype(float))
+                ctl = ctl.with_(
+                    torque_active=rng.integers(0, 2, n).astype(float),
+                    torque_cmd_Nm=rng.uniform(-30, 30, n),
+                    motor_on=rng.integers(0, 2, n).astype(float),
+                )
             y = states_along_track(m, rng, 1)[0]
             assert scaled_difference(m, m.float_kernel(y, ctl), numpy_rhs(m, y, ctl)) <= REL
 
@@ -120,7 +133,7 @@ def test_one_generated_function_per_structure_of_controls():
     m = model_for(SCENARIOS / "tow6_uniform.yaml")
     rng = np.random.default_rng(2)
     y = random_state(m, rng)
-    for _ in range(5):                   # new set-points, same structure: no new code
+    for _ in range(5):  # new set-points, same structure: no new code
         ctl = Controls.rolling(m.n, np.ones(m.n), rng.uniform(0, 2, m.n))
         assert scaled_difference(m, m.float_kernel(y, ctl), numpy_rhs(m, y, ctl)) <= REL
     assert len(m.float_kernel._by_key) == 1
@@ -132,12 +145,16 @@ def test_one_generated_function_per_structure_of_controls():
 def test_models_differing_in_parameters_share_the_generated_code():
     """A sweep's cases (other X_t, tow, masses) run the same generated code with their own parameters."""
     rng = np.random.default_rng(8)
-    ms = [model_for(SCENARIOS / "inchworm6.yaml", [("terrain.xt", xt), ("tow.force_N", f), ("vehicle.segment.mass_kg", mk)])
-          for xt, f, mk in ((0.25, 0.0, 60.0), (0.31, 90.0, 75.0))]
+    ms = [
+        model_for(
+            SCENARIOS / "inchworm6.yaml", [("terrain.xt", xt), ("tow.force_N", f), ("vehicle.segment.mass_kg", mk)]
+        )
+        for xt, f, mk in ((0.25, 0.0, 60.0), (0.31, 90.0, 75.0))
+    ]
     ctl = busy_controls(ms[0], rng)
     y = random_state(ms[0], rng)
     fs = [m.float_kernel.function(ctl)[0] for m in ms]
-    assert fs[0] is not fs[1] and fs[0].__code__ is fs[1].__code__          # one code, two parameter sets
+    assert fs[0] is not fs[1] and fs[0].__code__ is fs[1].__code__  # one code, two parameter sets
     assert ms[0].float_kernel.generated + ms[1].float_kernel.generated <= 1
     for m in ms:
         assert scaled_difference(m, m.float_kernel(y, ctl), numpy_rhs(m, y, ctl)) <= REL
@@ -147,6 +164,7 @@ def test_models_differing_in_parameters_share_the_generated_code():
 def test_a_changed_law_reaches_both_paths(monkeypatch):
     """Change a law function and a law constant: the NumPy kernel and the float kernel both move, together."""
     from snoworm import feedback, terrain
+
     m0 = model_for(SCENARIOS / "inchworm6.yaml")
     rng = np.random.default_rng(4)
     y = random_state(m0, rng)
@@ -162,10 +180,10 @@ def test_a_changed_law_reaches_both_paths(monkeypatch):
     old_np, old_float = numpy_rhs(m_old, y, ctl), m_old.float_kernel(y, ctl)
     assert scaled_difference(m, new_float, new_np) <= REL
     assert scaled_difference(m, old_float, old_np) <= REL
-    assert scaled_difference(m, new_np, old_np) > 1e-3        # the change moved the NumPy kernel ...
+    assert scaled_difference(m, new_np, old_np) > 1e-3  # the change moved the NumPy kernel ...
     assert scaled_difference(m, new_float, old_float) > 1e-3  # ... and the float kernel
     s = m.layout.s
-    assert not np.allclose(m.unpack(new_float)[:-1, s], m.unpack(old_float)[:-1, s])   # K_LENGTH: the joints
+    assert not np.allclose(m.unpack(new_float)[:-1, s], m.unpack(old_float)[:-1, s])  # K_LENGTH: the joints
 
 
 def test_long_chains_and_stacks_keep_the_numpy_kernel():
@@ -185,6 +203,7 @@ def test_a_branch_on_a_state_cannot_be_traced():
         if np.any(Y[..., 0] > 0):
             pass
         return orig(Y, c, outputs, cd)
+
     m.evaluate = branching
     with pytest.raises(TypeError):
         floatkernel.generate(m, ctl)
@@ -194,10 +213,11 @@ def test_a_model_with_generated_code_pickles_for_worker_processes():
     """Sweeps and the paper send models to worker processes: the generated closures stay behind
     and the copy generates (or reuses) its own."""
     import pickle
+
     m = model_for(SCENARIOS / "inchworm6.yaml")
     rng = np.random.default_rng(6)
     ctl, y = busy_controls(m, rng), random_state(m, rng)
     before = m.float_kernel(y, ctl)
     m2 = pickle.loads(pickle.dumps(m))
     assert m2.float_kernel.model is m2 and not m2.float_kernel._by_key
-    np.testing.assert_array_equal(m2.float_kernel(y, ctl), before)      # the same code on the same numbers
+    np.testing.assert_array_equal(m2.float_kernel(y, ctl), before)  # the same code on the same numbers

@@ -1,11 +1,24 @@
 """Piecewise-constant inputs of an integration interval (snoworm.model.inputs.Controls)."""
+
 import numpy as np
 import pytest
 
 from snoworm.model.inputs import Controls
 
-SEGMENT_FIELDS = ("motor_on", "speed_sp_mps", "fc_active", "fc_link", "fc_sigma", "fc_ref_N", "fc_nominal_mps",
-                  "fc_kp", "fc_ki", "fc_vmax_mps", "torque_active", "torque_cmd_Nm")
+SEGMENT_FIELDS = (
+    "motor_on",
+    "speed_sp_mps",
+    "fc_active",
+    "fc_link",
+    "fc_sigma",
+    "fc_ref_N",
+    "fc_nominal_mps",
+    "fc_kp",
+    "fc_ki",
+    "fc_vmax_mps",
+    "torque_active",
+    "torque_cmd_Nm",
+)
 
 
 @pytest.mark.parametrize("n", [1, 2, 6])
@@ -16,9 +29,9 @@ def test_rolling_shapes(n):
         assert np.shape(getattr(c, name)) == expected, name
     np.testing.assert_array_equal(c.speed_sp_mps, np.full(n, 1.8))
     np.testing.assert_array_equal(c.motor_on, np.ones(n))
-    assert not c.fc_active.any() and not c.joint_active.any()    # plain rolling: no force loop, joints locked
+    assert not c.fc_active.any() and not c.joint_active.any()  # plain rolling: no force loop, joints locked
     assert c.fc_link.dtype.kind == "i" and c.joint_mover.dtype.kind == "i" and c.joint_anchor.dtype.kind == "i"
-    np.testing.assert_array_equal(c.fc_link, np.full(n, n - 1))   # index N-1: the tow
+    np.testing.assert_array_equal(c.fc_link, np.full(n, n - 1))  # index N-1: the tow
 
 
 def test_rolling_per_segment_values():
@@ -32,11 +45,11 @@ def test_stack_keeps_equal_arrays_and_stacks_differing_ones():
     b = Controls.rolling(4, 1.0, 1.5)
     c = Controls.rolling(4, [0, 1, 1, 1], 1.2)
     s = Controls.stack([a, b, c])
-    assert s.speed_sp_mps.shape == (3, 4)                     # differs: a leading batch axis
+    assert s.speed_sp_mps.shape == (3, 4)  # differs: a leading batch axis
     np.testing.assert_array_equal(s.speed_sp_mps[:, 0], [1.8, 1.5, 1.2])
     assert s.motor_on.shape == (3, 4)
     np.testing.assert_array_equal(s.motor_on[2], [0, 1, 1, 1])
-    assert s.fc_kp.shape == (4,) and s.joint_ff_N.shape == (3,)   # equal in every member: unchanged
+    assert s.fc_kp.shape == (4,) and s.joint_ff_N.shape == (3,)  # equal in every member: unchanged
     np.testing.assert_array_equal(s.fc_link, a.fc_link)
 
 
@@ -51,7 +64,7 @@ def test_with_replaces_only_the_named_arrays():
     a = Controls.rolling(3, 1.0, 1.8)
     b = a.with_(speed_sp_mps=[0.0, 0.0, 0.0])
     np.testing.assert_array_equal(b.speed_sp_mps, [0.0, 0.0, 0.0])
-    np.testing.assert_array_equal(a.speed_sp_mps, [1.8, 1.8, 1.8])   # the original is unchanged
+    np.testing.assert_array_equal(a.speed_sp_mps, [1.8, 1.8, 1.8])  # the original is unchanged
     assert b.motor_on is a.motor_on
 
 

@@ -1,4 +1,5 @@
 """Jacobian structure and banded finite differences (snoworm.model.jacobian, docs/model.md section 6)."""
+
 import numpy as np
 import pytest
 
@@ -6,14 +7,18 @@ from snoworm.dynamics import Controls
 from tests.conftest import busy_controls, model_for, random_state
 
 
-@pytest.mark.parametrize("links,force_loop,n", [("fixed", False, 6), ("prismatic", False, 6),
-                                                 ("prismatic", True, 5), ("fixed", True, 3), ("fixed", False, 1)])
+@pytest.mark.parametrize(
+    "links,force_loop,n",
+    [("fixed", False, 6), ("prismatic", False, 6), ("prismatic", True, 5), ("fixed", True, 3), ("fixed", False, 1)],
+)
 def test_jac_sparsity_covers_finite_difference_jacobian(scenario_path, links, force_loop, n):
     """An incomplete jac_sparsity stalls BDF/Radau (docs/performance.md): check it covers every non-zero."""
     rng = np.random.default_rng(n)
-    m = model_for(scenario_path("tow6_uniform"), [("vehicle.links.type", links), ("vehicle.segments", n),
-                                                  ("terrain.profile", [[-5, 0.4], [5, 1.0]])],
-                  force_loop=force_loop)
+    m = model_for(
+        scenario_path("tow6_uniform"),
+        [("vehicle.links.type", links), ("vehicle.segments", n), ("terrain.profile", [[-5, 0.4], [5, 1.0]])],
+        force_loop=force_loop,
+    )
     P = m.jac_sparsity()
     for _ in range(5):
         y = random_state(m, rng)
@@ -30,14 +35,17 @@ def test_jac_sparsity_covers_finite_difference_jacobian(scenario_path, links, fo
     assert lb < m.layout.n_s * 2 + 2 and ub < m.layout.n_s * 2 + 2
 
 
-@pytest.mark.parametrize("links,force_loop,n", [("fixed", False, 6), ("prismatic", False, 6),
-                                                 ("prismatic", True, 5), ("fixed", False, 1)])
+@pytest.mark.parametrize(
+    "links,force_loop,n", [("fixed", False, 6), ("prismatic", False, 6), ("prismatic", True, 5), ("fixed", False, 1)]
+)
 def test_jacobian_banded_matches_column_by_column_differences(scenario_path, links, force_loop, n):
     """The one-call grouped finite difference equals perturbing one column at a time (same steps)."""
     rng = np.random.default_rng(10 + n)
-    m = model_for(scenario_path("tow6_uniform"), [("vehicle.links.type", links), ("vehicle.segments", n),
-                                                  ("terrain.profile", [[-5, 0.4], [5, 1.0]])],
-                  force_loop=force_loop)
+    m = model_for(
+        scenario_path("tow6_uniform"),
+        [("vehicle.links.type", links), ("vehicle.segments", n), ("terrain.profile", [[-5, 0.4], [5, 1.0]])],
+        force_loop=force_loop,
+    )
     lb, ub = m.bandwidths()
     for _ in range(3):
         y = random_state(m, rng)
@@ -49,7 +57,8 @@ def test_jacobian_banded_matches_column_by_column_differences(scenario_path, lin
             yp[j] += 1.2e-4 * max(1e-3, abs(y[j]))
             col = (m.rhs(0.0, yp, ctl) - f0) / (yp[j] - y[j])
             rows = np.arange(max(0, j - ub), min(m.n_states, j + lb + 1))
-            np.testing.assert_allclose(packed[ub + rows - j, j], col[rows], rtol=1e-9,
-                                       atol=1e-9 * (1 + np.abs(col).max()))
+            np.testing.assert_allclose(
+                packed[ub + rows - j, j], col[rows], rtol=1e-9, atol=1e-9 * (1 + np.abs(col).max())
+            )
             outside = np.setdiff1d(np.arange(m.n_states), rows)
             assert np.all(col[outside] == 0.0), "a non-zero outside the band"

@@ -1,4 +1,5 @@
 """Output quantities from states (snoworm.model.quantities): the documented columns, consistent with the state."""
+
 import numpy as np
 
 from snoworm.model.inputs import Controls
@@ -30,7 +31,7 @@ def test_quantities_follow_from_the_state():
     np.testing.assert_allclose(seg["wheel_speed_mps"][0], Y[:, m.layout.omega].mean(-1) * R, rtol=1e-12)
     np.testing.assert_allclose(seg["net_force_N"][0], seg["traction_N"][0] - seg["resistance_N"][0], rtol=1e-12)
     assert np.all(seg["motor_electrical_power_W"] >= 0)
-    np.testing.assert_array_equal(lk["extension_m"], 0.0)      # fixed links
+    np.testing.assert_array_equal(lk["extension_m"], 0.0)  # fixed links
 
 
 def test_motors_off_give_no_torque():

@@ -1,4 +1,5 @@
 """Symbolic floats and arrays (snoworm.model.symbolic): what the float kernel's trace records."""
+
 import numpy as np
 import pytest
 
@@ -21,10 +22,10 @@ def test_operations_on_symbols_are_recorded_and_on_floats_computed():
     src = [line for _, line, _ in tr.lines]
     assert isinstance(out, SymArray) and out.shape == (2,)
     assert "y0 * 2.0" in src[0] and "y1 * 3.0" in src[1]
-    assert any(" + 4.0" in line for line in src)                  # 1.0 * 4.0 folded to 4.0
-    assert any(">= 0.5 else 0.5" in line for line in src)         # maximum: a conditional expression
+    assert any(" + 4.0" in line for line in src)  # 1.0 * 4.0 folded to 4.0
+    assert any(">= 0.5 else 0.5" in line for line in src)  # maximum: a conditional expression
     assert src[-1].startswith("_tanh(") and symbolic.source(t) == t.name
-    assert symbolic._TRACE is None                                # recording ends with the block
+    assert symbolic._TRACE is None  # recording ends with the block
 
 
 def test_a_branch_on_a_symbol_cannot_be_traced():

@@ -1,4 +1,5 @@
 """The mode contract and the open registry (snoworm.modes.base): a user's own mode runs like a built-in."""
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,8 +43,9 @@ def user_mode():
 
 
 def raw_with_mode(mode, duration_s=8.0):
-    return apply_overrides(read_yaml(SCENARIOS / "tow6_uniform.yaml"),
-                           [("mode", mode), ("simulation.duration_s", duration_s)])
+    return apply_overrides(
+        read_yaml(SCENARIOS / "tow6_uniform.yaml"), [("mode", mode), ("simulation.duration_s", duration_s)]
+    )
 
 
 def test_user_mode_validates_and_runs(user_mode):
@@ -54,7 +56,7 @@ def test_user_mode_validates_and_runs(user_mode):
     ref = simulate(scenario_from_dict(raw_with_mode({"type": "uniform", "speed_mps": 1.8, "start_time_s": 0.0})))
     np.testing.assert_allclose(res.segments["v_mps"], ref.segments["v_mps"], rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(res.links["force_N"], ref.links["force_N"], rtol=1e-12, atol=1e-9)
-    assert res.summary()["constant_speed"] == {"speed_mps": 1.8}       # the mode's summary hook
+    assert res.summary()["constant_speed"] == {"speed_mps": 1.8}  # the mode's summary hook
     assert [p["label"] for p in res.phases] == ["constant"]
 
 
@@ -78,16 +80,18 @@ def test_registering_a_non_mode_raises_type_error():
     with pytest.raises(TypeError, match="Mode subclass"):
         register_mode(object)
     with pytest.raises(TypeError, match="Mode subclass"):
-        register_mode(object.__new__(ConstantSpeedMode))      # an instance, not a class
+        register_mode(object.__new__(ConstantSpeedMode))  # an instance, not a class
 
     class Nameless(Mode):
         pass
+
     with pytest.raises(TypeError, match="with a name"):
         register_mode(Nameless)
 
     class BadConfig(Mode):
         name = "bad_config"
         config_class = dict
+
     with pytest.raises(TypeError, match="ModeConfig"):
         register_mode(BadConfig)
     assert "bad_config" not in MODES

@@ -3,6 +3,7 @@
 Every controller here leaves a marker file when its module is imported or its class constructed,
 so each test can assert that reading a scenario, a result or a sweep ran nothing.
 """
+
 from __future__ import annotations
 
 import json
@@ -67,11 +68,17 @@ def test_reading_a_scenario_never_imports_its_controller(tmp_path, marker):
     load_scenario(p)
     r = cli("validate", p)
     assert r.exit_code == 0, r.output
-    r = cli("validate", SCENARIOS / "tow6_uniform.yaml", "--set", f"mode={{type: controller, controller: "
-            f"'{tmp_path / 'proj' / 'ctl.py'}:Ctl', period_s: 0.1}}", "--allow-code", tmp_path / "proj")
+    r = cli(
+        "validate",
+        SCENARIOS / "tow6_uniform.yaml",
+        "--set",
+        f"mode={{type: controller, controller: '{tmp_path / 'proj' / 'ctl.py'}:Ctl', period_s: 0.1}}",
+        "--allow-code",
+        tmp_path / "proj",
+    )
     assert r.exit_code == 0, r.output
     r = cli("mobility-map", p, "--xt", "0.7:0.9:2", "--tow", "0", "--out", tmp_path / "mm", "--no-plot")
-    assert r.exit_code == 2                                 # a controller does not roll at one speed
+    assert r.exit_code == 2  # a controller does not roll at one speed
     assert not _ran(marker)
 
 
@@ -102,7 +109,7 @@ def test_load_result_never_runs_code_whatever_its_scenario_yaml_says(tmp_path, m
     back = load_result(tmp_path / "run")
     assert back.scenario.mode.controller.startswith(str(tmp_path / "run" / "evil.py"))
     assert not _ran(marker)
-    with pytest.raises(ScenarioError, match="load_result"):             # nor later, unless allowed
+    with pytest.raises(ScenarioError, match="load_result"):  # nor later, unless allowed
         simulate(back.scenario)
     assert not _ran(marker)
     simulate(back.scenario, allow_code=[tmp_path / "run"])
@@ -112,8 +119,11 @@ def test_load_result_never_runs_code_whatever_its_scenario_yaml_says(tmp_path, m
 def test_a_controller_outside_the_scenario_folder_needs_allow_code(tmp_path, marker):
     _controller(tmp_path / "elsewhere" / "ctl.py", marker)
     p = _scenario(tmp_path / "proj", "../elsewhere/ctl.py:Ctl")
-    for cmd in (["validate", p], ["run", p, "--out", tmp_path / "o", "--no-plot"],
-                ["sweep", p, "--set", "terrain.xt=0.8", "--out", tmp_path / "s", "--no-plot"]):
+    for cmd in (
+        ["validate", p],
+        ["run", p, "--out", tmp_path / "o", "--no-plot"],
+        ["sweep", p, "--set", "terrain.xt=0.8", "--out", tmp_path / "s", "--no-plot"],
+    ):
         r = cli(*cmd)
         assert r.exit_code == 2, r.output
         assert "outside the scenario's folder" in r.output and "--allow-code" in r.output
@@ -122,7 +132,7 @@ def test_a_controller_outside_the_scenario_folder_needs_allow_code(tmp_path, mar
         simulate(load_scenario(p))
     r = cli("run", p, "--out", tmp_path / "o", "--no-plot", "--allow-code", tmp_path / "elsewhere")
     assert r.exit_code == 0, r.output
-    assert "running controller code" in r.output                        # the notice (stderr) names the file
+    assert "running controller code" in r.output  # the notice (stderr) names the file
     assert str(tmp_path / "elsewhere" / "ctl.py") in r.output
     assert _ran(marker)
 
@@ -137,21 +147,24 @@ def test_a_symlink_cannot_escape_the_scenario_folder(tmp_path, marker):
     assert not _ran(marker)
 
 
-@pytest.mark.parametrize("ref, words", [
-    ("this:C", ["standard library"]),
-    ("builtins:print", ["standard library"]),
-    ("os.path:join", ["standard library"]),
-    ("tests.controller_helpers:schedule", ["no class 'schedule'", "Uniform"]),
-    ("tests.test_modes_codeload:ScenarioError", ["no class 'ScenarioError'"]),      # an import, not a definition
-    ("ctl:Ctl", ["not found"]),
-    ("a" * 5000 + ".py:C", ["longer than"]),
-    ("ctl\x00.py:Ctl", ["NUL"]),
-    ("ctl.txt/x:Ctl", ["does not end in .py"]),
-    ("loop.py:Ctl", ["cannot be used"]),
-    ("dir.py:Ctl", ["not a regular file"]),
-    ("broken.py:Ctl", ["does not parse"]),
-    ("fn.py:Ctl", ["no class 'Ctl'"]),
-])
+@pytest.mark.parametrize(
+    "ref, words",
+    [
+        ("this:C", ["standard library"]),
+        ("builtins:print", ["standard library"]),
+        ("os.path:join", ["standard library"]),
+        ("tests.controller_helpers:schedule", ["no class 'schedule'", "Uniform"]),
+        ("tests.test_modes_codeload:ScenarioError", ["no class 'ScenarioError'"]),  # an import, not a definition
+        ("ctl:Ctl", ["not found"]),
+        ("a" * 5000 + ".py:C", ["longer than"]),
+        ("ctl\x00.py:Ctl", ["NUL"]),
+        ("ctl.txt/x:Ctl", ["does not end in .py"]),
+        ("loop.py:Ctl", ["cannot be used"]),
+        ("dir.py:Ctl", ["not a regular file"]),
+        ("broken.py:Ctl", ["does not parse"]),
+        ("fn.py:Ctl", ["no class 'Ctl'"]),
+    ],
+)
 def test_bad_references_are_exit_2_naming_the_field_and_run_nothing(tmp_path, capsys, ref, words):
     (tmp_path / "proj").mkdir()
     os.symlink("loop.py", tmp_path / "proj" / "loop.py")
@@ -164,7 +177,7 @@ def test_bad_references_are_exit_2_naming_the_field_and_run_nothing(tmp_path, ca
     assert "mode.controller" in r.output and "internal error" not in r.output
     for w in words:
         assert w in r.output
-    assert "Beautiful is better than ugly" not in r.output + capsys.readouterr().out     # `this` never imported
+    assert "Beautiful is better than ugly" not in r.output + capsys.readouterr().out  # `this` never imported
 
 
 def test_a_module_reference_is_found_without_importing_its_packages(tmp_path, marker, monkeypatch):
@@ -189,7 +202,7 @@ def test_trust_problem_and_allow_code_nest(tmp_path):
         assert trust_problem(f"{f}:C", tmp_path / "b") is None
         assert trust_problem(f"{f}:C", None) is None
     assert "load_result" in trust_problem(f"{f}:C", None)
-    assert trust_problem("tests.controller_helpers:Uniform", None) is None    # an installed module: no file rule
+    assert trust_problem("tests.controller_helpers:Uniform", None) is None  # an installed module: no file rule
 
 
 def test_shipped_example_controllers_still_validate_and_run_from_their_folder(tmp_path):

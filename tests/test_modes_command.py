@@ -1,4 +1,5 @@
 """The controller contract (snoworm.modes.command): observations and held commands."""
+
 import numpy as np
 import pytest
 
@@ -25,17 +26,20 @@ def test_initially_motors_off_and_joints_holding(prismatic2):
     np.testing.assert_array_equal(c.torque_active, 0.0)
 
 
-@pytest.mark.parametrize("command, words", [
-    ({"wheel_speed": [1.0] * 6}, ["'wheel_speed'", "unknown", "wheel_speed_mps"]),
-    ({"wheel_speed_mps": [1.0] * 5}, ["'wheel_speed_mps'", "expected 6 values"]),
-    ({"wheel_speed_mps": [1.0] * 5 + [np.nan]}, ["'wheel_speed_mps'", "finite"]),
-    ({"wheel_torque_Nm": [1.0] * 5 + [np.inf]}, ["'wheel_torque_Nm'", "finite"]),
-    ({"wheel_lock": [0.5] * 6}, ["'wheel_lock'", "true/false"]),
-    ({"wheel_speed_mps": ["fast"] * 6}, ["'wheel_speed_mps'", "expected 6 numbers"]),
-    ({"joint_force_N": [1.0] * 5}, ["'joint_force_N'", "no prismatic joints"]),
-    ({"wheel_speed_mps": [1.0] * 6, "wheel_torque_Nm": [1.0] * 6}, ["not both"]),
-    ([1.0] * 6, ["mapping"]),
-])
+@pytest.mark.parametrize(
+    "command, words",
+    [
+        ({"wheel_speed": [1.0] * 6}, ["'wheel_speed'", "unknown", "wheel_speed_mps"]),
+        ({"wheel_speed_mps": [1.0] * 5}, ["'wheel_speed_mps'", "expected 6 values"]),
+        ({"wheel_speed_mps": [1.0] * 5 + [np.nan]}, ["'wheel_speed_mps'", "finite"]),
+        ({"wheel_torque_Nm": [1.0] * 5 + [np.inf]}, ["'wheel_torque_Nm'", "finite"]),
+        ({"wheel_lock": [0.5] * 6}, ["'wheel_lock'", "true/false"]),
+        ({"wheel_speed_mps": ["fast"] * 6}, ["'wheel_speed_mps'", "expected 6 numbers"]),
+        ({"joint_force_N": [1.0] * 5}, ["'joint_force_N'", "no prismatic joints"]),
+        ({"wheel_speed_mps": [1.0] * 6, "wheel_torque_Nm": [1.0] * 6}, ["not both"]),
+        ([1.0] * 6, ["mapping"]),
+    ],
+)
 def test_bad_commands_raise_naming_the_key_and_change_nothing(fixed6, command, words):
     cs = CommandState(fixed6)
     before = cs.apply({"wheel_speed_mps": [1.2] * 6})
@@ -64,7 +68,7 @@ def test_torque_command_and_lock_override(fixed6):
     np.testing.assert_array_equal(c.torque_active, [1, 1, 1, 1, 1, 0])
     np.testing.assert_array_equal(c.torque_cmd_Nm, [0, 1, 2, 3, 4, 0])
     np.testing.assert_array_equal(c.speed_sp_mps, 0.0)
-    c = cs.apply({"wheel_speed_mps": [1.5] * 6})       # the latest wheel key acts
+    c = cs.apply({"wheel_speed_mps": [1.5] * 6})  # the latest wheel key acts
     np.testing.assert_array_equal(c.torque_active, 0.0)
 
 
@@ -83,10 +87,10 @@ def test_direct_torque_is_clipped_to_the_motor_envelope(fixed6):
 def test_joint_commands_map_to_the_actuator(prismatic2):
     cs = CommandState(prismatic2)
     L = prismatic2.links
-    c = cs.apply({"joint_force_N": [150.0]})             # tension: the joint pulls
+    c = cs.apply({"joint_force_N": [150.0]})  # tension: the joint pulls
     assert (c.joint_active[0], c.joint_length_mode[0], c.joint_dir[0], c.joint_ff_N[0]) == (1, 0, -1, 150)
     assert c.joint_limit_N[0] == L.force_max_N[0]
-    c = cs.apply({"joint_force_N": [-80.0]})              # compression: it pushes
+    c = cs.apply({"joint_force_N": [-80.0]})  # compression: it pushes
     assert (c.joint_dir[0], c.joint_ff_N[0]) == (1, 80)
     c = cs.apply({"joint_length_m": [0.2]})
     assert (c.joint_length_mode[0], c.joint_sref_m[0], c.joint_vtarget_mps[0]) == (1, 0.2, L.rate_max_mps[0])
@@ -105,9 +109,20 @@ def test_observation_is_read_only_and_matches_the_outputs(prismatic2):
     with pytest.raises(AttributeError):
         obs.t_s = 2.0
     d = obs.as_dict()
-    assert set(d) == {"t_s", "x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt", "grade_deg", "link_force_N",
-                      "link_length_m", "joint_extension_m"}
-    d["slip"][0] = 9.0                                    # a copy
+    assert set(d) == {
+        "t_s",
+        "x_m",
+        "v_mps",
+        "wheel_speed_mps",
+        "slip",
+        "motor_torque_Nm",
+        "xt",
+        "grade_deg",
+        "link_force_N",
+        "link_length_m",
+        "joint_extension_m",
+    }
+    d["slip"][0] = 9.0  # a copy
     assert obs.slip[0] != 9.0
 
 
@@ -117,9 +132,19 @@ def test_command_keys_documented():
 
 def test_observation_from_values_for_unit_tests():
     from snoworm.modes import Observation
-    obs = Observation(t_s=1.0, x_m=[0.0, -1.5], v_mps=[1.0, 1.0], wheel_speed_mps=[1.1, 1.1], slip=[0.1, 0.1],
-                      motor_torque_Nm=[5.0, 5.0], xt=[0.9, 0.9], link_force_N=[3.0], link_length_m=[1.5],
-                      joint_extension_m=[0.0])
+
+    obs = Observation(
+        t_s=1.0,
+        x_m=[0.0, -1.5],
+        v_mps=[1.0, 1.0],
+        wheel_speed_mps=[1.1, 1.1],
+        slip=[0.1, 0.1],
+        motor_torque_Nm=[5.0, 5.0],
+        xt=[0.9, 0.9],
+        link_force_N=[3.0],
+        link_length_m=[1.5],
+        joint_extension_m=[0.0],
+    )
     assert obs.link_force_N[0] == 3.0 and obs.x_m.dtype == float
     with pytest.raises(ValueError):
         obs.x_m[0] = 2.0
@@ -133,12 +158,13 @@ def test_observation_keeps_the_state_it_was_made_from(fixed6):
     ctl = CommandState(fixed6).apply({"wheel_speed_mps": [1.0] * 6})
     expected = output_series(fixed6, y[None], ctl)[0]["v_mps"][0].copy()
     obs = observe(fixed6, y, ctl, 0.5)
-    y[:] = 0.0                                   # the caller's array changes afterwards
+    y[:] = 0.0  # the caller's array changes afterwards
     np.testing.assert_array_equal(obs.v_mps, expected)
 
 
 def test_batched_commands_give_the_stacked_controls(fixed6):
     from snoworm.model.inputs import Controls
+
     rng = np.random.default_rng(0)
     speeds = rng.uniform(0, 3, (4, 6))
     batched = CommandState(fixed6, batch=4).apply({"wheel_speed_mps": speeds})
@@ -147,7 +173,10 @@ def test_batched_commands_give_the_stacked_controls(fixed6):
         alone.append(CommandState(fixed6).apply({"wheel_speed_mps": speeds[b]}))
     stacked = Controls.stack(alone)
     for name in Controls.__dataclass_fields__:
-        np.testing.assert_array_equal(np.broadcast_to(getattr(batched, name), np.shape(getattr(stacked, name))),
-                                      getattr(stacked, name), err_msg=name)
+        np.testing.assert_array_equal(
+            np.broadcast_to(getattr(batched, name), np.shape(getattr(stacked, name))),
+            getattr(stacked, name),
+            err_msg=name,
+        )
     with pytest.raises(ValueError, match=r"shape \(6,\) \(batch 4\)"):
         CommandState(fixed6, batch=4).apply({"wheel_speed_mps": speeds[0]})

@@ -1,4 +1,5 @@
 """The controller mode (snoworm.modes.controller): loading, validation, the run, its errors."""
+
 import textwrap
 
 import numpy as np
@@ -58,21 +59,24 @@ def _mode(cls, period=0.05, **params):
 
 def test_relative_path_resolved_from_scenario_folder_and_recorded(tmp_path, monkeypatch):
     p = _write(tmp_path, GOOD, _mode("Const", v=1.5))
-    monkeypatch.chdir("/")                          # not the scenario's folder
+    monkeypatch.chdir("/")  # not the scenario's folder
     sc = load_scenario(p)
     assert sc.mode.controller == f"{(tmp_path / 'ctl' / 'mine.py').resolve()}:Const"
     dumped = sc.to_dict()["mode"]
     assert dumped["controller"] == sc.mode.controller and dumped["params"] == {"v": 1.5}
-    assert sc.with_({"mode.params.v": 1.2}).mode.params == {"v": 1.2}   # re-validates from the absolute path
+    assert sc.with_({"mode.params.v": 1.2}).mode.params == {"v": 1.2}  # re-validates from the absolute path
 
 
-@pytest.mark.parametrize("mode, words", [
-    (_mode("Nope"), ["mine.py", "no class 'Nope'", "Const"]),
-    ({**_mode("Const"), "controller": "ctl/missing.py:Const"}, ["missing.py", "does not exist"]),
-    ({**_mode("Const"), "controller": "ctl/mine.py"}, ["mode.controller", "ClassName"]),
-    ({**_mode("Const"), "controller": "no_such_pkg_xyz.mod:Const"}, ["not found", "no_such_pkg_xyz"]),
-    ({**_mode("Const", v=1.0), "period_s": 0}, ["mode.period_s", "greater than 0"]),
-])
+@pytest.mark.parametrize(
+    "mode, words",
+    [
+        (_mode("Nope"), ["mine.py", "no class 'Nope'", "Const"]),
+        ({**_mode("Const"), "controller": "ctl/missing.py:Const"}, ["missing.py", "does not exist"]),
+        ({**_mode("Const"), "controller": "ctl/mine.py"}, ["mode.controller", "ClassName"]),
+        ({**_mode("Const"), "controller": "no_such_pkg_xyz.mod:Const"}, ["not found", "no_such_pkg_xyz"]),
+        ({**_mode("Const", v=1.0), "period_s": 0}, ["mode.period_s", "greater than 0"]),
+    ],
+)
 def test_bad_controller_is_scenario_error(tmp_path, mode, words):
     p = _write(tmp_path, GOOD, mode)
     with pytest.raises(ScenarioError) as err:
@@ -82,7 +86,7 @@ def test_bad_controller_is_scenario_error(tmp_path, mode, words):
 
 
 def test_a_failing_constructor_is_scenario_error_when_the_run_starts_not_at_loading(tmp_path):
-    sc = load_scenario(_write(tmp_path, GOOD, _mode("BadCtor")))          # loading runs no code
+    sc = load_scenario(_write(tmp_path, GOOD, _mode("BadCtor")))  # loading runs no code
     with pytest.raises(ScenarioError) as err:
         simulate(sc)
     for w in ["mine.py:BadCtor", "constructing", "gain_missing"]:
@@ -101,7 +105,7 @@ def test_controller_raising_reports_time_and_only_user_frames(tmp_path):
     msg = str(err.value)
     assert msg.startswith("controller raised at t = 0.35 s:")
     assert "mine.py" in msg and "in inner" in msg and "my controller broke" in msg
-    assert "snoworm" not in msg.replace(str(tmp_path), "")   # no frame of the package
+    assert "snoworm" not in msg.replace(str(tmp_path), "")  # no frame of the package
 
 
 def test_bad_command_names_key_and_time(tmp_path):
@@ -111,9 +115,17 @@ def test_bad_command_names_key_and_time(tmp_path):
 
 
 def test_called_once_per_period_at_interval_starts():
-    sc = load_scenario(SCENARIOS / "tow6_uniform.yaml").with_({
-        "mode": {"type": "controller", "controller": "tests.controller_helpers:Uniform", "period_s": 0.1,
-                 "params": {"speed_mps": 1.8, "start_time_s": 0.5}}, "simulation.duration_s": 1.0})
+    sc = load_scenario(SCENARIOS / "tow6_uniform.yaml").with_(
+        {
+            "mode": {
+                "type": "controller",
+                "controller": "tests.controller_helpers:Uniform",
+                "period_s": 0.1,
+                "params": {"speed_mps": 1.8, "start_time_s": 0.5},
+            },
+            "simulation.duration_s": 1.0,
+        }
+    )
     res = simulate(sc)
     assert res.mode_summary["controller_calls"] == 10
     assert [p["t_start_s"] for p in res.phases] == pytest.approx(np.arange(10) * 0.1, abs=1e-12)
@@ -125,8 +137,16 @@ def test_called_once_per_period_at_interval_starts():
 def test_controller_run_equals_simulator_stepped_with_same_commands():
     """One stepping: a controller run and a Simulator stepped with the same commands give the same result."""
     base = load_scenario(SCENARIOS / "tow6_uniform.yaml").with_({"simulation.duration_s": 2.0})
-    sc = base.with_({"mode": {"type": "controller", "controller": "tests.controller_helpers:Scheduled",
-                              "period_s": 0.05, "params": {}}})
+    sc = base.with_(
+        {
+            "mode": {
+                "type": "controller",
+                "controller": "tests.controller_helpers:Scheduled",
+                "period_s": 0.05,
+                "params": {},
+            }
+        }
+    )
     ran = simulate(sc)
     sim = Simulator(base)
     obs = sim.reset()
@@ -142,20 +162,23 @@ def test_controller_run_equals_simulator_stepped_with_same_commands():
 
 def test_sweep_over_mode_params(tmp_path):
     from snoworm.studies.sweep import run_sweep
+
     p = _write(tmp_path, GOOD, _mode("Const", v=1.0), sim={"duration_s": 2.0})
     table = run_sweep(p, ["mode.params.v=1.0,1.6"], out_dir=tmp_path / "sw", plot=False)
     rows = table.rows if hasattr(table, "rows") else None
     text = (tmp_path / "sw" / "summary.csv").read_text().splitlines()
     assert len(text) == 3 and all(",ok," in line for line in text[1:]), text
     import csv
+
     recs = list(csv.DictReader(text))
     d = [float(r["distance_m"]) for r in recs]
-    assert d[1] > d[0] * 1.3          # faster wheels, farther
+    assert d[1] > d[0] * 1.3  # faster wheels, farther
     assert rows is None or len(rows) == 2
 
 
 def test_failing_controller_is_a_sweep_case_status(tmp_path):
     from snoworm.studies.sweep import STATUSES, run_case
+
     p = _write(tmp_path, GOOD, _mode("Raises"), sim={"duration_s": 1.0})
     raw = yaml.safe_load(p.read_text())
     out = run_case(SweepTask(0, raw=raw, source=str(p), base_dir=str(tmp_path)))
@@ -165,11 +188,12 @@ def test_failing_controller_is_a_sweep_case_status(tmp_path):
 
 def test_resolve_paths_takes_a_relative_file_from_the_given_folder_only(tmp_path):
     from snoworm.modes.controller import ControllerConfig
+
     raw = {"type": "controller", "controller": "ctl/my.py:Mine", "period_s": 0.1}
     out = ControllerConfig.resolve_paths(raw, tmp_path)
     assert out["controller"] == f"{(tmp_path / 'ctl' / 'my.py').resolve()}:Mine"
-    assert raw["controller"] == "ctl/my.py:Mine"                 # the given mapping is not changed
-    for spec in ("tests.controller_helpers:Schedule", "/abs/file.py:X", 3):     # a module, absolute, not text
+    assert raw["controller"] == "ctl/my.py:Mine"  # the given mapping is not changed
+    for spec in ("tests.controller_helpers:Schedule", "/abs/file.py:X", 3):  # a module, absolute, not text
         assert ControllerConfig.resolve_paths({**raw, "controller": spec}, tmp_path)["controller"] == spec
     with pytest.raises(ScenarioError, match=r"^mode\.controller: expected 'file\.py:ClassName'"):
         ControllerConfig.resolve_paths({**raw, "controller": "no colon.py"}, tmp_path)

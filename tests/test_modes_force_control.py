@@ -5,6 +5,7 @@ steady-state solver; forces within 2 N, set-points within 5 mm/s (the steady sol
 predictions agree with the simulation to < 1e-4 m/s; the tolerance leaves room for solver
 settings).
 """
+
 from __future__ import annotations
 
 import copy
@@ -31,8 +32,12 @@ def _run(name, overrides=()):
 def _final(res, window_s=0.5):
     """Means over the last ``window_s`` seconds: link forces, wheel nets, set-points, connector nets."""
     last = res.t >= res.t[-1] - window_s
-    return (res.links["force_N"][last].mean(0), res.segments["net_force_N"][last].mean(0),
-            res.segments["speed_setpoint_mps"][last].mean(0), res.segments["connector_net_N"][last].mean(0))
+    return (
+        res.links["force_N"][last].mean(0),
+        res.segments["net_force_N"][last].mean(0),
+        res.segments["speed_setpoint_mps"][last].mean(0),
+        res.segments["connector_net_N"][last].mean(0),
+    )
 
 
 def _raw(name):
@@ -48,9 +53,9 @@ def runs():
 def test_fig8_leader_zeroes_link_force(runs):
     T, W, sp, _ = _final(runs["pi2_zero"])
     assert abs(T[0]) < F_TOL_N
-    assert W[1] == pytest.approx(200.0, abs=F_TOL_N)          # the rear carries the whole tow
-    assert sp[0] == pytest.approx(1.679, abs=V_TOL_MPS)       # docs/model.md section 5, Fig 8
-    assert sp[1] == pytest.approx(1.8, abs=1e-9)              # the free rear segment at its nominal speed
+    assert W[1] == pytest.approx(200.0, abs=F_TOL_N)  # the rear carries the whole tow
+    assert sp[0] == pytest.approx(1.679, abs=V_TOL_MPS)  # docs/model.md section 5, Fig 8
+    assert sp[1] == pytest.approx(1.8, abs=1e-9)  # the free rear segment at its nominal speed
 
 
 def test_fig9_10_equal_links_middle_slowest(runs):
@@ -59,14 +64,14 @@ def test_fig9_10_equal_links_middle_slowest(runs):
     np.testing.assert_allclose(W, [100.0, 0.0, 100.0], atol=F_TOL_N)
     np.testing.assert_allclose(sp, [1.800, 1.747, 1.800], atol=V_TOL_MPS)
     assert np.argmin(sp) == 1
-    assert abs(C[1]) < F_TOL_N                                # zero net connector force on the middle
+    assert abs(C[1]) < F_TOL_N  # zero net connector force on the middle
 
 
 def test_fig11_middle_positive_connector_force(runs):
     T, W, sp, C = _final(runs["pi3_middle_positive"])
     np.testing.assert_allclose(T, [50.0, -50.0], atol=F_TOL_N)
     np.testing.assert_allclose(W, [50.0, -100.0, 250.0], atol=F_TOL_N)
-    assert C[1] > 90.0                                        # pulled ahead and pushed from behind: +100 N
+    assert C[1] > 90.0  # pulled ahead and pushed from behind: +100 N
     assert np.argmin(sp) == 1
 
 
@@ -82,7 +87,7 @@ def test_predicted_steady_state_matches_simulation(runs):
 def test_setpoints_within_limits(runs):
     for name, res in runs.items():
         sp = res.segments["speed_setpoint_mps"]
-        vmax = 0.265 * 18.326                                 # default v_max: the no-load wheel speed
+        vmax = 0.265 * 18.326  # default v_max: the no-load wheel speed
         assert sp.min() >= 0.0, name
         assert sp.max() <= vmax + 1e-9, name
 
@@ -91,10 +96,10 @@ def test_weak_segment_is_relieved(runs):
     res = runs["tow6_weak_segment"]
     T, W, _, _ = _final(res)
     others = np.delete(W, 2)
-    assert W[2] < 0.5 * others.min()                          # the weakened segment carries much less
+    assert W[2] < 0.5 * others.min()  # the weakened segment carries much less
     assert W[2] == pytest.approx(200.0 * 75.44 / (5 * 345.42 + 75.44), abs=F_TOL_N)
     np.testing.assert_allclose(others, others.mean(), atol=F_TOL_N)
-    assert W.sum() == pytest.approx(200.0, abs=F_TOL_N)       # the tow is carried in full
+    assert W.sum() == pytest.approx(200.0, abs=F_TOL_N)  # the tow is carried in full
     fc = res.mode_summary["force_control"]
     assert fc["drawbar_limited_by"][2] == "motor" and fc["drawbar_limited_by"][0] == "terrain"
 
@@ -102,7 +107,7 @@ def test_weak_segment_is_relieved(runs):
 def test_weak_segment_settles_within_duration(runs):
     res = runs["tow6_weak_segment"]
     ref = np.array(res.mode_summary["force_control"]["link_force_refs_N"])
-    late = res.t >= 10.0                                      # start at 1 s; settled by 10 s
+    late = res.t >= 10.0  # start at 1 s; settled by 10 s
     assert np.max(np.abs(res.links["force_N"][late] - ref)) < F_TOL_N
 
 
@@ -131,7 +136,9 @@ def test_impossible_target_exit_2(tmp_path):
     assert r.exit_code == 2
     assert "impossible target" in r.output and "segment 1" in r.output and "345" in r.output
     assert not out.exists()
-    r = runner.invoke(main, ["validate", str(SCEN / "pi3_equal.yaml"), "--set", "mode.targets.net_connector_N={1: -400}"])
+    r = runner.invoke(
+        main, ["validate", str(SCEN / "pi3_equal.yaml"), "--set", "mode.targets.net_connector_N={1: -400}"]
+    )
     assert r.exit_code == 2
     assert "mode.targets" in r.output and "impossible target" in r.output
 
@@ -156,19 +163,28 @@ def test_setpoint_above_vmax_exit_2():
     assert "max_speed_mps" in r.output
 
 
-@pytest.mark.parametrize("change, words", [
-    (lambda m: m["targets"].update(link_force_N=[1, 2]), ["mode.targets.link_force_N", "unknown key", "link_forces_N"]),
-    (lambda m: m.update(kp=1.0), ["mode.kp", "unknown key"]),
-    (lambda m: m["targets"].update(net_connector_N=None, link_forces_N=[100.0]), ["link_forces_N", "2 for 3 segments"]),
-    (lambda m: m["targets"].update(net_connector_N=None, load_shares=[0.5, 0.5]), ["load_shares", "(3)"]),
-    (lambda m: m["targets"].update(net_connector_N=None, load_shares=[0.5, 0.3, 0.3]), ["sum to 1"]),
-    (lambda m: m["targets"].update(net_connector_N=None, load_shares="evn"), ["unknown rule", "'even'"]),
-    (lambda m: m.update(targets={}), ["give a target"]),
-    (lambda m: m["targets"].update(link_forces_N=[1, 2]), ["cannot be combined"]),
-    (lambda m: m.update(free_segment=3), ["free_segment", "0..2"]),
-    (lambda m: m.update(speed_mps=[1.8, 1.8]), ["speed_mps", "3"]),
-    (lambda m: m["targets"].update(net_connector_N={5: 0}), ["net_connector_N.5", "out of range"]),
-])
+@pytest.mark.parametrize(
+    "change, words",
+    [
+        (
+            lambda m: m["targets"].update(link_force_N=[1, 2]),
+            ["mode.targets.link_force_N", "unknown key", "link_forces_N"],
+        ),
+        (lambda m: m.update(kp=1.0), ["mode.kp", "unknown key"]),
+        (
+            lambda m: m["targets"].update(net_connector_N=None, link_forces_N=[100.0]),
+            ["link_forces_N", "2 for 3 segments"],
+        ),
+        (lambda m: m["targets"].update(net_connector_N=None, load_shares=[0.5, 0.5]), ["load_shares", "(3)"]),
+        (lambda m: m["targets"].update(net_connector_N=None, load_shares=[0.5, 0.3, 0.3]), ["sum to 1"]),
+        (lambda m: m["targets"].update(net_connector_N=None, load_shares="evn"), ["unknown rule", "'even'"]),
+        (lambda m: m.update(targets={}), ["give a target"]),
+        (lambda m: m["targets"].update(link_forces_N=[1, 2]), ["cannot be combined"]),
+        (lambda m: m.update(free_segment=3), ["free_segment", "0..2"]),
+        (lambda m: m.update(speed_mps=[1.8, 1.8]), ["speed_mps", "3"]),
+        (lambda m: m["targets"].update(net_connector_N={5: 0}), ["net_connector_N.5", "out of range"]),
+    ],
+)
 def test_config_validation(change, words):
     raw = _raw("pi3_equal")
     m = raw["mode"]

@@ -4,6 +4,7 @@ targets -> link-force references, available drawbar pull, load-share rules.
 Conversions are exact sums (atol 1e-9 N); drawbar limits are checked against the hand formula
 of the module docstring (rel 1e-6) and the terrain's peak drawbar of docs/model.md section 2 (1 N).
 """
+
 from pathlib import Path
 
 import numpy as np
@@ -26,19 +27,22 @@ def test_available_drawbar_terrain_and_motor_limits():
     segs = sc.vehicle.segment_params()
     healthy, why_h = available_drawbar_N(0.9, segs[0], model.tp, 1.8)
     weak, why_w = available_drawbar_N(0.9, segs[2], model.tp, 1.8)
-    assert healthy == pytest.approx(345.0, abs=1.0) and why_h == "terrain"    # docs/model.md section 2 table
+    assert healthy == pytest.approx(345.0, abs=1.0) and why_h == "terrain"  # docs/model.md section 2 table
     F_n = 90 * 9.81 / 4
     T_rr = F_n * 0.265 * (0.1710 + 1.7096 * 0.1)
     assert weak == pytest.approx(4 * (25.0 - T_rr) / 0.265, rel=1e-6) and why_w == "motor"
 
 
-@pytest.mark.parametrize("targets, refs", [
-    ({"link_forces_N": [30.0, -20.0, 10.0]}, [30.0, -20.0, 10.0]),
-    ({"load_shares": "even"}, [50.0, 100.0, 150.0]),
-    ({"load_shares": [0.1, 0.2, 0.3, 0.4]}, [20.0, 60.0, 120.0]),
-    ({"net_connector_N": {1: 0.0}}, [200 / 3, 200 / 3, 400 / 3]),
-    ({"net_connector_N": {0: 20.0, 2: -10.0}, "load_shares": "even"}, [-20.0, 85.0, 95.0]),
-])
+@pytest.mark.parametrize(
+    "targets, refs",
+    [
+        ({"link_forces_N": [30.0, -20.0, 10.0]}, [30.0, -20.0, 10.0]),
+        ({"load_shares": "even"}, [50.0, 100.0, 150.0]),
+        ({"load_shares": [0.1, 0.2, 0.3, 0.4]}, [20.0, 60.0, 120.0]),
+        ({"net_connector_N": {1: 0.0}}, [200 / 3, 200 / 3, 400 / 3]),
+        ({"net_connector_N": {0: 20.0, 2: -10.0}, "load_shares": "even"}, [-20.0, 85.0, 95.0]),
+    ],
+)
 def test_target_conversion(targets, refs):
     raw = _raw("pi3_equal")
     raw["vehicle"]["segments"] = 4
@@ -64,4 +68,4 @@ def test_share_rules_favour_the_stronger_segment(rule):
     W = plan(sc.mode, sc, sc.chain_model).wheel_net_N
     assert W.sum() == pytest.approx(200.0, abs=1e-9)
     assert W[1] == pytest.approx(W[2], rel=1e-9)
-    assert W[0] > 1.05 * W[1]      # drawbar: 80 vs 60 N; inverse_slip: 70.6 vs 64.7 N
+    assert W[0] > 1.05 * W[1]  # drawbar: 80 vs 60 N; inverse_slip: 70.6 vs 64.7 N

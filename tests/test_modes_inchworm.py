@@ -1,4 +1,5 @@
 """Inchworm mode (paper section 5.1, Fig 5, Eqs. 4-6)."""
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
@@ -12,8 +13,8 @@ from tests.conftest import SCENARIOS
 FROSTYBOY_TERRAIN = terrain_params("frostyboy")
 
 FN = 90 * 9.81 / 4
-V_S = 0.002          # smooth-sign speed of the property test [m/s] (see test docstring)
-MARGIN = 0.10        # Eq. 4/5 margin, as a fraction of the terrain resistance involved
+V_S = 0.002  # smooth-sign speed of the property test [m/s] (see test docstring)
+MARGIN = 0.10  # Eq. 4/5 margin, as a fraction of the terrain resistance involved
 
 
 def two_segment_push(x_front, x_rear, force_N, duration=0.6):
@@ -21,13 +22,23 @@ def two_segment_push(x_front, x_rear, force_N, duration=0.6):
     the front with a constant force, front wheels driven forward at 2 m/s; a 1 m stroke so the
     phase outlasts the run.  Returns (front advance, rear advance) [m]."""
     raw = read_yaml(SCENARIOS / "inchworm2.yaml")
-    raw = apply_overrides(raw, [
-        ("terrain.profile", [[-0.95, x_rear], [-0.55, x_front]]),
-        ("terrain.model.sign_eps_mps", V_S), ("vehicle.links.stroke_max_m", 1.0),
-        ("vehicle.links.rate_max_mps", 5.0),
-        ("mode.gait", [[0], [1]]), ("mode.joint_control", "force"), ("mode.joint_force_N", force_N),
-        ("mode.hold_margin", None), ("mode.mover_wheel_speed_mps", 2.0), ("mode.start_time_s", 0.0),
-        ("simulation.duration_s", duration), ("simulation.output_dt_s", 0.01)])
+    raw = apply_overrides(
+        raw,
+        [
+            ("terrain.profile", [[-0.95, x_rear], [-0.55, x_front]]),
+            ("terrain.model.sign_eps_mps", V_S),
+            ("vehicle.links.stroke_max_m", 1.0),
+            ("vehicle.links.rate_max_mps", 5.0),
+            ("mode.gait", [[0], [1]]),
+            ("mode.joint_control", "force"),
+            ("mode.joint_force_N", force_N),
+            ("mode.hold_margin", None),
+            ("mode.mover_wheel_speed_mps", 2.0),
+            ("mode.start_time_s", 0.0),
+            ("simulation.duration_s", duration),
+            ("simulation.output_dt_s", 0.01),
+        ],
+    )
     res = simulate(scenario_from_dict(raw))
     x = res.segments["x_m"]
     return x[-1, 0] - x[0, 0], x[-1, 1] - x[0, 1]
@@ -57,11 +68,11 @@ def test_eqs_4_to_6_predict_a_simulated_push_phase(x_front, x_rear, force):
     """
     Ftr_f, Ftr_r = full_resistance(x_front), full_resistance(x_rear)
     Ft_peak = max(traction(i, x_front) for i in np.linspace(0, 1, 201))
-    anchor_hi = Ftr_r + traction(1.0, x_rear)      # sliding fast: locked wheels brake at slip 1
+    anchor_hi = Ftr_r + traction(1.0, x_rear)  # sliding fast: locked wheels brake at slip 1
     eq4_holds = force - Ftr_f > MARGIN * Ftr_f
     eq4_fails = force + Ft_peak - Ftr_f < -MARGIN * Ftr_f
     eq5_fails = force > (1 + MARGIN) * anchor_hi
-    eq5_holds = force < (1 - MARGIN) * Ftr_r       # creeping: locked-wheel slip ~ 0, resistance only
+    eq5_holds = force < (1 - MARGIN) * Ftr_r  # creeping: locked-wheel slip ~ 0, resistance only
     if not (eq4_holds or eq4_fails or eq5_fails or eq5_holds):
         return
     front, rear = two_segment_push(x_front, x_rear, force)
@@ -87,8 +98,8 @@ def inch6():
 def test_inchworm6_progresses_where_rolling_is_stuck(inch6):
     roll = simulate(load_scenario(SCENARIOS / "rolling6_xt025.yaml", ["simulation.duration_s=16"]))
     s_inch, s_roll = inch6.summary(), roll.summary()
-    assert s_inch["distance_m"] > 0.8                       # ~0.07 m/s of steady progress
-    assert abs(s_roll["distance_m"]) < 0.05                 # rolling: immobilised
+    assert s_inch["distance_m"] > 0.8  # ~0.07 m/s of steady progress
+    assert abs(s_roll["distance_m"]) < 0.05  # rolling: immobilised
     assert s_inch["gait_cycles"] >= 3
     # every segment advanced, none slid back overall
     adv = inch6.segments["x_m"][-1] - inch6.segments["x_m"][0]
@@ -142,9 +153,10 @@ def test_higher_xt_faster_less_sliding_lower_force(inch6):
 
 
 def test_user_gait_four_segments_one_at_a_time():
-    raw = apply_overrides(read_yaml(SCENARIOS / "inchworm6.yaml"),
-                          [("vehicle.segments", 4), ("mode.gait", [[3], [2], [1], [0]]),
-                           ("simulation.duration_s", 8)])
+    raw = apply_overrides(
+        read_yaml(SCENARIOS / "inchworm6.yaml"),
+        [("vehicle.segments", 4), ("mode.gait", [[3], [2], [1], [0]]), ("simulation.duration_s", 8)],
+    )
     res = simulate(scenario_from_dict(raw))
     assert np.all(res.segments["x_m"][-1] - res.segments["x_m"][0] > 0.2)
     assert res.summary()["gait_cycles"] >= 1

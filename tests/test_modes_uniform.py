@@ -1,4 +1,5 @@
 """Uniform wheel-speed mode (snoworm.modes.uniform): paper Figs 6-7 steady state (docs/model.md section 5)."""
+
 import numpy as np
 import pytest
 
@@ -8,6 +9,7 @@ from snoworm import load_scenario, simulate
 @pytest.fixture(scope="module")
 def fig6(request):
     from tests.conftest import SCENARIOS
+
     return simulate(load_scenario(SCENARIOS / "tow6_uniform.yaml"))
 
 
@@ -34,6 +36,7 @@ def test_steady_state_agrees_with_root_finder(fig6):
 
     from snoworm.config.params import parameter_set, terrain_params
     from snoworm.steady import steady_state
+
     FROSTYBOY_TERRAIN = terrain_params("frostyboy")
     seg = SimpleNamespace(**parameter_set("frostyboy")["segment"])
     ss = steady_state(0.9, seg, FROSTYBOY_TERRAIN, wheel_speed_mps=1.8, drawbar_N=200.0 / 6)

@@ -1,4 +1,5 @@
 """User code bounded by simulation.max_wall_s; a controller never ends the process (issue 24, high)."""
+
 from __future__ import annotations
 
 import signal
@@ -52,20 +53,22 @@ def _scenario(tmp_path, where, max_wall_s=1.0):
 
 
 @pytest.mark.skipif(not bounded(), reason="needs POSIX timers in the main thread")
-@pytest.mark.parametrize("where, words", [("call", ["max_wall_s", "at t = 0.3 s", "endless loop"]),
-                                          ("init", ["max_wall_s", "constructing"])])
+@pytest.mark.parametrize(
+    "where, words", [("call", ["max_wall_s", "at t = 0.3 s", "endless loop"]), ("init", ["max_wall_s", "constructing"])]
+)
 def test_a_controller_looping_forever_is_stopped_by_max_wall_s(tmp_path, where, words):
     sc = load_scenario(_scenario(tmp_path, where))
     with pytest.raises(ControllerError) as err:
         simulate(sc)
     for w in words:
         assert w in str(err.value)
-    assert signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)          # restored
+    assert signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)  # restored
     assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
 
 
-@pytest.mark.parametrize("where, words", [("exit", ["sys.exit(0)", "at t = 0.3 s"]),
-                                          ("exit_init", ["sys.exit(0)", "constructing"])])
+@pytest.mark.parametrize(
+    "where, words", [("exit", ["sys.exit(0)", "at t = 0.3 s"]), ("exit_init", ["sys.exit(0)", "constructing"])]
+)
 def test_a_controller_calling_sys_exit_is_exit_1_and_a_sweep_row(tmp_path, where, words):
     p = _scenario(tmp_path, where, max_wall_s=60)
     r = CliRunner().invoke(main, ["run", str(p), "--out", str(tmp_path / "o"), "--no-plot"])
@@ -83,11 +86,11 @@ def test_wall_limit_interrupts_a_loop_and_leaves_no_timer_behind():
         with wall_limit(time.perf_counter() + 0.2):
             while True:
                 pass
-    with wall_limit(time.perf_counter() + 30):     # returns in time: nothing raised, timer stopped
+    with wall_limit(time.perf_counter() + 30):  # returns in time: nothing raised, timer stopped
         x = sum(range(1000))
     assert x == 499500 and signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
-    with wall_limit(None):                         # no limit: a plain block
+    with wall_limit(None):  # no limit: a plain block
         pass
-    with pytest.raises(WallLimit):                 # a deadline already passed
+    with pytest.raises(WallLimit):  # a deadline already passed
         with wall_limit(time.perf_counter() - 1):
             pass

@@ -1,4 +1,5 @@
 """Plots (snoworm.plotting): the standard figures of a run are written as PNG files."""
+
 import pytest
 
 from snoworm import load_scenario, simulate
@@ -18,7 +19,7 @@ def test_plot_result_writes_pngs(tmp_path, name, extra):
         assert p.parent == tmp_path / "plots"
         data = p.read_bytes()
         assert data[:8] == PNG_MAGIC and len(data) > 10_000, p.name
-    assert sorted(x.name for x in (tmp_path / "plots").iterdir()) == sorted(expected)   # no temporary files left
+    assert sorted(x.name for x in (tmp_path / "plots").iterdir()) == sorted(expected)  # no temporary files left
 
 
 def test_library_never_changes_the_backend(tmp_path):
@@ -26,13 +27,14 @@ def test_library_never_changes_the_backend(tmp_path):
     not even imported) and Result.plot (a figure of pyplot's manager, so it can be shown)."""
     import subprocess
     import sys
+
     code = f"""
 import sys, matplotlib
 matplotlib.use("svg")
 import snoworm
 from snoworm import plotting
-res = snoworm.simulate(snoworm.load_scenario({str(SCENARIOS / 'tow6_uniform.yaml')!r}, ["simulation.duration_s=1"]))
-res.write({str(tmp_path / 'run')!r})
+res = snoworm.simulate(snoworm.load_scenario({str(SCENARIOS / "tow6_uniform.yaml")!r}, ["simulation.duration_s=1"]))
+res.write({str(tmp_path / "run")!r})
 assert "matplotlib.pyplot" not in sys.modules            # files only: no pyplot, no window
 fig = res.plot("forces")
 import matplotlib.pyplot as plt
@@ -55,15 +57,16 @@ def test_script_shows_the_figures_with_plt_show(tmp_path):
     figure manager holds it (show itself is a no-op there) and saving it from pyplot works."""
     import subprocess
     import sys
+
     code = f"""
 import matplotlib
 matplotlib.use("agg")
 import matplotlib.pyplot as plt
 import snoworm
-res = snoworm.simulate(snoworm.load_scenario({str(SCENARIOS / 'pi2_zero.yaml')!r}, ["simulation.duration_s=1"]))
+res = snoworm.simulate(snoworm.load_scenario({str(SCENARIOS / "pi2_zero.yaml")!r}, ["simulation.duration_s=1"]))
 fig = res.plot("positions", size="column")
 assert plt.gcf() is fig
-plt.savefig({str(tmp_path / 'gcf.png')!r})
+plt.savefig({str(tmp_path / "gcf.png")!r})
 plt.show()
 print("ok")
 """

@@ -1,4 +1,5 @@
 """The force diagram of a force-control run (snoworm.plotting.diagram)."""
+
 import dataclasses
 
 import numpy as np

@@ -1,4 +1,5 @@
 """Several runs on one figure (snoworm.plotting.overlay: snoworm.plotting.compare)."""
+
 import numpy as np
 import pytest
 

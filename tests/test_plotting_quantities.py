@@ -1,4 +1,5 @@
 """Slip, motor torque and power, energy along the run (snoworm.plotting.quantities)."""
+
 import numpy as np
 import pytest
 from matplotlib.figure import Figure
@@ -30,9 +31,14 @@ def test_slip_lines_with_a_dimensionless_unit(three):
 
 def test_a_gait_is_drawn_as_charts(inch):
     fig = inch.plot("motor")
-    meshes = [c for a in fig.axes if a.get_ylabel().startswith("segment") for c in a.collections
-              if c.__class__.__name__ == "QuadMesh"]
-    assert len(meshes) == 2                  # torque and power, a row per segment
+    meshes = [
+        c
+        for a in fig.axes
+        if a.get_ylabel().startswith("segment")
+        for c in a.collections
+        if c.__class__.__name__ == "QuadMesh"
+    ]
+    assert len(meshes) == 2  # torque and power, a row per segment
     np.testing.assert_array_equal(np.asarray(meshes[0].get_array()).reshape(6, -1), inch.segments["motor_torque_Nm"].T)
 
 

@@ -26,15 +26,18 @@ def _labels(ax):
 def test_inchworm_speeds_one_panel_per_moving_group(inch):
     fig = runs.plot_speeds(inch)
     groups = runs.moving_groups(inch)
-    assert groups == [(0, 3), (1, 4), (2, 5)]        # the six_segment gait's phases (paper Fig 5)
+    assert groups == [(0, 3), (1, 4), (2, 5)]  # the six_segment gait's phases (paper Fig 5)
     panels = [a for a in fig.axes if a.get_ylabel().startswith("ground speed")]
-    assert [_labels(a) for a in panels] == [["leader 0", "follower 3"], ["follower 1", "follower 4"],
-                                            ["follower 2", "follower 5"]]
-    for a in panels:     # the two traces of a pair overlap: they differ in colour, line style and marker
+    assert [_labels(a) for a in panels] == [
+        ["leader 0", "follower 3"],
+        ["follower 1", "follower 4"],
+        ["follower 2", "follower 5"],
+    ]
+    for a in panels:  # the two traces of a pair overlap: they differ in colour, line style and marker
         l1, l2 = a.get_lines()[:2]
         assert l1.get_color() != l2.get_color() and l1.get_marker() != l2.get_marker()
     chart = [a for a in fig.axes if a.get_ylabel().startswith("segment")]
-    assert len(chart) == 1 and len(chart[0].get_yticklabels()) == 6     # set-points as a chart, a row each
+    assert len(chart) == 1 and len(chart[0].get_yticklabels()) == 6  # set-points as a chart, a row each
 
 
 def test_uniform_speeds_one_panel(uniform):
@@ -68,15 +71,17 @@ def test_many_links_get_small_multiples_and_shaded_phases(inch):
     visible = [a for a in fig.axes if a.get_visible()]
     assert len(visible) == 5 + 6
     texts = sorted(t.get_text() for a in visible for t in a.texts)
-    assert texts == sorted([f"link {j} ({j}-{j + 1})" for j in range(5)] + ["leader 0"]
-                           + [f"follower {k}" for k in range(1, 6)])
-    assert all(len(a.get_lines()) <= 2 for a in visible)      # the series and the zero line
+    assert texts == sorted(
+        [f"link {j} ({j}-{j + 1})" for j in range(5)] + ["leader 0"] + [f"follower {k}" for k in range(1, 6)]
+    )
+    assert all(len(a.get_lines()) <= 2 for a in visible)  # the series and the zero line
     spans = runs.gait_spans(inch)
     assert len(spans) >= 3 and {k for *_, k, _ in spans} == {0, 1, 2}
     assert all(t1 > t0 for t0, t1, *_ in spans)
     pos = runs.plot_positions(inch)
-    assert not [ln for ln in pos.axes[0].get_lines() if ln.get_label().startswith("_child")
-                and np.ptp(ln.get_xdata()) == 0]                 # no vertical line per phase
+    assert not [
+        ln for ln in pos.axes[0].get_lines() if ln.get_label().startswith("_child") and np.ptp(ln.get_xdata()) == 0
+    ]  # no vertical line per phase
 
 
 def test_tow_far_off_scale_is_a_note_not_a_line(three):
@@ -87,7 +92,7 @@ def test_tow_far_off_scale_is_a_note_not_a_line(three):
         runs._tow_line(a, tow, F)
         assert bool([ln for ln in a.get_lines() if ln.get_label() == "tow"]) is line
         assert any("off scale" in t.get_text() for t in a.texts) is not line
-        assert a.get_ylim()[1] < F.max() + 0.5 * np.ptp(F) + 1     # the link traces keep the scale
+        assert a.get_ylim()[1] < F.max() + 0.5 * np.ptp(F) + 1  # the link traces keep the scale
 
 
 def test_supervisor_gets_one_speed_panel_per_moving_group():
@@ -97,8 +102,10 @@ def test_supervisor_gets_one_speed_panel_per_moving_group():
 
 def test_positions_side_panel_only_when_terrain_varies(uniform):
     assert len(runs.plot_positions(uniform).axes) == 1
-    patch = load_scenario(SCENARIOS / "tow6_uniform.yaml", [
-        "simulation.duration_s=1", ("terrain.patches", [{"start_m": -4.0, "end_m": -2.0, "xt": 0.5, "ramp_m": 0.5}])])
+    patch = load_scenario(
+        SCENARIOS / "tow6_uniform.yaml",
+        ["simulation.duration_s=1", ("terrain.patches", [{"start_m": -4.0, "end_m": -2.0, "xt": 0.5, "ramp_m": 0.5}])],
+    )
     fig = runs.plot_positions(simulate(patch))
     assert len(fig.axes) == 2 and fig.axes[0].get_xlabel() == "X_t"
 

@@ -1,4 +1,5 @@
 """Figures of the studies (snoworm.plotting.studies): sweeps, heat maps, mobility map, Table 2."""
+
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -13,29 +14,52 @@ def _mmap():
     for f in tows:
         for x in xts:
             rolling = x > 0.5 + f / 500
-            rows.append({"xt": x, "tow_N": f, "rolling": rolling, "inching": not rolling and x > 0.3,
-                         "region": "rolling" if rolling else ("inching only" if x > 0.3 else "immobile"),
-                         "rolling_energy_per_metre_J_per_m": 100.0 / x, "inching_energy_per_metre_J_per_m": 300.0,
-                         "inching_cheaper": False})
-    return {"regions": REGIONS, "xts": xts, "tows": tows, "rows": rows, "scenario": "test",
-            "rolling_limit_xt": {f: 0.5 + f / 500 for f in tows}, "wheel_speed_mps": 0.5}
+            rows.append(
+                {
+                    "xt": x,
+                    "tow_N": f,
+                    "rolling": rolling,
+                    "inching": not rolling and x > 0.3,
+                    "region": "rolling" if rolling else ("inching only" if x > 0.3 else "immobile"),
+                    "rolling_energy_per_metre_J_per_m": 100.0 / x,
+                    "inching_energy_per_metre_J_per_m": 300.0,
+                    "inching_cheaper": False,
+                }
+            )
+    return {
+        "regions": REGIONS,
+        "xts": xts,
+        "tows": tows,
+        "rows": rows,
+        "scenario": "test",
+        "rolling_limit_xt": {f: 0.5 + f / 500 for f in tows},
+        "wheel_speed_mps": 0.5,
+    }
 
 
 def test_mobility_map_cells_stay_within_the_grid():
     fig = studies.plot_mobility_map(_mmap())
     a1 = fig.axes[0]
-    assert a1.get_xlim() == (0.2, 1.0) and a1.get_ylim() == (0.0, 100.0)   # not to -25 N or X_t 0
-    mesh = a1.collections[0]           # rows: tows; at tow 50 N: immobile, inching only, rolling
+    assert a1.get_xlim() == (0.2, 1.0) and a1.get_ylim() == (0.0, 100.0)  # not to -25 N or X_t 0
+    mesh = a1.collections[0]  # rows: tows; at tow 50 N: immobile, inching only, rolling
     coords = mesh.get_coordinates()
     assert coords[..., 1].min() == 0.0 and coords[..., 1].max() == 100.0
     assert coords[..., 0].min() == 0.2 and coords[..., 0].max() == 1.0
-    assert mesh.get_array().reshape(3, 3)[1].tolist() == [REGIONS.index("immobile"), REGIONS.index("inching only"),
-                                                          REGIONS.index("rolling")]
+    assert mesh.get_array().reshape(3, 3)[1].tolist() == [
+        REGIONS.index("immobile"),
+        REGIONS.index("inching only"),
+        REGIONS.index("rolling"),
+    ]
 
 
 def test_sweep_axes_in_words_with_units():
-    fig = studies.plot_sweep([0.0, 100.0, 200.0], {"mean_speed_mps": [0.5, 0.4, None], "energy_per_m_J": [1, 2, 3]},
-                             "tow.force_N", immobilised=[False, False, True], ok=[True, True, False])
+    fig = studies.plot_sweep(
+        [0.0, 100.0, 200.0],
+        {"mean_speed_mps": [0.5, 0.4, None], "energy_per_m_J": [1, 2, 3]},
+        "tow.force_N",
+        immobilised=[False, False, True],
+        ok=[True, True, False],
+    )
     assert fig.axes[-1].get_xlabel() == "tow force [N]"
     assert [a.get_ylabel() for a in fig.axes] == ["mean speed [m/s]", "energy per metre [J/m]"]
     assert "tow.force_N" not in fig.axes[0].get_title()
@@ -44,15 +68,16 @@ def test_sweep_axes_in_words_with_units():
 def test_heatmap_on_the_users_axes():
     ax = Figure().subplots()
     v = np.array([[0.1, 0.2], [np.nan, 0.4]])
-    fig = studies.plot_sweep_heatmap(["0.5", "1"], ["0", "100"], v, "terrain.xt", "tow.force_N", "mean speed [m/s]",
-                                     failed=np.isnan(v), ax=ax)
+    fig = studies.plot_sweep_heatmap(
+        ["0.5", "1"], ["0", "100"], v, "terrain.xt", "tow.force_N", "mean speed [m/s]", failed=np.isnan(v), ax=ax
+    )
     assert fig is ax.figure
     assert ax.get_xlabel() == "terrain coefficient X_t" and ax.get_ylabel() == "tow force [N]"
     assert sorted(t.get_text() for t in ax.texts) == ["0.10", "0.20", "0.40", "failed"]
 
 
 def test_groundtruth_figures_in_the_chosen_format(tmp_path):
-    _, _, paths = run_groundtruth(tmp_path / "gt", plot_format="svg")     # each run owns its folder
+    _, _, paths = run_groundtruth(tmp_path / "gt", plot_format="svg")  # each run owns its folder
     _, _, paths2 = run_terrain_curves([1.0, 0.5], tmp_path / "tc", n_points=51, plot_format="pdf")
     assert [p.name for p in paths + paths2] == ["table2.csv", "table2.svg", "terrain_curves.csv", "terrain_curves.pdf"]
     assert b"<svg" in paths[1].read_bytes() and paths2[1].read_bytes()[:5] == b"%PDF-"
@@ -64,21 +89,47 @@ def test_study_figures_readable_at_column_width():
     from snoworm.plotting import FIGURE_SIZES, headless
     from snoworm.studies.groundtruth import terrain_curves, vehicle_model
     from tests.figure_checks import problems
+
     v = np.array([[0.1, 0.2, 0.3], [np.nan, 0.4, 0.5]])
-    rows = [{"case": k, "xt": 0.5 + 0.1 * k, "slip_measured": 0.1, "slip_model": 0.12, "torque_measured_Nm": 20.0,
-             "torque_model_Nm": 21.0} for k in range(1, 6)]
+    rows = [
+        {
+            "case": k,
+            "xt": 0.5 + 0.1 * k,
+            "slip_measured": 0.1,
+            "slip_model": 0.12,
+            "torque_measured_Nm": 20.0,
+            "torque_model_Nm": 21.0,
+        }
+        for k in range(1, 6)
+    ]
     with headless():
-        figs = {"mobility": studies.plot_mobility_map(_mmap(), size="column"),
-                "sweep": studies.plot_sweep([0.0, 100.0, 200.0], {"mean_speed_mps": [0.5, 0.4, None],
-                                                                   "energy_per_m_J": [1, 2, 3]}, "tow.force_N",
-                                            immobilised=[False, False, True], ok=[True, True, False], size="column"),
-                "heatmap": studies.plot_sweep_heatmap(["0.5", "0.75", "1"], ["0", "100"], v, "terrain.xt",
-                                                      "tow.force_N", "mean speed [m/s]", failed=np.isnan(v),
-                                                      size="column"),
-                "table2": studies.plot_table2(rows, size="column"),
-                "terrain curves": studies.plot_terrain_curves(terrain_curves([1.0, 0.5], *vehicle_model("frostyboy", None),
-                                                                             101), size="column")}
+        figs = {
+            "mobility": studies.plot_mobility_map(_mmap(), size="column"),
+            "sweep": studies.plot_sweep(
+                [0.0, 100.0, 200.0],
+                {"mean_speed_mps": [0.5, 0.4, None], "energy_per_m_J": [1, 2, 3]},
+                "tow.force_N",
+                immobilised=[False, False, True],
+                ok=[True, True, False],
+                size="column",
+            ),
+            "heatmap": studies.plot_sweep_heatmap(
+                ["0.5", "0.75", "1"],
+                ["0", "100"],
+                v,
+                "terrain.xt",
+                "tow.force_N",
+                "mean speed [m/s]",
+                failed=np.isnan(v),
+                size="column",
+            ),
+            "table2": studies.plot_table2(rows, size="column"),
+            "terrain curves": studies.plot_terrain_curves(
+                terrain_curves([1.0, 0.5], *vehicle_model("frostyboy", None), 101), size="column"
+            ),
+        }
     assert " ".join(figs["mobility"].axes[0].get_legend().get_title().get_text().split()).endswith(
-        "which modes move the vehicle")
+        "which modes move the vehicle"
+    )
     for name, fig in figs.items():
         assert problems(fig, FIGURE_SIZES["column"]) == [], name

@@ -1,4 +1,5 @@
 """The figures' style and plumbing (snoworm.plotting.style): labels, force text, saving, axes."""
+
 import struct
 
 import pytest
@@ -7,21 +8,33 @@ from matplotlib.figure import Figure
 from snoworm.plotting.style import COLOURS, DPI, force_text, new_figure, quantity_label, save, series_style
 
 
-@pytest.mark.parametrize("key, label", [
-    ("tow.force_N", "tow force [N]"),
-    ("terrain.xt", "terrain coefficient X_t"),
-    ("simulation.duration_s", "simulation duration [s]"),
-    ("vehicle.links.stiffness_N_per_m", "links stiffness [N/m]"),
-    ("mode.target_speed_mps", "mode target speed [m/s]"),
-    ("mean_speed_mps", "mean speed [m/s]"),
-])
+@pytest.mark.parametrize(
+    "key, label",
+    [
+        ("tow.force_N", "tow force [N]"),
+        ("terrain.xt", "terrain coefficient X_t"),
+        ("simulation.duration_s", "simulation duration [s]"),
+        ("vehicle.links.stiffness_N_per_m", "links stiffness [N/m]"),
+        ("mode.target_speed_mps", "mode target speed [m/s]"),
+        ("mean_speed_mps", "mean speed [m/s]"),
+    ],
+)
 def test_quantity_label_words_and_units(key, label):
     assert quantity_label(key) == label
-    assert "." not in quantity_label(key).split("[")[0]      # no dotted keys left
+    assert "." not in quantity_label(key).split("[")[0]  # no dotted keys left
 
 
-@pytest.mark.parametrize("value, text", [(-0.04, "0.0 N"), (-0.0, "0.0 N"), (0.049, "0.0 N"), (-1.26, "\u22121.3 N"),
-                                         (2, "+2.0 N"), (-165.33, "\u2212165.3 N")])
+@pytest.mark.parametrize(
+    "value, text",
+    [
+        (-0.04, "0.0 N"),
+        (-0.0, "0.0 N"),
+        (0.049, "0.0 N"),
+        (-1.26, "\u22121.3 N"),
+        (2, "+2.0 N"),
+        (-165.33, "\u2212165.3 N"),
+    ],
+)
 def test_force_text_never_prints_minus_zero(value, text):
     assert force_text(value) == text
 
@@ -44,11 +57,11 @@ def test_save_formats_and_resolution(tmp_path):
     fig.subplots().plot([0, 1], [1, 0])
     p = save(fig, tmp_path / "a.png")
     assert DPI >= 200 and _png_size(p) == (4 * DPI, 3 * DPI)
-    assert save(fig, tmp_path / "a.png", "pdf").read_bytes()[:5] == b"%PDF-"     # suffix follows the format
+    assert save(fig, tmp_path / "a.png", "pdf").read_bytes()[:5] == b"%PDF-"  # suffix follows the format
     assert b"<svg" in save(fig, tmp_path / "b", "svg").read_bytes()
     with pytest.raises(ValueError, match="png, pdf, svg"):
         save(fig, tmp_path / "c.jpg")
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.pdf", "a.png", "b.svg"]   # no temporary files
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.pdf", "a.png", "b.svg"]  # no temporary files
 
 
 def test_new_figure_uses_the_given_axes_or_figure():
@@ -77,8 +90,10 @@ from tests.figure_checks import problems  # noqa: E402
 
 @pytest.fixture(scope="module")
 def runs():
-    return {n: simulate(load_scenario(SCENARIOS / f"{n}.yaml", ["simulation.duration_s=4"]))
-            for n in ("inchworm6", "pi3_equal", "tow6_uniform")}
+    return {
+        n: simulate(load_scenario(SCENARIOS / f"{n}.yaml", ["simulation.duration_s=4"]))
+        for n in ("inchworm6", "pi3_equal", "tow6_uniform")
+    }
 
 
 @pytest.mark.parametrize("size", ["column", "page"])
@@ -142,7 +157,7 @@ def test_the_readability_check_can_fail():
     a = fig.subplots()
     for k in range(3):
         a.plot([0, 1], [k, k], label=f"a rather long label number {k}")
-    a.legend(loc="lower left", bbox_to_anchor=(0, 1.02, 1, 0.1), mode="expand", ncol=3)   # entries collide
+    a.legend(loc="lower left", bbox_to_anchor=(0, 1.02, 1, 0.1), mode="expand", ncol=3)  # entries collide
     a.set_xlabel("tiny", fontsize=5)
     a.text(1.5, 0.5, "far outside", transform=a.transAxes)
     found = " | ".join(problems(fig, 3.5))

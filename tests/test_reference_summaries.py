@@ -34,6 +34,7 @@ counts (the three paths differ by up to 9 %), gait intervals within one, output 
 two.  A deliberate numerical change (model, solver settings, scenario values) re-records the
 file (``python benchmarks/record_references.py summaries``) and says why in its commit.
 """
+
 import json
 from pathlib import Path
 
@@ -44,13 +45,15 @@ from tests.reference_quantities import COUNTS, SCALES, compared, is_gait, quanti
 
 REFERENCE = json.loads((Path(__file__).parent / "data" / "reference_summaries.json").read_text())
 SHIPPED = sorted(p.stem for p in SCENARIOS.glob("*.yaml"))
-SLOW = {"traverse_patch"}          # ~10 s: marked slow, still run by default
+SLOW = {"traverse_patch"}  # ~10 s: marked slow, still run by default
 K_SMOOTH, K_GAIT = 0.1, 10.0
 
 
 def kinked(scenario) -> bool:
     """Whether the axles cross breakpoints of an X_t table (the right-hand side has kinks there)."""
     return not scenario.terrain.compile().is_constant
+
+
 WORK_BAND = (0.8, 1.25)
 
 
@@ -62,15 +65,23 @@ def test_every_shipped_scenario_has_a_reference():
 
 def work_outside_band(got: dict, ref: dict) -> dict:
     """The counts of ``got`` outside their band around ``ref``: ``{name: (got, ref)}``."""
-    bad = {k: (got[k], ref[k]) for k in ("nfev", "njev")
-           if not WORK_BAND[0] * ref[k] <= got[k] <= WORK_BAND[1] * ref[k]}
+    bad = {
+        k: (got[k], ref[k]) for k in ("nfev", "njev") if not WORK_BAND[0] * ref[k] <= got[k] <= WORK_BAND[1] * ref[k]
+    }
     bad.update({k: (got[k], ref[k]) for k, slack in (("intervals", 1), ("n_t", 2)) if abs(got[k] - ref[k]) > slack})
     return bad
 
 
 def test_the_checks_can_fail():
-    ref = {"distance_m": 2.0, "max_abs_link_force_N": 400.0, "mean_link_force_N": [0.5, -0.5],
-           "nfev": 1000, "njev": 100, "intervals": 50, "n_t": 1549}
+    ref = {
+        "distance_m": 2.0,
+        "max_abs_link_force_N": 400.0,
+        "mean_link_force_N": [0.5, -0.5],
+        "nfev": 1000,
+        "njev": 100,
+        "intervals": 50,
+        "n_t": 1549,
+    }
     assert scaled_error({"distance_m": 2.0 + 2e-5}, ref, "distance_m") == pytest.approx(1e-5)
     assert scaled_error({"mean_link_force_N": [0.5, -0.1]}, ref, "mean_link_force_N") == pytest.approx(1e-3)
     assert work_outside_band(dict(ref), ref) == {}
@@ -85,5 +96,6 @@ def test_summary_matches_reference(name):
     errors = {k: scaled_error(got, ref, k) for k in compared(gait)}
     bad = {k: f"{e:.2e}" for k, e in errors.items() if e > tol}
     assert not bad, f"{name}: changed by more than {tol:.1e} of their scale: {bad}"
-    assert not work_outside_band(got, ref), f"{name}: solver work outside its band (got, reference): " \
-                                            f"{work_outside_band(got, ref)}"
+    assert not work_outside_band(got, ref), (
+        f"{name}: solver work outside its band (got, reference): {work_outside_band(got, ref)}"
+    )

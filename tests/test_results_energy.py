@@ -2,6 +2,7 @@
 
 The balance: motor work + joint work - dissipation - tow work = change of kinetic + spring energy.
 """
+
 import pytest
 
 from snoworm import load_scenario, simulate
@@ -10,10 +11,12 @@ from snoworm.results.energy import energy_balance, energy_metrics
 
 def test_energy_balance(scenario_path):
     """Motor work - dissipation - tow work = change of kinetic + spring energy (within 0.5 % of motor work)."""
-    sc = load_scenario(scenario_path("tow6_staggered"),
-                       ["simulation.output_dt_s=0.002", "simulation.rtol=1e-7", "simulation.duration_s=10"])
+    sc = load_scenario(
+        scenario_path("tow6_staggered"),
+        ["simulation.output_dt_s=0.002", "simulation.rtol=1e-7", "simulation.duration_s=10"],
+    )
     res = simulate(sc)
-    b = energy_balance(res)       # fixed links: throughput = |motor work| (no joint power)
+    b = energy_balance(res)  # fixed links: throughput = |motor work| (no joint power)
     assert b["joint_J"] == 0.0
     assert b["throughput_J"] > 1e4
     assert abs(b["residual_J"]) < 5e-3 * b["throughput_J"]
@@ -35,7 +38,7 @@ def test_energy_balance_inching(scenario_path):
     sc = load_scenario(scenario_path("inchworm6"), ["simulation.duration_s=5", "simulation.output_dt_s=0.005"])
     res = simulate(sc)
     b = energy_balance(res)
-    assert b["joint_J"] > 300 and b["motor_J"] > 300      # both sources matter
+    assert b["joint_J"] > 300 and b["motor_J"] > 300  # both sources matter
     assert abs(b["residual_J"]) < 5e-3 * b["throughput_J"]
     e = energy_metrics(res)
     assert e["joint_electrical_total_J"] == pytest.approx(sum(e["joint_mechanical_J"]) / 0.7, rel=1e-12)
@@ -47,10 +50,11 @@ def test_energy_along_ends_at_the_metrics_totals(scenario_path):
     import numpy as np
 
     from snoworm.results.energy import energy_along
+
     res = simulate(load_scenario(scenario_path("inchworm2"), ["simulation.duration_s=4"]))
     e, m = energy_along(res), energy_metrics(res)
     assert e["total_electrical_J"][0] == 0.0 and np.all(np.diff(e["total_electrical_J"]) >= 0)
     assert e["motor_electrical_J"][-1] == pytest.approx(m["motor_electrical_total_J"], rel=1e-9)
     assert e["joint_electrical_J"][-1] == pytest.approx(m["joint_electrical_total_J"], rel=1e-9)
-    assert m["joint_electrical_total_J"] > 0                     # inching: the joints do work
+    assert m["joint_electrical_total_J"] > 0  # inching: the joints do work
     assert e["distance_m"][-1] == pytest.approx(m["distance_m"], rel=1e-12)

@@ -1,4 +1,5 @@
 """Results as pandas tables and xarray Datasets (snoworm.results.frames, Result.to_pandas/to_xarray)."""
+
 import io
 
 import numpy as np

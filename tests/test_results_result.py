@@ -1,4 +1,5 @@
 """Results of a run (snoworm.results.result): documented columns only, CSV files that match the arrays."""
+
 import csv
 import io
 import json
@@ -36,8 +37,9 @@ def _parse(text):
     return rows[0], np.array(rows[1:], dtype=float)
 
 
-@pytest.mark.parametrize("table, columns, index", [("segments", SEGMENT_COLUMNS, "segment"),
-                                                   ("links", LINK_COLUMNS, "link")])
+@pytest.mark.parametrize(
+    "table, columns, index", [("segments", SEGMENT_COLUMNS, "segment"), ("links", LINK_COLUMNS, "link")]
+)
 def test_csv_round_trip(short_run, tmp_path, table, columns, index):
     """The written CSV parses back to the arrays at the printed precision (%.6g; t_s %.4f)."""
     short_run.write(tmp_path, plot=False)
@@ -61,20 +63,22 @@ def test_written_summary_and_scenario(short_run, tmp_path):
     # the resolved scenario re-loads to the same scenario
     again = scenario_from_dict(yaml.safe_load((tmp_path / "scenario.yaml").read_text()))
     assert again == short_run.scenario
-    assert not list(tmp_path.glob(".*.tmp*"))               # no temporary files left behind
+    assert not list(tmp_path.glob(".*.tmp*"))  # no temporary files left behind
 
 
 def test_time_stamps_resolve_the_output_interval(scenario_path):
     """output_dt_s = 1e-5: every printed t_s distinct (4 decimals used to print 180 000 duplicates)."""
     from snoworm.results.result import time_decimals
+
     assert time_decimals(0.05) == 4 and time_decimals(0.02) == 4 and time_decimals(1e-5) == 6
-    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.output_dt_s", 1e-5),
-                                                       ("simulation.duration_s", 0.002)])
+    sc = load_scenario(
+        scenario_path("tow6_uniform"), [("simulation.output_dt_s", 1e-5), ("simulation.duration_s", 0.002)]
+    )
     res = simulate(sc)
     rows = list(csv.reader(io.StringIO(res.segments_csv())))[1:]
     t = [r[0] for r in rows if r[1] == "0"]
     assert len(t) == len(set(t)) == res.t.size
-    np.testing.assert_allclose([float(x) for x in t], res.t, atol=1e-6)   # printed to 6 decimals
+    np.testing.assert_allclose([float(x) for x in t], res.t, atol=1e-6)  # printed to 6 decimals
 
 
 @pytest.mark.parametrize("name", ["tow6_uniform", "inchworm2"])
@@ -107,6 +111,7 @@ def test_load_result_of_a_folder_that_is_not_a_run(tmp_path):
 
 def test_result_plot_returns_the_figure(short_run):
     from matplotlib.figure import Figure
+
     ax = Figure().subplots()
     assert short_run.plot("positions", ax=ax) is ax.figure
     assert isinstance(short_run.plot("forces"), Figure)
@@ -118,6 +123,7 @@ def test_a_run_folder_written_before_the_grade_columns_reads_back_level(tmp_path
     """segments.csv without grade_deg, elevation_m, gravity_N (written before slopes existed, so on
     level ground) reads back with those columns zero; any other column set is refused."""
     from snoworm import load_result, load_scenario, simulate
+
     res = simulate(load_scenario("tow6_uniform", ["simulation.duration_s=1"]))
     res.write(tmp_path / "run")
     path = tmp_path / "run" / "segments.csv"
@@ -128,7 +134,7 @@ def test_a_run_folder_written_before_the_grade_columns_reads_back_level(tmp_path
     back = load_result(tmp_path / "run")
     np.testing.assert_array_equal(back.segments["grade_deg"], 0.0)
     np.testing.assert_allclose(back.segments["v_mps"], res.segments["v_mps"], rtol=1e-5, atol=1e-9)
-    path.write_text("\n".join(",".join(row.split(",")[:-1]) for row in lines) + "\n")       # drop another column
+    path.write_text("\n".join(",".join(row.split(",")[:-1]) for row in lines) + "\n")  # drop another column
     with pytest.raises(ValueError, match="unexpected columns"):
         load_result(tmp_path / "run")
 
@@ -138,21 +144,30 @@ def _tamper_csv(name, fn):
     def tamper(d):
         lines = (d / name).read_text().splitlines()
         (d / name).write_text("\n".join(fn(lines)) + "\n")
+
     return tamper
 
 
 def _set_yaml(key, value):
     def tamper(d):
         import yaml
+
         raw = yaml.safe_load((d / "scenario.yaml").read_text())
         raw["vehicle" if key == "segments" else "simulation"][key] = value
         (d / "scenario.yaml").write_text(yaml.safe_dump(raw))
+
     return tamper
 
 
 TAMPERED = {
-    "nan_value": ("segments.csv", _tamper_csv("segments.csv", lambda ls: ls[:3] + [ls[3].rsplit(",", 1)[0] + ",nan"] + ls[4:])),
-    "text_value": ("segments.csv", _tamper_csv("segments.csv", lambda ls: ls[:3] + [ls[3].replace(",", ",x", 1)] + ls[4:])),
+    "nan_value": (
+        "segments.csv",
+        _tamper_csv("segments.csv", lambda ls: ls[:3] + [ls[3].rsplit(",", 1)[0] + ",nan"] + ls[4:]),
+    ),
+    "text_value": (
+        "segments.csv",
+        _tamper_csv("segments.csv", lambda ls: ls[:3] + [ls[3].replace(",", ",x", 1)] + ls[4:]),
+    ),
     "header": ("segments.csv", _tamper_csv("segments.csv", lambda ls: ["t_s,segment,foo"] + ls[1:])),
     "segment_index": ("segments.csv", _tamper_csv("segments.csv", lambda ls: [ls[0], ls[2], ls[1]] + ls[3:])),
     "row_dropped": ("segments.csv", _tamper_csv("segments.csv", lambda ls: ls[:5] + ls[6:])),
@@ -175,7 +190,7 @@ def test_a_tampered_run_folder_raises_one_error_type_naming_the_file(tmp_path, k
     res = simulate(load_scenario(SCENARIOS / "tow6_uniform.yaml", ["simulation.duration_s=0.5"]))
     d = tmp_path / "run"
     res.write(d, plot=False)
-    load_result(d)                                   # intact: reads back
+    load_result(d)  # intact: reads back
     name, tamper = TAMPERED[kind]
     tamper(d)
     with pytest.raises(ResultFileError) as err:
@@ -185,7 +200,8 @@ def test_a_tampered_run_folder_raises_one_error_type_naming_the_file(tmp_path, k
 
 def test_write_records_the_command_it_is_given(short_run, tmp_path):
     from snoworm.infra.folders import read_manifest
+
     short_run.write(tmp_path / "given", plot=False, command="snoworm run x.yaml --out given")
     assert read_manifest(tmp_path / "given")["command"] == "snoworm run x.yaml --out given"
-    short_run.write(tmp_path / "default", plot=False)          # default: this process's command line
+    short_run.write(tmp_path / "default", plot=False)  # default: this process's command line
     assert read_manifest(tmp_path / "default")["command"] != "snoworm run x.yaml --out given"

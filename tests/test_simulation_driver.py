@@ -5,6 +5,7 @@ the wall-clock side, docs/performance.md).  A change that makes the solver work 
 here; one that makes it cheaper should lower the budget.  The Figs 6-7 steady state is in
 test_modes_uniform.py, the energy balance in test_results_energy.py.
 """
+
 import numpy as np
 import pytest
 
@@ -17,6 +18,7 @@ from tests.conftest import assert_metrics_close, shipped_result
 
 def test_solver_failure_raises(monkeypatch, scenario_path):
     import importlib
+
     S = importlib.import_module("snoworm.simulation.driver")
     interval = importlib.import_module("snoworm.simulation.interval")
 
@@ -25,6 +27,7 @@ def test_solver_failure_raises(monkeypatch, scenario_path):
         t = np.array([0.0])
         y = np.zeros((36, 1))
         t_events = None
+
     monkeypatch.setattr(interval, "solve_ivp", lambda *a, **k: Bad())
     with pytest.raises(SolverError, match="step size"):
         S.simulate(load_scenario(scenario_path("tow6_uniform")))
@@ -34,12 +37,18 @@ def test_solver_failure_raises(monkeypatch, scenario_path):
 #: frostyboy_case3 482 / 8 (LSODA); inchworm6 8 906 / 263, inchworm2 5 106 / 165 and traverse_patch
 #: 43 473 / 1 150 (VODE, rtol 1e-5, atol_scale 3, wheel speeds' atol 10x more; before that
 #: 10 424 / 290, 6 033 / 210 and 47 792 / 1 191; traverse_patch was 58 961 / 6 271 on LSODA)
-BUDGETS = {"tow6_uniform": (690, 23), "frostyboy_case3": (555, 10), "inchworm6": (10_250, 305), "inchworm2": (5_900, 190),
-           "traverse_patch": (50_000, 1_325)}
+BUDGETS = {
+    "tow6_uniform": (690, 23),
+    "frostyboy_case3": (555, 10),
+    "inchworm6": (10_250, 305),
+    "inchworm2": (5_900, 190),
+    "traverse_patch": (50_000, 1_325),
+}
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "traverse_patch" else n
-                                  for n in sorted(BUDGETS)])
+@pytest.mark.parametrize(
+    "name", [pytest.param(n, marks=pytest.mark.slow) if n == "traverse_patch" else n for n in sorted(BUDGETS)]
+)
 def test_solver_work_budget(name):
     res = shipped_result(name)
     nfev, njev = BUDGETS[name]
@@ -51,9 +60,13 @@ CASES = [(0.6, 0.0, 1.8), (0.75, 100.0, 1.5), (0.9, 200.0, 1.8), (1.0, 300.0, 2.
 
 
 def test_batched_runs_match_one_by_one(scenario_path):
-    scs = [load_scenario(scenario_path("tow6_uniform"),
-                         [("terrain.xt", xt), ("tow.force_N", f), ("mode.speed_mps", v), ("simulation.duration_s", 4)])
-           for xt, f, v in CASES]
+    scs = [
+        load_scenario(
+            scenario_path("tow6_uniform"),
+            [("terrain.xt", xt), ("tow.force_N", f), ("mode.speed_mps", v), ("simulation.duration_s", 4)],
+        )
+        for xt, f, v in CASES
+    ]
     assert len({batch_key(sc) for sc in scs}) == 1
     batched = simulate_batch(scs)
     for sc, mb in zip(scs, batched):
@@ -63,15 +76,17 @@ def test_batched_runs_match_one_by_one(scenario_path):
 
 
 def _short_inchworm(scenario_path, method):
-    return simulate(load_scenario(scenario_path("inchworm2"), [("simulation.duration_s", 6),
-                                                               ("simulation.method", method)]))
+    return simulate(
+        load_scenario(scenario_path("inchworm2"), [("simulation.duration_s", 6), ("simulation.method", method)])
+    )
 
 
 def test_vode_matches_lsoda_within_tolerance(scenario_path):
     vode, lsoda = _short_inchworm(scenario_path, "VODE"), _short_inchworm(scenario_path, "LSODA")
     assert [p["label"] for p in vode.phases] == [p["label"] for p in lsoda.phases]
-    np.testing.assert_allclose([p["t_end_s"] for p in vode.phases], [p["t_end_s"] for p in lsoda.phases],
-                               rtol=0, atol=2e-3)
+    np.testing.assert_allclose(
+        [p["t_end_s"] for p in vode.phases], [p["t_end_s"] for p in lsoda.phases], rtol=0, atol=2e-3
+    )
     np.testing.assert_allclose(vode.segments["x_m"][-1], lsoda.segments["x_m"][-1], rtol=0, atol=1e-4)
     assert vode.stats.get("retries", 0) == 0
     assert vode.stats["njev"] < lsoda.stats["njev"]
@@ -85,20 +100,23 @@ def test_vode_failure_falls_back_per_interval(monkeypatch, scenario_path):
         if len(calls) % 2:
             raise VodeError(f"VODE failed near t = {self.t:.6g} s (istate -4)")
         return real(self, t1, events, t_eval, on_step)
+
     real = VodeStepper.advance
     monkeypatch.setattr(VodeStepper, "advance", fail_every_other)
     res = _short_inchworm(scenario_path, "VODE")
     ref = _short_inchworm(scenario_path, "LSODA")
-    assert res.stats["retries"] == (len(calls) + 1) // 2            # each failed interval ran on LSODA
+    assert res.stats["retries"] == (len(calls) + 1) // 2  # each failed interval ran on LSODA
     np.testing.assert_allclose(res.segments["x_m"][-1], ref.segments["x_m"][-1], rtol=0, atol=1e-4)
 
 
 def test_vode_every_method_failing_raises(monkeypatch, scenario_path):
     import importlib
+
     interval = importlib.import_module("snoworm.simulation.interval")
 
     def boom(*a, **k):
         raise ValueError("no luck")
+
     monkeypatch.setattr(VodeStepper, "advance", lambda self, *a, **k: boom())
     monkeypatch.setattr(interval, "solve_ivp", boom)
     with pytest.raises(SolverError, match="VODE: no luck; LSODA: no luck; BDF: no luck; Radau: no luck"):
@@ -107,8 +125,13 @@ def test_vode_every_method_failing_raises(monkeypatch, scenario_path):
 
 def test_batched_members_on_vode_are_stacked_on_lsoda(scenario_path):
     """A stack keeps LSODA (max-norm error test per member) when the members ask for VODE."""
-    scs = [load_scenario(scenario_path("tow6_uniform"), [("terrain.xt", xt), ("simulation.duration_s", 3),
-                                                         ("simulation.method", "VODE")]) for xt in (0.6, 0.9)]
+    scs = [
+        load_scenario(
+            scenario_path("tow6_uniform"),
+            [("terrain.xt", xt), ("simulation.duration_s", 3), ("simulation.method", "VODE")],
+        )
+        for xt in (0.6, 0.9)
+    ]
     batched = simulate_batch(scs)
     for sc, mb in zip(scs, batched):
         assert mb.status == "ok" and mb.result.stats["batch_size"] == 2
@@ -118,6 +141,7 @@ def test_batched_members_on_vode_are_stacked_on_lsoda(scenario_path):
 def test_vode_carries_its_history_across_simulator_steps(scenario_path):
     """Simulator (its IntervalSolver carries VODE's history) on VODE: no restart per 10 ms step, same states, far less work."""
     from snoworm.simulation.stepwise import Simulator
+
     sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.method", "VODE"), ("simulation.duration_s", 3)])
     runs = {}
     for cont in (True, False):
@@ -135,6 +159,7 @@ def test_vode_carries_its_history_across_simulator_steps(scenario_path):
 
 def test_only_the_controller_mode_continues_the_solver():
     from snoworm.modes import MODES
+
     assert {name for name, cls in MODES.items() if cls.continue_solver} == {"controller"}
 
 
@@ -156,6 +181,7 @@ def test_solver_fallbacks_are_logged(monkeypatch, scenario_path, caplog):
     import logging
 
     from snoworm.simulation import interval
+
     real, calls = interval.solve_ivp, []
 
     def flaky(*a, **kw):
@@ -163,6 +189,7 @@ def test_solver_fallbacks_are_logged(monkeypatch, scenario_path, caplog):
         if len(calls) == 1:
             raise ValueError("injected")
         return real(*a, **kw)
+
     monkeypatch.setattr(interval, "solve_ivp", flaky)
     sc = load_scenario(scenario_path("frostyboy_case1")).with_({"simulation.duration_s": 1.0})
     with caplog.at_level(logging.INFO, logger="snoworm"):
@@ -177,12 +204,16 @@ FC_CASES = [(0.9, 200.0, 1.8), (0.75, 150.0, 1.6), (1.0, 250.0, 2.0), (0.85, 100
 
 def test_batched_force_control_matches_one_by_one(scenario_path):
     """Force control has no state events: a stack of it equals its members run one by one."""
-    scs = [load_scenario(scenario_path("pi3_equal"),
-                         [("terrain.xt", xt), ("tow.force_N", f), ("mode.speed_mps", v), ("simulation.duration_s", 6)])
-           for xt, f, v in FC_CASES]
+    scs = [
+        load_scenario(
+            scenario_path("pi3_equal"),
+            [("terrain.xt", xt), ("tow.force_N", f), ("mode.speed_mps", v), ("simulation.duration_s", 6)],
+        )
+        for xt, f, v in FC_CASES
+    ]
     assert len({batch_key(sc) for sc in scs}) == 1
     other = load_scenario(scenario_path("pi3_equal"), [("mode.start_time_s", 0.5)])
-    assert batch_key(other) != batch_key(scs[0])        # other intervals: another stack
+    assert batch_key(other) != batch_key(scs[0])  # other intervals: another stack
     batched = simulate_batch(scs)
     for sc, mb in zip(scs, batched):
         assert mb.status == "ok", mb.error

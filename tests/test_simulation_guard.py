@@ -1,5 +1,6 @@
 """The guard around every solve (snoworm.simulation.guard, issue 15): work limit, wall-time limit,
 solver breakdowns and runaway states end a run with SolverError; shipped runs stay far inside."""
+
 import pytest
 
 from snoworm import SolverError, load_scenario, simulate
@@ -18,7 +19,7 @@ def test_work_limit_ends_a_too_stiff_run(monkeypatch, scenario_path):
     monkeypatch.setattr(sc.chain_model, "rhs", lambda *a: calls.append(1) or real(*a))
     with pytest.raises(SolverError, match=r"work limit: \d+ right-hand-side evaluations by t = .* too stiff"):
         simulate(sc)
-    assert len(calls) <= 2_000 + guard.work_rate(sc.simulation) * 1e-3     # stopped within the budget
+    assert len(calls) <= 2_000 + guard.work_rate(sc.simulation) * 1e-3  # stopped within the budget
 
 
 def test_work_limit_leaves_shipped_runs_alone(scenario_path):
@@ -30,7 +31,7 @@ def test_work_limit_leaves_shipped_runs_alone(scenario_path):
 
 def test_work_rate_grows_with_tighter_tolerances(scenario_path):
     sc = load_scenario(scenario_path("tow6_uniform"))
-    assert work_rate(sc.simulation) == WORK_NFEV_PER_S                       # rtol 1e-5, atol_scale 1
+    assert work_rate(sc.simulation) == WORK_NFEV_PER_S  # rtol 1e-5, atol_scale 1
     tight = sc.with_({"simulation.rtol": 1e-9, "simulation.atol_scale": 1e-3})
     assert work_rate(tight.simulation) == pytest.approx(10 * WORK_NFEV_PER_S)  # (1e-5 / 1e-9)^(1/4)
 
@@ -50,8 +51,9 @@ def test_runaway_chain_is_a_solver_failure(scenario_path):
 
 def test_singular_matrix_is_a_solver_failure(scenario_path):
     """A wheel of (almost) no inertia makes the Newton matrix singular: SolverError, not a crash."""
-    sc = load_scenario(scenario_path("tow6_uniform"), [("vehicle.segment.wheel_inertia_kgm2", 1e-300),
-                                                       ("simulation.duration_s", 3)])
+    sc = load_scenario(
+        scenario_path("tow6_uniform"), [("vehicle.segment.wheel_inertia_kgm2", 1e-300), ("simulation.duration_s", 3)]
+    )
     with pytest.raises(SolverError):
         simulate(sc)
 
@@ -79,10 +81,13 @@ def test_progress_within_a_long_interval(monkeypatch):
     from snoworm import load_scenario, simulate
     from snoworm.simulation import guard
     from tests.conftest import SCENARIOS
+
     monkeypatch.setattr(guard, "PROGRESS_EVERY_S", 0.0)
     calls = []
-    res = simulate(load_scenario(SCENARIOS / "tow6_uniform.yaml", ["simulation.duration_s=20"]),
-                   progress=lambda t, T: calls.append((t, T)))
+    res = simulate(
+        load_scenario(SCENARIOS / "tow6_uniform.yaml", ["simulation.duration_s=20"]),
+        progress=lambda t, T: calls.append((t, T)),
+    )
     within = [t for t, _ in calls if 0.0 < t < 20.0]
     assert res.stats["intervals"] <= 3 and len(within) >= 5
     assert all(T == 20.0 for _, T in calls) and calls[-1][0] == 20.0

@@ -1,5 +1,6 @@
 """The interval solve (snoworm.simulation.interval): one IntervalSolver per run owns the counters,
 the options of each method and the VODE stepper; tolerances per field; the output grid."""
+
 import numpy as np
 import pytest
 
@@ -11,6 +12,7 @@ from snoworm.simulation.vode import VodeStepper
 
 def test_atol_per_field_scales_only_the_named_fields(scenario_path):
     from snoworm.simulation.interval import ATOL, atol_per_field, solver_options
+
     sc = load_scenario(scenario_path("inchworm6"), [("simulation.atol_scale_fields", {"omega_rear": 7.0})])
     sim = sc.simulation
     got = atol_per_field(sim)
@@ -18,7 +20,7 @@ def test_atol_per_field_scales_only_the_named_fields(scenario_path):
     # the same products (in another order of multiplication: to rounding)
     np.testing.assert_allclose(list(got.values()), np.array(list(ATOL.values())) * scale, rtol=1e-15)
     assert got["omega_rear"] == pytest.approx(ATOL["omega_rear"] * sim.atol_scale * 7.0, rel=1e-15)
-    assert got["omega_front"] == ATOL["omega_front"] * sim.atol_scale    # no factor: unchanged
+    assert got["omega_front"] == ATOL["omega_front"] * sim.atol_scale  # no factor: unchanged
     m = sc.chain_model
     atol = solver_options(m, sim)["atol"]
     assert atol[m.layout.flat_index(3, "omega_rear")] == got["omega_rear"]
@@ -30,8 +32,8 @@ def test_output_grid_is_the_multiples_of_dt_inside_and_the_ends():
     assert output_grid(0.0, 0.2, 0.05, False) == pytest.approx([0.05, 0.1, 0.15, 0.2], abs=1e-15)
     g = output_grid(0.123, 0.31, 0.05, False)
     assert g[-1] == 0.31 and g[:-1] == [k * 0.05 for k in (3, 4, 5, 6)]
-    assert output_grid(0.1, 0.1 + 1e-12, 0.05, False) == [0.1 + 1e-12]        # no multiple strictly inside
-    assert isinstance(output_grid(0.0, 1.0, 0.1, True), list)                   # walked by index, no arrays
+    assert output_grid(0.1, 0.1 + 1e-12, 0.05, False) == [0.1 + 1e-12]  # no multiple strictly inside
+    assert isinstance(output_grid(0.0, 1.0, 0.1, True), list)  # walked by index, no arrays
 
 
 @pytest.mark.parametrize("method", ["LSODA", "VODE"])
@@ -45,10 +47,11 @@ def test_one_solver_per_run_accumulates_its_work_and_finds_events(scenario_path,
     assert which is None and t1 == 0.5 and ts[-1] == 0.5 and ys.shape == (len(ts), y.size)
     first = dict(solver.stats)
     assert first["intervals"] == 1 and first["nfev"] > 0
-    assert solver.options(method) is solver.options(method)                     # built once per run
+    assert solver.options(method) is solver.options(method)  # built once per run
 
-    def moved(t, yy):                          # the leader reaches 2 m: a terminal event
+    def moved(t, yy):  # the leader reaches 2 m: a terminal event
         return yy[case.model.layout.flat_index(0, "x_m")] - 2.0
+
     moved.direction = 1
     ts, ys, t2, y2, which = solver.solve(ctl, t1, 5.0, y1, [moved], output_grid(t1, 5.0, 0.05, False))
     assert which == 0 and 0.5 < t2 < 5.0 and ts[-1] == t2

@@ -1,4 +1,5 @@
 """Step-by-step simulation (snoworm.simulation.stepwise.Simulator)."""
+
 import numpy as np
 import pytest
 
@@ -26,7 +27,7 @@ def test_reset_step_result(tow6):
     np.testing.assert_array_equal(res.segments["x_m"][-1], obs.x_m)
     s = res.summary()
     assert s["distance_m"] > 0.3 and s["solver"]["intervals"] == 10
-    obs = sim.reset()                                    # back to the start, nothing kept
+    obs = sim.reset()  # back to the start, nothing kept
     assert obs.t_s == 0.0 and np.all(obs.x_m == sim.observation().x_m)
     with pytest.raises(ValueError, match="step"):
         sim.result()
@@ -85,13 +86,13 @@ def test_wheel_lock_holds_the_wheels(tow6):
 
 
 def test_joint_force_and_length_commands_through_the_actuator():
-    sc = load_scenario(SCENARIOS / "inchworm2.yaml")     # starts fully extended
+    sc = load_scenario(SCENARIOS / "inchworm2.yaml")  # starts fully extended
     L = sc.chain_model.links
     sim = Simulator(sc)
     s0 = sim.reset().joint_extension_m[0]
     assert s0 == pytest.approx(L.stroke_max_m[0])
     sim.step({"wheel_lock": [True, True]}, 0.5)
-    for ref in (80.0, 200.0):                               # tension: the joint pulls
+    for ref in (80.0, 200.0):  # tension: the joint pulls
         obs = sim.step({"joint_force_N": [ref]}, 1.0)
         assert obs.link_force_N[0] == pytest.approx(ref, abs=1.0)
     # length command: the extension moves towards it no faster than the actuator's rate limit
@@ -100,27 +101,29 @@ def test_joint_force_and_length_commands_through_the_actuator():
     assert 0 < s0 - obs.joint_extension_m[0] <= L.rate_max_mps[0] * 0.1 + 1e-6
     obs = sim.step(None, 2.0)
     assert obs.joint_extension_m[0] == pytest.approx(0.1, abs=0.005)
-    obs = sim.step({"joint_force_N": [-120.0]}, 0.5)       # compression, away from the end stops
+    obs = sim.step({"joint_force_N": [-120.0]}, 0.5)  # compression, away from the end stops
     assert obs.link_force_N[0] == pytest.approx(-120.0, abs=1.0)
-    obs = sim.step({"joint_length_m": [-5.0]}, 3.0)        # beyond the stroke: held at the end stop
+    obs = sim.step({"joint_length_m": [-5.0]}, 3.0)  # beyond the stroke: held at the end stop
     assert obs.joint_extension_m[0] >= L.stroke_min_m[0] - 0.01
 
 
 def test_solver_failure_leaves_the_simulator_at_the_step_start(tow6, monkeypatch):
     from snoworm.simulation.driver import SolverError
     from snoworm.simulation.interval import IntervalSolver
+
     sim = Simulator(tow6)
     sim.step({"wheel_speed_mps": [1.0] * 6}, 0.2)
     before = sim.observation()
 
     def boom(*a, **k):
         raise SolverError("every method failed (test)")
+
     monkeypatch.setattr(IntervalSolver, "solve", boom)
     with pytest.raises(SolverError):
         sim.step({"wheel_speed_mps": [2.0] * 6}, 0.2)
     assert sim.t_s == before.t_s
     np.testing.assert_array_equal(sim.observation().x_m, before.x_m)
-    np.testing.assert_array_equal(sim.commands.controls.speed_sp_mps, 1.0)   # the failed step's command undone
+    np.testing.assert_array_equal(sim.commands.controls.speed_sp_mps, 1.0)  # the failed step's command undone
     assert sim.result().t[-1] == pytest.approx(0.2)
 
 
@@ -128,16 +131,19 @@ def test_simulator_observes_the_grade_under_each_segment():
     """A controller sees the chord grade under each segment (docs/model.md section 7): on a route that
     rises 1 m in 10 m from x = 0, the leader sits on it while the segments behind are level."""
     import snoworm
+
     sc = snoworm.load_scenario("tow6_uniform", ["terrain.elevation=[[0,0],[10,1],[20,1]]"])
     obs = snoworm.Simulator(sc).observation()
     grade = obs.grade_deg
     assert grade.shape == (6,)
-    assert 0.0 < grade[0] < np.degrees(np.arcsin(0.1)) + 1e-9     # straddles the foot of the rise
+    assert 0.0 < grade[0] < np.degrees(np.arcsin(0.1)) + 1e-9  # straddles the foot of the rise
     np.testing.assert_allclose(grade[1:], 0.0, atol=1e-12)
-    blank = snoworm.modes.command.Observation(t_s=0.0, **{k: np.zeros(6) for k in
-                                                        ("x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt")},
-                                             **{k: np.zeros(5) for k in ("link_force_N", "link_length_m", "joint_extension_m")})
-    np.testing.assert_array_equal(blank.grade_deg, np.zeros(6))   # built by hand without a grade: level
+    blank = snoworm.modes.command.Observation(
+        t_s=0.0,
+        **{k: np.zeros(6) for k in ("x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt")},
+        **{k: np.zeros(5) for k in ("link_force_N", "link_length_m", "joint_extension_m")},
+    )
+    np.testing.assert_array_equal(blank.grade_deg, np.zeros(6))  # built by hand without a grade: level
 
 
 @pytest.mark.parametrize("dt", [5e-324, 10**400, 1e300, 1e6, -(10**400), 1e-7])
@@ -145,7 +151,7 @@ def test_dt_out_of_bounds_is_a_clear_value_error(tow6, dt):
     sim = Simulator(tow6)
     with pytest.raises(ValueError, match=r"dt: the step length must be a number of seconds from 1e-06 to") as err:
         sim.step(None, dt)
-    assert len(str(err.value)) < 300                      # the value is quoted short
+    assert len(str(err.value)) < 300  # the value is quoted short
     assert sim.t_s == 0.0
 
 
@@ -153,12 +159,16 @@ def _snoworm_bytes(snapshot):
     """Bytes still allocated by snoworm's own code (innermost frame in the package): SciPy 1.17's
     LSODA keeps ~24 kB per solve_ivp call alive by itself, which snoworm cannot free."""
     import tracemalloc
-    return sum(st.size for st in snapshot.filter_traces([tracemalloc.Filter(True, "*/snoworm/*")]).statistics("filename"))
+
+    return sum(
+        st.size for st in snapshot.filter_traces([tracemalloc.Filter(True, "*/snoworm/*")]).statistics("filename")
+    )
 
 
 def test_record_false_keeps_snoworms_memory_flat_and_record_true_is_bounded(tow6):
     import gc
     import tracemalloc
+
     sim = Simulator(tow6, record=False)
     sim.reset()
     sim.step({"wheel_speed_mps": [1.0] * 6}, 0.01)
@@ -197,10 +207,10 @@ def test_record_false_steps_start_at_their_start_and_state_is_a_copy(tow6):
             t0 = sim.t_s
             y0 = sim.state
             sim.step({"wheel_speed_mps": [1.8] * 6}, 0.1)
-    ts, ys, _ = light.last_step                                          # y0, t0: light's last step start
-    assert ts[0] == t0                                                   # the step's start is its first sample
-    np.testing.assert_allclose(ys[0], y0, rtol=1e-12, atol=1e-12)       # (solve_ivp's interpolant at its node)
-    assert kept.last_step[0][0] > t0                                     # the Result has the start already
-    np.testing.assert_array_equal(light.state, kept.state)               # the same solve either way
-    light.state[0] = 99.0                                                # a copy: the simulator is untouched
+    ts, ys, _ = light.last_step  # y0, t0: light's last step start
+    assert ts[0] == t0  # the step's start is its first sample
+    np.testing.assert_allclose(ys[0], y0, rtol=1e-12, atol=1e-12)  # (solve_ivp's interpolant at its node)
+    assert kept.last_step[0][0] > t0  # the Result has the start already
+    np.testing.assert_array_equal(light.state, kept.state)  # the same solve either way
+    light.state[0] = 99.0  # a copy: the simulator is untouched
     assert light.state[0] != 99.0

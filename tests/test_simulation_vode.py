@@ -1,4 +1,5 @@
 """VodeStepper: steps, dense output, events, continuation across a change of controls, failures."""
+
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -7,7 +8,9 @@ from snoworm.simulation.vode import VodeError, VodeStepper
 
 # a banded linear test system dy/dt = A y (tridiagonal, damped, with a fast and slow part)
 N = 6
-A = (np.diag(np.full(N, -2.0)) + np.diag(np.full(N - 1, 1.0), 1) + np.diag(np.full(N - 1, 0.5), -1)) * np.linspace(1, 50, N)[:, None]
+A = (np.diag(np.full(N, -2.0)) + np.diag(np.full(N - 1, 1.0), 1) + np.diag(np.full(N - 1, 0.5), -1)) * np.linspace(
+    1, 50, N
+)[:, None]
 Y0 = np.linspace(1.0, 2.0, N)
 
 
@@ -33,10 +36,10 @@ def test_advance_reaches_t1_exactly_and_matches_the_exact_solution():
     st.restart(0.0, Y0)
     grid = np.linspace(0.0, 0.3, 31)
     ts, ys, t_end, y_end, which = st.advance(0.3, t_eval=grid)
-    assert which is None and t_end == 0.3 and st.t == 0.3        # never steps past t1
+    assert which is None and t_end == 0.3 and st.t == 0.3  # never steps past t1
     np.testing.assert_array_equal(ts, grid)
     exact = np.array([expm(A * t) @ Y0 for t in grid])
-    np.testing.assert_allclose(ys, exact, rtol=1e-6, atol=1e-8)   # dense output between steps
+    np.testing.assert_allclose(ys, exact, rtol=1e-6, atol=1e-8)  # dense output between steps
     np.testing.assert_array_equal(y_end, ys[-1])
     assert st.nsteps > 5 and st.nfev >= st.nsteps and st.njev >= 1
 
@@ -58,6 +61,7 @@ def test_event_is_located_on_the_dense_output():
     # y0 decays as sum of exponentials; locate where the first state falls to 0.5 (falling only)
     def half(t, y):
         return y[0] - 0.5
+
     half.direction = -1
     st = _stepper()
     st.restart(0.0, Y0)
@@ -67,13 +71,14 @@ def test_event_is_located_on_the_dense_output():
     exact = expm(A * t_end) @ Y0
     assert abs(exact[0] - 0.5) < 1e-7
     assert ts[-1] == t_end and np.all(ts[:-1] < t_end) and np.all(np.diff(ts) > 0)
-    assert st.t >= t_end                            # the stepper stands at or beyond the event
+    assert st.t >= t_end  # the stepper stands at or beyond the event
 
 
 def test_event_direction_filters_crossings():
     def rising(t, y):
-        return 0.5 - y[0]                          # rises through 0 as y[0] falls through 0.5
-    rising.direction = -1                          # ... so a falling-only event never fires
+        return 0.5 - y[0]  # rises through 0 as y[0] falls through 0.5
+
+    rising.direction = -1  # ... so a falling-only event never fires
     st = _stepper()
     st.restart(0.0, Y0)
     *_, t_end, _, which = st.advance(0.5, [rising])
@@ -90,13 +95,13 @@ def test_controls_change_without_restart_continues_the_history():
         st = _stepper(ctl=u1)
         st.restart(0.0, Y0)
         st.advance(0.2)
-        assert st.t == 0.2                          # the switch falls on a step boundary (critical time)
+        assert st.t == 0.2  # the switch falls on a step boundary (critical time)
         n_before = st.nsteps
         st.ctl = u2
         if restart:
             st.restart(st.t, st.y)
         else:
-            assert st.t_old is not None             # the multistep history carries on
+            assert st.t_old is not None  # the multistep history carries on
         *_, y_end, _ = st.advance(0.4)
         np.testing.assert_allclose(y_end, exact_04, rtol=1e-6, atol=1e-8)
         ends[restart] = (st.nsteps - n_before, st.recoveries)
@@ -125,8 +130,9 @@ def test_counters_accumulate_over_restarts():
 
 def test_failure_raises_vode_error():
     """A solution that blows up in finite time (y' = y^2, y(0) = 1, singular at t = 1)."""
-    st = VodeStepper(lambda t, y, c: y * y, lambda t, y, c: np.array([2 * y]), 1, rtol=1e-6, atol=1e-9,
-                     lband=0, uband=0)
+    st = VodeStepper(
+        lambda t, y, c: y * y, lambda t, y, c: np.array([2 * y]), 1, rtol=1e-6, atol=1e-9, lband=0, uband=0
+    )
     st.restart(0.0, [1.0])
     with pytest.raises(VodeError, match="VODE (failed|made no finite progress)"):
         st.advance(2.0)
@@ -147,7 +153,7 @@ def test_max_order_and_first_step():
     st = _stepper(rtol=1e-6, atol=1e-9, max_order=2, first_step=1e-7)
     st.restart(0.0, Y0)
     st.step(1.0)
-    assert st.t == pytest.approx(1e-7, rel=1e-9)         # the given first step, accepted
+    assert st.t == pytest.approx(1e-7, rel=1e-9)  # the given first step, accepted
     orders = []
     while st.t < 0.5:
         st.step(0.5)

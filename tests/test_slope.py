@@ -4,6 +4,7 @@ Analytic checks of the model on a grade, each against the kernel or the dynamic 
 coasting on a constant slope, a chain with locked wheels holding or sliding, steady rolling
 (drawbar drop) and the energy balance with the potential term; Eqs. 4-6 with gravity.
 """
+
 import math
 
 import numpy as np
@@ -21,8 +22,13 @@ G0 = 9.81
 
 
 def _model(grade_deg, xt, segments=1, links="fixed", com_height_m=None):
-    sets = [f"terrain.xt={xt}", f"terrain.grade_deg={grade_deg}", f"vehicle.segments={segments}",
-            f"vehicle.links.type={links}", "tow.force_N=0"]
+    sets = [
+        f"terrain.xt={xt}",
+        f"terrain.grade_deg={grade_deg}",
+        f"vehicle.segments={segments}",
+        f"vehicle.links.type={links}",
+        "tow.force_N=0",
+    ]
     if com_height_m is not None:
         sets.append(f"vehicle.segment.com_height_m={com_height_m}")
     sc = load_scenario("tow6_uniform", sets)
@@ -58,9 +64,9 @@ def test_constant_grade_and_patches():
     assert ElevationProfile.constant(0.0).is_level and not c.is_level
     p = grade_patch_profile(2.0, [(10.0, 20.0, 12.0, 1.0)])
     s2, s12 = math.sin(math.radians(2.0)), math.sin(math.radians(12.0))
-    assert float(p.sin_grade(15.0, 0.5)) == pytest.approx(s12, rel=1e-12)       # inside the patch
-    assert float(p.sin_grade(30.0, 0.5)) == pytest.approx(s2, rel=1e-12)        # after it
-    assert float(p.sin_grade(-30.0, 0.5)) == pytest.approx(s2, rel=1e-12)       # before it
+    assert float(p.sin_grade(15.0, 0.5)) == pytest.approx(s12, rel=1e-12)  # inside the patch
+    assert float(p.sin_grade(30.0, 0.5)) == pytest.approx(s2, rel=1e-12)  # after it
+    assert float(p.sin_grade(-30.0, 0.5)) == pytest.approx(s2, rel=1e-12)  # before it
     # the patch's rise: 10 m at 12 deg plus two 1 m ramps at the mean sine
     rise = float(p.elevation(21.0) - p.elevation(9.0))
     assert rise == pytest.approx(10 * s12 + 2 * 0.5 * (s2 + s12), rel=1e-12)
@@ -71,7 +77,7 @@ def test_normal_load_law():
     """F_n = W (cos -+ 2h/b sin), front and rear: sums to the segment's W cos(theta) per wheel pair."""
     W, th, t = 220.725, math.radians(10.0), 2 * 0.4 / 1.094
     Fn = terrain.normal_load_N(np.array([W]), np.array([math.sin(th)]), np.array([math.cos(th)]), np.array([t]))
-    assert Fn[0, 0] < Fn[0, 1]                             # uphill: the rear axle carries more
+    assert Fn[0, 0] < Fn[0, 1]  # uphill: the rear axle carries more
     assert Fn[0].sum() == pytest.approx(2 * W * math.cos(th), rel=1e-15)
     assert Fn[0, 1] - Fn[0, 0] == pytest.approx(2 * W * t * math.sin(th), rel=1e-14)
 
@@ -95,12 +101,21 @@ def test_coasting_segment_decelerates_by_gravity_and_resistance(grade):
     y0[0, L.v] = 8.0
     y0[0, L.omega] = 8.0 / seg.wheel_radius_m
     ctl = Controls.rolling(1, 0.0, 0.0)
-    sol = solve_ivp(m.rhs, (0.0, 0.9), y0.reshape(-1), args=(ctl,), method="Radau", rtol=1e-10, atol=1e-12,
-                    t_eval=[0.3, 0.9], jac=lambda t, y, c: m.jacobian_sparse(t, y, c))
+    sol = solve_ivp(
+        m.rhs,
+        (0.0, 0.9),
+        y0.reshape(-1),
+        args=(ctl,),
+        method="Radau",
+        rtol=1e-10,
+        atol=1e-12,
+        t_eval=[0.3, 0.9],
+        jac=lambda t, y, c: m.jacobian_sparse(t, y, c),
+    )
     assert sol.success
     Y = m.unpack(sol.y.T)
     v, w = Y[:, 0, L.v], Y[:, 0, L.omega]
-    assert v.min() > 1.0 and w.min() * seg.wheel_radius_m > 1.0     # still rolling: sgn() saturated
+    assert v.min() > 1.0 and w.min() * seg.wheel_radius_m > 1.0  # still rolling: sgn() saturated
     dt = 0.6
     th = math.radians(grade)
     n_w, R, J = seg.wheels_per_axle, seg.wheel_radius_m, seg.wheel_inertia_kgm2
@@ -134,8 +149,17 @@ def test_locked_chain_holds_or_slides_where_the_terrain_law_says(factor):
     sc, m = _model(grade, X, 2, com_height_m=0.0)
     ctl = Controls.rolling(2, 1.0, 0.0)
     L = m.layout
-    sol = solve_ivp(m.rhs, (0.0, 6.0), m.initial_state(), args=(ctl,), method="Radau", rtol=1e-9, atol=1e-10,
-                    t_eval=[5.0, 6.0], jac=lambda t, y, c: m.jacobian_sparse(t, y, c))
+    sol = solve_ivp(
+        m.rhs,
+        (0.0, 6.0),
+        m.initial_state(),
+        args=(ctl,),
+        method="Radau",
+        rtol=1e-9,
+        atol=1e-10,
+        t_eval=[5.0, 6.0],
+        jac=lambda t, y, c: m.jacobian_sparse(t, y, c),
+    )
     assert sol.success
     v = sol.y[[L.flat_index(k, "v_mps") for k in range(2)]].mean(0)
     th = math.radians(grade)
@@ -146,17 +170,20 @@ def test_locked_chain_holds_or_slides_where_the_terrain_law_says(factor):
         tp = m.tp
 
         def bal(u):
-            return (float(terrain.traction_force(u / tp.slip_eps_mps, 1.0, X, tp))
-                    + float(terrain.resistance_force(u, 1.0, X, tp)) - math.tan(th))
+            return (
+                float(terrain.traction_force(u / tp.slip_eps_mps, 1.0, X, tp))
+                + float(terrain.resistance_force(u, 1.0, X, tp))
+                - math.tan(th)
+            )
 
         creep = brentq(bal, 1e-9, tp.slip_eps_mps)
-        assert abs(v[1] - v[0]) < 1e-3                       # settled (sliding would be ~0.4 m/s^2)
+        assert abs(v[1] - v[0]) < 1e-3  # settled (sliding would be ~0.4 m/s^2)
         # 10 %: the PI holds w at 0 only up to its integral's lag, so the wheel turns back slightly and the
         # slip is a little below |V|/v_eps (measured 6 %); a slide would be orders of magnitude faster
         assert -v[-1] == pytest.approx(creep, rel=0.1) and -v[-1] < tp.slip_eps_mps
     else:
         a = (v[1] - v[0]) / 1.0
-        assert v[-1] < -1.0                                                        # slides back
+        assert v[-1] < -1.0  # slides back
         # 5e-3 (measured 1.0e-3): the PI-held wheel turns slightly (|i| just below 1) while its integral settles
         assert a == pytest.approx(-G0 * (math.sin(th) - math.cos(th) * (c_t + c_r)), rel=5e-3)
 
@@ -176,7 +203,8 @@ def test_drawbar_drops_by_gravity_and_the_cos_change(grade):
     A, B, C = d0, seg.mass_kg * G0, 20.0
     phi = math.atan2(B, A)
     assert steady.max_grade_deg(0.9, seg, tp, 1.8, C) == pytest.approx(
-        math.degrees(math.acos(C / math.hypot(A, B)) - phi), abs=1e-7)
+        math.degrees(math.acos(C / math.hypot(A, B)) - phi), abs=1e-7
+    )
 
 
 def test_steady_on_grade_matches_the_simulation():
@@ -204,13 +232,19 @@ def test_max_grade_against_the_simulation():
     g_max = steady.max_grade_deg(0.8, seg, tp, 1.8)
     speeds = {}
     for g in (g_max - 0.5, g_max + 0.5):
-        res = simulate(sc.with_({"terrain.grade_deg": 0.0,
-                                 "terrain.grade_patches": [{"start_m": 4.0, "end_m": 500.0, "grade_deg": g, "ramp_m": 2.0}]}))
-        np.testing.assert_allclose(res.segments["grade_deg"][-1], g, rtol=1e-9)     # the whole chain on the slope
+        res = simulate(
+            sc.with_(
+                {
+                    "terrain.grade_deg": 0.0,
+                    "terrain.grade_patches": [{"start_m": 4.0, "end_m": 500.0, "grade_deg": g, "ramp_m": 2.0}],
+                }
+            )
+        )
+        np.testing.assert_allclose(res.segments["grade_deg"][-1], g, rtol=1e-9)  # the whole chain on the slope
         speeds[g] = float(res.segments["v_mps"][-1].mean())
     below = steady.steady_state(0.8, seg, tp, wheel_speed_mps=1.8, grade_deg=g_max - 0.5)
-    assert speeds[g_max - 0.5] == pytest.approx(below.ground_speed_mps, rel=1e-3)    # climbs at the steady speed
-    assert speeds[g_max + 0.5] < 0.2            # past the peak slip: falls to a crawl, spinning
+    assert speeds[g_max - 0.5] == pytest.approx(below.ground_speed_mps, rel=1e-3)  # climbs at the steady speed
+    assert speeds[g_max + 0.5] < 0.2  # past the peak slip: falls to a crawl, spinning
 
 
 # ------------------------------------------------------------------ energy with gravity
@@ -224,15 +258,23 @@ def test_energy_balance_closes_with_the_potential_term(seed):
     pos = np.arange(-10.0, 60.0, 5.0)
     z = np.cumsum(np.r_[0.0, rng.uniform(-0.15, 0.2, pos.size - 1) * 5.0])
     table = "[" + ",".join(f"[{p:g},{v:.6g}]" for p, v in zip(pos, z)) + "]"
-    sc = load_scenario("tow6_uniform", [f"terrain.elevation={table}", "simulation.duration_s=8",
-                                         "simulation.output_dt_s=0.01", "simulation.rtol=1e-7"])
+    sc = load_scenario(
+        "tow6_uniform",
+        [
+            f"terrain.elevation={table}",
+            "simulation.duration_s=8",
+            "simulation.output_dt_s=0.01",
+            "simulation.rtol=1e-7",
+        ],
+    )
     res = simulate(sc)
     b = energy_balance(res)
     assert abs(b["residual_J"]) < 5e-3 * b["throughput_J"]
     assert abs(b["potential_change_J"]) > 20 * abs(b["residual_J"]) or abs(b["potential_change_J"]) < 50.0
     e = energy_metrics(res)
-    assert e["elevation_gain_m"] == pytest.approx(float(np.mean(res.segments["elevation_m"][-1]
-                                                                - res.segments["elevation_m"][0])))
+    assert e["elevation_gain_m"] == pytest.approx(
+        float(np.mean(res.segments["elevation_m"][-1] - res.segments["elevation_m"][0]))
+    )
 
 
 def test_level_profile_skips_the_grade_terms():
@@ -253,6 +295,7 @@ def test_eq6_with_gravity_is_eq4_plus_eq5(F_c, Ft_f, Ftr_f, Ftr_r, G_f, G_r):
     (> 0) and Eq. 5 (>= 0) exactly when Eq. 6 > 0: the largest F_c the anchor holds, F_tr,rear + G_rear,
     makes Eq. 4 equal Eq. 6."""
     from snoworm.modes.gait import progress_conditions
+
     pc = progress_conditions(F_c, Ft_f, Ftr_f, Ftr_r, G_f, G_r)
     assert pc["eq6_N"] == pytest.approx(pc["eq4_N"] + pc["eq5_N"], abs=1e-9)
     best = progress_conditions(Ftr_r + G_r, Ft_f, Ftr_f, Ftr_r, G_f, G_r)
@@ -271,6 +314,7 @@ def test_eq6_on_a_uniform_slope_is_a_grade_limit(X, grade, slip):
     locked): with the laws' forces at F_n = W cos(theta), Eq. 6 with gravity reads
     W n cos(theta) c_t(i) > 2 m g sin(theta), i.e. tan(theta) < c_t(i) / 2 (the resistances cancel)."""
     from snoworm.modes.gait import progress_conditions
+
     sc, m = _model(0.0, X)
     seg, tp = sc.vehicle.segment_params()[0], m.tp
     n = 2 * seg.wheels_per_axle

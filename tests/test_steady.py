@@ -2,6 +2,7 @@
 
 FrostyBoy parameters, default model (d = 2), wheel speed R_w*omega = 1.8 m/s unless stated.
 """
+
 from types import SimpleNamespace
 
 import pytest
@@ -11,7 +12,7 @@ from snoworm.config.params import parameter_set, terrain_params
 
 SEG = SimpleNamespace(**parameter_set("frostyboy")["segment"])
 TP = terrain_params("frostyboy")
-W = 1.8   # wheel speed R_w*omega [m/s]
+W = 1.8  # wheel speed R_w*omega [m/s]
 
 
 def test_fig6_tow_share_slip():
@@ -19,7 +20,7 @@ def test_fig6_tow_share_slip():
     ss = steady.steady_state(0.9, SEG, TP, wheel_speed_mps=W, drawbar_N=200.0 / 6)
     assert 100 * ss.slip == pytest.approx(4.80, abs=0.01)
     assert ss.ground_speed_mps == pytest.approx(1.714, abs=0.001)
-    assert ss.drawbar_N == pytest.approx(200.0 / 6, abs=1e-6)         # the root balances the drawbar
+    assert ss.drawbar_N == pytest.approx(200.0 / 6, abs=1e-6)  # the root balances the drawbar
     assert ss.wheel_speed_mps == W
 
 
@@ -47,7 +48,7 @@ def test_immobilised_raises():
     with pytest.raises(steady.Immobilised, match="exceeds the maximum"):
         steady.steady_state(0.5, SEG, TP, wheel_speed_mps=W)
     with pytest.raises(steady.Immobilised):
-        steady.steady_state(0.9, SEG, TP, wheel_speed_mps=W, drawbar_N=400.0)   # above the 345 N maximum
+        steady.steady_state(0.9, SEG, TP, wheel_speed_mps=W, drawbar_N=400.0)  # above the 345 N maximum
 
 
 def test_ground_speed_form_agrees_with_wheel_speed_form():

@@ -1,5 +1,6 @@
 """Field data (snoworm.studies.field_data): the shipped Table 2 file, the reader's tolerance and its
 messages (bad values through the CLI are in test_studies_calibrate.py)."""
+
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,7 @@ from snoworm.studies import field_data as fd
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("1", "2", "3", "4", "5")
-HEADER = ",".join(fd.FIELD_COLUMNS)   # the field-data CSV header
+HEADER = ",".join(fd.FIELD_COLUMNS)  # the field-data CSV header
 
 
 def test_shipped_data_is_table2(data):
@@ -27,8 +28,10 @@ def test_shipped_data_is_table2(data):
 
 def test_reader_tolerates_comments_blank_lines_extra_columns(tmp_path):
     f = tmp_path / "field.csv"
-    f.write_text("# my rover\n\n" + HEADER + ",note\n# a comment between rows\n"
-                 'a,"snow, wet",1.0,1.1,0.0909,20,0,0.9,x\n\n  # indented comment\nb,snow,1.0,1.1,0.09,21,5,0.9,y\n')
+    f.write_text(
+        "# my rover\n\n" + HEADER + ",note\n# a comment between rows\n"
+        'a,"snow, wet",1.0,1.1,0.0909,20,0,0.9,x\n\n  # indented comment\nb,snow,1.0,1.1,0.09,21,5,0.9,y\n'
+    )
     d = fd.read_field_data(f)
     assert d.case == ("a", "b")
     assert d.surface[0] == "snow, wet"
@@ -40,14 +43,20 @@ def test_bad_input_api_raises_scenario_error(tmp_path):
         fd.read_field_data(tmp_path / "missing.csv")
 
 
-@pytest.mark.parametrize("row, needle", [
-    ("a,snow,1.0,1.1,6,20,0,0.9", r"slip 6 is outside \[-1, 1\]; slip is a fraction\. Did you give it in percent\?"),
-    ("a,snow,1.0,0,0.09,20,0,0.9", r"wheel_speed_mps must be greater than 0 m/s"),
-    ("a,snow,1.0,1.1,0.09,20,0,1.5", r"xt must be in \(0, 1\], got 1\.5"),
-    ("a,snow,1.0,1.1,0.09,20,,0.9", r"line 2, column 'drawbar_N': expected a number .* Write 0 for no drawbar\."),
-    ("a,snow,1.0,1.1,0.09,inf,0,0.9", r"line 2, column 'torque_Nm': must be a finite number"),
-    ("a,snow,1.0,1.1,0.09,20,0", r"line 2 has 7 fields but the header has 8"),
-])
+@pytest.mark.parametrize(
+    "row, needle",
+    [
+        (
+            "a,snow,1.0,1.1,6,20,0,0.9",
+            r"slip 6 is outside \[-1, 1\]; slip is a fraction\. Did you give it in percent\?",
+        ),
+        ("a,snow,1.0,0,0.09,20,0,0.9", r"wheel_speed_mps must be greater than 0 m/s"),
+        ("a,snow,1.0,1.1,0.09,20,0,1.5", r"xt must be in \(0, 1\], got 1\.5"),
+        ("a,snow,1.0,1.1,0.09,20,,0.9", r"line 2, column 'drawbar_N': expected a number .* Write 0 for no drawbar\."),
+        ("a,snow,1.0,1.1,0.09,inf,0,0.9", r"line 2, column 'torque_Nm': must be a finite number"),
+        ("a,snow,1.0,1.1,0.09,20,0", r"line 2 has 7 fields but the header has 8"),
+    ],
+)
 def test_each_bad_value_names_the_line_and_the_rule(tmp_path, row, needle):
     f = tmp_path / "field.csv"
     f.write_text(HEADER + "\n" + row + "\n")

@@ -4,6 +4,7 @@ Tolerances are stated next to each comparison.  Numbers quoted from docs/model.m
 model (d = 2); the literal reading d = 1 is tested for its documented failure.  Calibration is in
 test_studies_calibrate.py.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -25,14 +26,13 @@ MODEL_TORQUE_NM = (10.0, 27.0, 30.0, 31.9, 45.0)
 MODEL_SLIP_PCT = (2.1, 6.3, 7.8, 9.3, 30.4)
 
 
-
-
 @pytest.fixture(scope="module")
 def rows(data, frostyboy):
     return gt.compare_table2(data, *frostyboy)
 
 
 # ------------------------------------------------------------------------------- Table 2
+
 
 def test_table2_torques(rows):
     """Table 2 torques: within 1 N m (cases 1, 2, 3, 5) and 1.5 N m (case 4, drawbar)."""
@@ -49,6 +49,7 @@ def test_table2_slips_as_model_md(rows):
 
 
 # ------------------------------------------------------------------------------- Figure 3
+
 
 def test_figure3_claims(frostyboy):
     c = gt.terrain_curves([1.0, 0.5], *frostyboy, n_points=2001)
@@ -67,7 +68,7 @@ def test_literal_reading_d1_fails_as_documented(frostyboy):
     seg, tp = frostyboy
     tp1 = dataclasses.replace(tp, peak_exponent_d=1.0)
     c = gt.terrain_curves([1.0, 0.5], seg, tp1, n_points=2001)
-    assert c.zero_crossing_slip[0] == pytest.approx(0.0213, abs=0.0005)   # X = 1 unchanged
+    assert c.zero_crossing_slip[0] == pytest.approx(0.0213, abs=0.0005)  # X = 1 unchanged
     assert 0.72 < c.zero_crossing_slip[1] < 0.76
     assert c.net_N[1, -1] > 0
     s5 = steady.steady_state(0.65, seg, tp1, wheel_speed_mps=1.58)
@@ -75,6 +76,7 @@ def test_literal_reading_d1_fails_as_documented(frostyboy):
 
 
 # ------------------------------------------------------------------------------- scenarios
+
 
 @pytest.mark.parametrize("case", range(1, 6))
 def test_case_scenario_reaches_steady_state(case, data, frostyboy):
@@ -84,8 +86,9 @@ def test_case_scenario_reaches_steady_state(case, data, frostyboy):
     assert sc.terrain.xt == data.xt[k] and sc.tow.force_N == data.drawbar_N[k]
     assert sc.mode.speed_mps == (data.wheel_speed_mps[k],)
     res = simulate(sc)
-    ss = steady.steady_state(sc.terrain.xt, frostyboy[0], frostyboy[1], drawbar_N=sc.tow.force_N,
-                             wheel_speed_mps=sc.mode.speed_mps[0])
+    ss = steady.steady_state(
+        sc.terrain.xt, frostyboy[0], frostyboy[1], drawbar_N=sc.tow.force_N, wheel_speed_mps=sc.mode.speed_mps[0]
+    )
     assert abs(res.segments["slip"][-1, 0] - ss.slip) < 0.002
     assert abs(res.segments["motor_torque_Nm"][-1, 0] - ss.torque_Nm) < 0.2
     assert res.segments["v_mps"][-1, 0] == pytest.approx(ss.ground_speed_mps, abs=0.005)
@@ -93,14 +96,23 @@ def test_case_scenario_reaches_steady_state(case, data, frostyboy):
 
 # ------------------------------------------------------------------------------- CLI
 
+
 def test_cli_groundtruth(tmp_path):
     out = tmp_path / "gt"
     r = CliRunner().invoke(main, ["groundtruth", "--out", str(out)])
     assert r.exit_code == 0, r.output
-    assert "30.44" in r.output and "31.91" in r.output   # case 5 slip %, case 4 torque
+    assert "30.44" in r.output and "31.91" in r.output  # case 5 slip %, case 4 torque
     lines = (out / "table2.csv").read_text().splitlines()
-    assert lines[0].split(",")[:8] == ["case", "xt", "drawbar_N", "wheel_speed_mps", "speed_measured_mps",
-                                       "speed_model_mps", "speed_residual_mps", "slip_measured"]
+    assert lines[0].split(",")[:8] == [
+        "case",
+        "xt",
+        "drawbar_N",
+        "wheel_speed_mps",
+        "speed_measured_mps",
+        "speed_model_mps",
+        "speed_residual_mps",
+        "slip_measured",
+    ]
     assert len(lines) == 6
     assert (out / "table2.png").stat().st_size > 1000
 

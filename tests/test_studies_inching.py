@@ -1,5 +1,6 @@
 """The inching cells of a mobility map (snoworm.studies.inching): the scenario of a cell, gait
 labels, and the bisection of the runs over the grades."""
+
 import pytest
 
 from snoworm.config.scenario import load_scenario, scenario_from_dict
@@ -37,8 +38,13 @@ def test_the_runs_are_bisected_over_the_grades(monkeypatch):
         grade = raw["terrain"].get("grade_deg", 0.0)
         ran.append(grade)
         ok = grade <= 10.0
-        return {"inching": ok, "inching_speed_mps": 0.1 if ok else 0.0,
-                "inching_energy_per_metre_J_per_m": 50.0 if ok else None, "inching_note": ""}
+        return {
+            "inching": ok,
+            "inching_speed_mps": 0.1 if ok else 0.0,
+            "inching_energy_per_metre_J_per_m": 50.0 if ok else None,
+            "inching_note": "",
+        }
+
     monkeypatch.setattr(inching, "_inch_run", fake_run)
     sc = load_scenario(SCENARIOS / "inchworm6.yaml")
     grades = [0.0, 5.0, 10.0, 15.0, 20.0]

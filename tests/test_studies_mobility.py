@@ -1,4 +1,5 @@
 """Mobility map (snoworm.studies.mobility): which modes move the vehicle over X_t and tow (beyond the paper)."""
+
 import math
 
 import numpy as np
@@ -13,49 +14,77 @@ from snoworm.studies.mobility import mobility_map
 
 def test_map_rolling_boundary_matches_steady_limit(scenario_path):
     sc = load_scenario(scenario_path("traverse_patch"))
-    xts = np.linspace(0.2, 1.0, 33)                     # grid step 0.025
+    xts = np.linspace(0.2, 1.0, 33)  # grid step 0.025
     dx = xts[1] - xts[0]
     m = mobility_map(sc, xts, [0.0, 200.0], wheel_speed_mps=1.8, inching=False)
     for tow, expected in ((0.0, 0.586), (200.0, m["rolling_limit_xt"][200.0])):
         roll = [r["xt"] for r in m["rows"] if r["tow_N"] == tow and r["rolling"]]
         first = min(roll)
-        assert first - dx < expected <= first + 1e-12              # boundary within one grid step
-        assert all(x >= first for x in roll) and len(roll) == sum(xts >= first - 1e-12)   # one boundary
+        assert first - dx < expected <= first + 1e-12  # boundary within one grid step
+        assert all(x >= first for x in roll) and len(roll) == sum(xts >= first - 1e-12)  # one boundary
     # docs/model.md section 2: 0.586 without tow; a 200 N tow (33 N per segment) raises it
     assert m["rolling_limit_xt"][0.0] == pytest.approx(0.586, abs=5e-4)
     seg = sc.vehicle.segment_params()[0]
     assert m["rolling_limit_xt"][200.0] == pytest.approx(
-        steady.immobilisation_limit_xt(seg, sc.chain_model.tp, drawbar_N=200.0 / 6, wheel_speed_mps=1.8), abs=1e-9)
+        steady.immobilisation_limit_xt(seg, sc.chain_model.tp, drawbar_N=200.0 / 6, wheel_speed_mps=1.8), abs=1e-9
+    )
     assert m["rolling_limit_xt"][200.0] > m["rolling_limit_xt"][0.0] + 0.01
 
 
 def test_cli_mobility_map_regions(scenario_path, tmp_path):
-    r = CliRunner().invoke(main, ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.3,0.9",
-                                  "--tow", "0", "--inch-duration", "4", "--out", str(tmp_path)])
+    r = CliRunner().invoke(
+        main,
+        [
+            "mobility-map",
+            str(scenario_path("traverse_patch")),
+            "--xt",
+            "0.3,0.9",
+            "--tow",
+            "0",
+            "--inch-duration",
+            "4",
+            "--out",
+            str(tmp_path),
+        ],
+    )
     assert r.exit_code == 0, r.output
     assert (tmp_path / "mobility_map.png").stat().st_size > 10000
     lines = (tmp_path / "mobility_map.csv").read_text().splitlines()
     rows = [dict(zip(lines[0].split(","), ln.split(","))) for ln in lines[1:]]
     assert [(float(x["xt"]), x["region"]) for x in rows] == [(0.3, "inching only"), (0.9, "rolling")]
     assert float(rows[0]["inching_speed_mps"]) > 0.02
-    assert float(rows[1]["rolling_speed_mps"]) == pytest.approx(1.8 * (1 - 0.039), abs=0.01)   # slip 3.9 %
+    assert float(rows[1]["rolling_speed_mps"]) == pytest.approx(1.8 * (1 - 0.039), abs=0.01)  # slip 3.9 %
 
 
 def test_cli_mobility_map_bad_grid(scenario_path, tmp_path):
-    r = CliRunner().invoke(main, ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.2:1.0",
-                                  "--out", str(tmp_path)])
+    r = CliRunner().invoke(
+        main, ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.2:1.0", "--out", str(tmp_path)]
+    )
     assert r.exit_code == 2 and "START:STOP:COUNT" in r.output
 
 
 def test_progress_counts_the_inching_runs(scenario_path):
     sc = load_scenario(scenario_path("traverse_patch"))
     seen = []
-    m = mobility_map(sc, [0.3, 0.9], [0.0], wheel_speed_mps=1.8, inch_duration_s=1.0, every_cell=True,
-                     progress=lambda n, total: seen.append((n, total)))
+    m = mobility_map(
+        sc,
+        [0.3, 0.9],
+        [0.0],
+        wheel_speed_mps=1.8,
+        inch_duration_s=1.0,
+        every_cell=True,
+        progress=lambda n, total: seen.append((n, total)),
+    )
     assert seen == [(1, 2), (2, 2)] and len(m["rows"]) == 2
-    seen.clear()                                                     # default: the rolling cell is not run
-    m = mobility_map(sc, [0.3, 0.9], [0.0], wheel_speed_mps=1.8, inch_duration_s=1.0,
-                     progress=lambda n, total: seen.append((n, total)))
+    seen.clear()  # default: the rolling cell is not run
+    m = mobility_map(
+        sc,
+        [0.3, 0.9],
+        [0.0],
+        wheel_speed_mps=1.8,
+        inch_duration_s=1.0,
+        progress=lambda n, total: seen.append((n, total)),
+    )
     assert seen == [(1, 1)] and [r["rolling"] for r in m["rows"]] == [False, True]
 
 
@@ -83,20 +112,21 @@ def test_default_map_equals_the_every_cell_map_on_the_issue_grid(scenario_path):
     full = _cells(mobility_map(sc, xts, tows, wheel_speed_mps=1.8, jobs=2, every_cell=True))
     fast = _cells(mobility_map(sc, xts, tows, wheel_speed_mps=1.8, jobs=2))
     assert full.keys() == fast.keys() and len(full) == 27
-    assert {r["region"] for r in full.values()} == {"rolling", "inching only"}   # both regions on the grid
+    assert {r["region"] for r in full.values()} == {"rolling", "inching only"}  # both regions on the grid
     skipped = 0
     for key, f in full.items():
         g = fast[key]
         assert g["region"] == f["region"], key
-        assert g["rolling_speed_mps"] == f["rolling_speed_mps"]           # steady state: same code path
-        if g["inching"] is None:                                          # skipped: only rolling cells
+        assert g["rolling_speed_mps"] == f["rolling_speed_mps"]  # steady state: same code path
+        if g["inching"] is None:  # skipped: only rolling cells
             assert f["rolling"] and g["inching_cheaper"] is None and g["inching_speed_mps"] is None
             skipped += 1
             continue
         assert g["inching"] == f["inching"] and g["inching_note"] == f["inching_note"]
         assert g["inching_speed_mps"] == pytest.approx(f["inching_speed_mps"], rel=1e-9, abs=0)
-        assert g["inching_energy_per_metre_J_per_m"] == pytest.approx(f["inching_energy_per_metre_J_per_m"],
-                                                                       rel=1e-9, abs=0)
+        assert g["inching_energy_per_metre_J_per_m"] == pytest.approx(
+            f["inching_energy_per_metre_J_per_m"], rel=1e-9, abs=0
+        )
         assert g["inching_cheaper"] == f["inching_cheaper"]
     assert skipped == sum(r["rolling"] for r in full.values()) > 0
     # the full map still answers where inching is cheaper than rolling (docs/beyond.md): next to the limit
@@ -107,7 +137,7 @@ def test_order_of_the_runs_does_not_change_the_map(scenario_path):
     sc = load_scenario(scenario_path("traverse_patch"))
     kw = dict(wheel_speed_mps=1.8, inch_duration_s=1.0, every_cell=True)
     serial = mobility_map(sc, [0.3, 0.5, 0.9], [0.0], jobs=1, **kw)["rows"]
-    pooled = mobility_map(sc, [0.3, 0.5, 0.9], [0.0], jobs=2, **kw)["rows"]   # started highest X_t first
+    pooled = mobility_map(sc, [0.3, 0.5, 0.9], [0.0], jobs=2, **kw)["rows"]  # started highest X_t first
     assert [r["xt"] for r in pooled] == [0.3, 0.5, 0.9]
     for a, b in zip(serial, pooled):
         assert a["inching_speed_mps"] == pytest.approx(b["inching_speed_mps"], rel=1e-12, abs=0)
@@ -115,8 +145,17 @@ def test_order_of_the_runs_does_not_change_the_map(scenario_path):
 
 
 def test_cli_every_cell_simulates_the_rolling_cells_too(scenario_path, tmp_path):
-    base = ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.3,0.9", "--tow", "0",
-            "--inch-duration", "2", "--no-plot"]
+    base = [
+        "mobility-map",
+        str(scenario_path("traverse_patch")),
+        "--xt",
+        "0.3,0.9",
+        "--tow",
+        "0",
+        "--inch-duration",
+        "2",
+        "--no-plot",
+    ]
     r = CliRunner().invoke(main, base + ["--out", str(tmp_path / "a")])
     assert r.exit_code == 0, r.output
     assert "--every-cell" in r.output
@@ -129,7 +168,9 @@ def test_cli_every_cell_simulates_the_rolling_cells_too(scenario_path, tmp_path)
     assert "--every-cell" not in r.output
     rows = (tmp_path / "b" / "mobility_map.csv").read_text().splitlines()
     rolling = dict(zip(hdr, rows[2].split(",")))
-    assert rolling["region"] == "rolling" and rolling["inching"] in ("0", "1") and rolling["inching_cheaper"] in ("0", "1")
+    assert (
+        rolling["region"] == "rolling" and rolling["inching"] in ("0", "1") and rolling["inching_cheaper"] in ("0", "1")
+    )
 
 
 def test_grade_axis_bisection_equals_every_cell(scenario_path):
@@ -146,9 +187,12 @@ def test_grade_axis_bisection_equals_every_cell(scenario_path):
     assert region(fast) == region(full)
     assert set(region(full).values()) == {"rolling", "inching only", "immobile"}
     simulated = [r for r in fast["rows"] if r["inching_speed_mps"] is not None]
-    assert len(simulated) < sum(not r["rolling"] for r in fast["rows"])          # the bisection saved runs
-    assert all(r["inching_note"].startswith("not simulated") for r in fast["rows"]
-               if r["inching"] is not None and r["inching_speed_mps"] is None)
+    assert len(simulated) < sum(not r["rolling"] for r in fast["rows"])  # the bisection saved runs
+    assert all(
+        r["inching_note"].startswith("not simulated")
+        for r in fast["rows"]
+        if r["inching"] is not None and r["inching_speed_mps"] is None
+    )
 
 
 def test_rolling_cells_on_a_grade_use_the_graded_steady_state(scenario_path):
@@ -159,18 +203,41 @@ def test_rolling_cells_on_a_grade_use_the_graded_steady_state(scenario_path):
     g = m["gradeability"][0.0]
     assert g["rolling_grid_deg"] == [10.0]
     assert g["rolling_J_per_m_climbed"][0] == pytest.approx(
-        m["rows"][0]["rolling_energy_per_metre_J_per_m"] / math.sin(math.radians(10.0)))
+        m["rows"][0]["rolling_energy_per_metre_J_per_m"] / math.sin(math.radians(10.0))
+    )
 
 
 def test_cli_mobility_map_grade_axis(scenario_path, tmp_path):
-    r = CliRunner().invoke(main, ["mobility-map", str(scenario_path("traverse_patch")), "--xt", "0.7,0.9",
-                                  "--grade", "0:20:3", "--no-inching", "--out", str(tmp_path / "m")])
+    r = CliRunner().invoke(
+        main,
+        [
+            "mobility-map",
+            str(scenario_path("traverse_patch")),
+            "--xt",
+            "0.7,0.9",
+            "--grade",
+            "0:20:3",
+            "--no-inching",
+            "--out",
+            str(tmp_path / "m"),
+        ],
+    )
     assert r.exit_code == 0, r.output
     header = (tmp_path / "m" / "mobility_map.csv").read_text().splitlines()[0].split(",")
     assert header[:4] == ["xt", "tow_N", "grade_deg", "region"]
     assert (tmp_path / "m" / "gradeability.png").stat().st_size > 10000
-    bad = CliRunner().invoke(main, ["mobility-map", str(scenario_path("traverse_patch")), "--grade", "0:60:3",
-                                    "--no-inching", "--out", str(tmp_path / "b")])
+    bad = CliRunner().invoke(
+        main,
+        [
+            "mobility-map",
+            str(scenario_path("traverse_patch")),
+            "--grade",
+            "0:60:3",
+            "--no-inching",
+            "--out",
+            str(tmp_path / "b"),
+        ],
+    )
     assert bad.exit_code == 2 and "--grade" in bad.output and "40" in bad.output
 
 
@@ -179,6 +246,7 @@ def test_several_gaits_one_curve_each(scenario_path):
     moves the chain, reporting that gait; a bad gait is a one-line error before any run."""
     from snoworm.config.schema import ScenarioError
     from snoworm.studies.mobility import parse_gait
+
     sc = load_scenario(scenario_path("traverse_patch"))
     gaits = ["six_segment", parse_gait("[[0],[1],[2],[3],[4],[5]]")]
     m = mobility_map(sc, [0.4], [0.0], wheel_speed_mps=1.8, grades=[0.0, 8.0], inch_duration_s=4.0, gaits=gaits)

@@ -1,5 +1,6 @@
 """Figure 5 claims (snoworm/studies/paper/fig5.py): they follow the inchworm and rolling runs, and swapping
 the terrains reverses them."""
+
 from __future__ import annotations
 
 import pytest
@@ -11,8 +12,12 @@ from snoworm.studies import paper
 def inchworm_runs():
     ctx = paper.Context(quick=True)
     dur = [f"simulation.duration_s={paper.QUICK_INCHWORM_DURATION_S:g}"]
-    return (ctx.run("inchworm6", dur), ctx.run("inchworm6", dur + ["terrain.xt=0.5"]),
-            ctx.run("rolling6_xt025", dur), ctx.run("rolling6_xt025", dur + ["terrain.xt=0.9"]))
+    return (
+        ctx.run("inchworm6", dur),
+        ctx.run("inchworm6", dur + ["terrain.xt=0.5"]),
+        ctx.run("rolling6_xt025", dur),
+        ctx.run("rolling6_xt025", dur + ["terrain.xt=0.9"]),
+    )
 
 
 def test_fig5_claims_follow_the_runs(inchworm_runs):

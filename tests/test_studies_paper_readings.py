@@ -1,5 +1,6 @@
 """The alternative readings of the paper (snoworm/studies/paper/readings.py): under d = 1 and tau1 = 0 the
 documented claims fail."""
+
 from __future__ import annotations
 
 import pytest

@@ -1,4 +1,5 @@
 """Rendering of the report (snoworm/studies/paper/render.py): verdicts, escaping, the variant tables."""
+
 from __future__ import annotations
 
 from snoworm.studies import paper
@@ -6,11 +7,27 @@ from snoworm.studies import paper
 
 def _report(holds=True, statement="a statement", variant_holds=None):
     c = paper.Claim("x.y", "Fig 6", statement, "paper", {"v": 1.0, "w": [1.5, None]}, "v <= 2 | w", holds)
-    variants = [] if variant_holds is None else [paper.Variant(
-        "alt reading", {"terrain.model.tau1": 0},
-        [paper.Claim("x.y", "Fig 6", statement, "paper", {"v": 3.0}, "v <= 2", variant_holds)])]
-    sec = paper.Section("x", "Figure X", "the paper <says> & more", scenarios=["tow6_uniform"], claims=[c],
-                        tables=["| a | b |\n|---|---|\n| 1 | <2> |"], notes=["a <note>"], variants=variants)
+    variants = (
+        []
+        if variant_holds is None
+        else [
+            paper.Variant(
+                "alt reading",
+                {"terrain.model.tau1": 0},
+                [paper.Claim("x.y", "Fig 6", statement, "paper", {"v": 3.0}, "v <= 2", variant_holds)],
+            )
+        ]
+    )
+    sec = paper.Section(
+        "x",
+        "Figure X",
+        "the paper <says> & more",
+        scenarios=["tow6_uniform"],
+        claims=[c],
+        tables=["| a | b |\n|---|---|\n| 1 | <2> |"],
+        notes=["a <note>"],
+        variants=variants,
+    )
     return paper.PaperReport([sec], True, 0.1)
 
 

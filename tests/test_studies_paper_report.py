@@ -3,6 +3,7 @@
 The quick report runs end to end and every claim in it holds; a solver or input error in one
 item becomes a failing claim; the CLI's exit status follows --strict.
 """
+
 from __future__ import annotations
 
 import json
@@ -13,9 +14,22 @@ from click.testing import CliRunner
 from snoworm.cli import main
 from snoworm.studies import paper
 
-FIGURES = ("fig3_terrain_curves.png", "table2.png", "fig5_speeds.png", "fig5_positions.png", "fig6_forces.png",
-           "fig7_forces.png", "fig8_forces.png", "fig8_speeds.png", "fig9_forces.png", "fig9_speeds.png",
-           "fig10_force_diagram.png", "fig11_forces.png", "fig11_speeds.png", "fig3_d1_terrain_curves.png")
+FIGURES = (
+    "fig3_terrain_curves.png",
+    "table2.png",
+    "fig5_speeds.png",
+    "fig5_positions.png",
+    "fig6_forces.png",
+    "fig7_forces.png",
+    "fig8_forces.png",
+    "fig8_speeds.png",
+    "fig9_forces.png",
+    "fig9_speeds.png",
+    "fig10_force_diagram.png",
+    "fig11_forces.png",
+    "fig11_speeds.png",
+    "fig3_d1_terrain_curves.png",
+)
 
 
 @pytest.fixture(scope="module")
@@ -73,8 +87,18 @@ def test_solver_or_input_error_becomes_a_failing_claim():
 
 
 def _plain_sections(sections):
-    return [(s.key, s.title, s.scenarios, [c.to_dict() for c in s.claims], s.tables, s.notes,
-             [(v.label, v.overrides, [c.to_dict() for c in v.claims]) for v in s.variants]) for s in sections]
+    return [
+        (
+            s.key,
+            s.title,
+            s.scenarios,
+            [c.to_dict() for c in s.claims],
+            s.tables,
+            s.notes,
+            [(v.label, v.overrides, [c.to_dict() for c in v.claims]) for v in s.variants],
+        )
+        for s in sections
+    ]
 
 
 def test_parallel_items_give_the_serial_report(quick_report):
@@ -93,8 +117,8 @@ def test_parallel_items_give_the_serial_report(quick_report):
 def test_parallel_errors_become_failing_claims_too():
     bad = {"tow6_uniform": ["tow.force_N=heavy"], "inchworm6": ["terrain.xt=heavy"]}
     c = _claims(["fig5", "fig6", "fig3"], scenario_overrides=bad, quick=True, jobs=2)
-    assert not c["fig5.ran"].holds and not c["fig6.ran"].holds       # a prefetched run and an item failed
-    assert c["fig3.xt1_zero_crossing"].holds and c["fig3.xt05_never_positive"].holds   # the others still ran
+    assert not c["fig5.ran"].holds and not c["fig6.ran"].holds  # a prefetched run and an item failed
+    assert c["fig3.xt1_zero_crossing"].holds and c["fig3.xt05_never_positive"].holds  # the others still ran
     assert "heavy" in c["fig5.ran"].computed["error"]
 
 
@@ -104,11 +128,14 @@ def test_default_jobs_is_capped():
 
 def test_unknown_item_is_rejected():
     from snoworm.config.schema import ScenarioError
+
     with pytest.raises(ScenarioError, match="unknown report item"):
         paper.evaluate(["fig99"])
 
 
-@pytest.mark.parametrize("fmt,shown", [("svg", "data:image/svg+xml;base64,"), ("pdf", "<a href='fig3_terrain_curves.pdf'>")])
+@pytest.mark.parametrize(
+    "fmt,shown", [("svg", "data:image/svg+xml;base64,"), ("pdf", "<a href='fig3_terrain_curves.pdf'>")]
+)
 def test_plot_format_of_the_figures_and_how_the_report_shows_them(tmp_path, fmt, shown):
     secs = paper.evaluate(["fig3"], out_dir=tmp_path, plot_format=fmt)
     figs = [p for s in secs for p in s.figures]
@@ -124,6 +151,7 @@ def test_figure_size_of_the_report_figures(tmp_path):
     """paper --figure-size column: the figures are 3.5 in (252 pt) wide PDFs without Type 3 fonts
     (the fig3 item: Figure 3)."""
     import re
+
     secs = paper.evaluate(["fig3"], out_dir=tmp_path, plot_format="pdf", figure_size="column")
     figs = [p for s in secs for p in s.figures]
     assert figs
@@ -135,11 +163,13 @@ def test_figure_size_of_the_report_figures(tmp_path):
 
 def test_unknown_plot_format_is_rejected():
     from snoworm.config.schema import ScenarioError
+
     with pytest.raises(ScenarioError, match="plot format 'gif'"):
         paper.evaluate(["fig3"], plot_format="gif")
 
 
 # ------------------------------------------------------------------ CLI
+
 
 def _fake_report(holds):
     c = paper.Claim("x.y", "Fig 6", "a statement", "paper", {"v": 1.0}, "v <= 2", holds)
@@ -148,8 +178,13 @@ def _fake_report(holds):
 
 @pytest.mark.parametrize("holds,strict,code", [(True, True, 0), (False, False, 0), (False, True, 1)])
 def test_cli_exit_status(monkeypatch, tmp_path, holds, strict, code):
-    monkeypatch.setattr(paper, "run_paper", lambda out, quick=False, progress=None, overwrite=False, jobs=1,
-                        plot_format="png", figure_size=None, command=None: _fake_report(holds))
+    monkeypatch.setattr(
+        paper,
+        "run_paper",
+        lambda out, quick=False, progress=None, overwrite=False, jobs=1, plot_format="png", figure_size=None, command=None: (
+            _fake_report(holds)
+        ),
+    )
     args = ["paper", "--out", str(tmp_path), "--quick"] + (["--strict"] if strict else [])
     res = CliRunner().invoke(main, args)
     assert res.exit_code == code, res.output

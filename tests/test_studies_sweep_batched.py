@@ -2,6 +2,7 @@
 
 The solver work budgets and the batched-vs-one-by-one driver test are in test_simulation_driver.py.
 """
+
 import numpy as np
 import pytest
 
@@ -26,15 +27,18 @@ def test_unbatchable_cases_run_one_by_one(scenario_path):
     """Event-driven modes and lone cases go through the ordinary per-case function."""
     uni = read_yaml(scenario_path("tow6_uniform"))
     inch = read_yaml(scenario_path("inchworm6"))
-    tasks = [SweepTask(0, raw=apply_overrides(uni, [("simulation.duration_s", 2)])),
-             SweepTask(1, raw=apply_overrides(uni, [("simulation.duration_s", 2), ("tow.force_N", 50)])),
-             SweepTask(2, raw=inch),
-             SweepTask(3, raw=apply_overrides(uni, [("simulation.duration_s", 3)]))]   # its own group of one
+    tasks = [
+        SweepTask(0, raw=apply_overrides(uni, [("simulation.duration_s", 2)])),
+        SweepTask(1, raw=apply_overrides(uni, [("simulation.duration_s", 2), ("tow.force_N", 50)])),
+        SweepTask(2, raw=inch),
+        SweepTask(3, raw=apply_overrides(uni, [("simulation.duration_s", 3)])),
+    ]  # its own group of one
     seen = []
 
     def one(task):
         seen.append(task.index)
         return {"index": task.index, "status": "stub"}
+
     rows = {r["index"]: r for r in run_chunk(tasks, fn=one, metrics=case_metrics)}
     assert sorted(seen) == [2, 3]
     assert rows[0]["status"] == rows[1]["status"] == "ok"
@@ -47,17 +51,21 @@ def test_in_process_sweep_validates_each_case_once(scenario_path, monkeypatch, b
     """A sweep run in this process hands the scenarios it validated while planning to the executor."""
     import snoworm.studies.sweep.metrics as metrics
     import snoworm.studies.sweep.plan as plan_mod
+
     calls = []
 
     def counting(original):
         def wrapped(*args, **kwargs):
             calls.append(1)
             return original(*args, **kwargs)
+
         return wrapped
+
     monkeypatch.setattr(plan_mod, "scenario_from_dict", counting(plan_mod.scenario_from_dict))
-    monkeypatch.setattr(metrics, "scenario_from_dict", counting(metrics.scenario_from_dict))   # SweepTask.validated
-    table = run_sweep(scenario_path("tow6_uniform"), ["tow.force_N=0,100,200", "simulation.duration_s=1"],
-                      plot=False, batch=batch)
+    monkeypatch.setattr(metrics, "scenario_from_dict", counting(metrics.scenario_from_dict))  # SweepTask.validated
+    table = run_sweep(
+        scenario_path("tow6_uniform"), ["tow.force_N=0,100,200", "simulation.duration_s=1"], plot=False, batch=batch
+    )
     assert [r["status"] for r in table.rows] == ["ok"] * 3
     assert len(calls) == 3
 
@@ -68,16 +76,19 @@ def test_local_pool_tasks_carry_the_validated_scenarios(scenario_path):
     from snoworm.config.scenario import load_scenario
     from snoworm.studies.sweep.plan import plan_sweep as _plan
     from snoworm.studies.sweep.run import _tasks
+
     sets = ["tow.force_N=0,100", "simulation.duration_s=1"]
     plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=True)
     tasks = list(_tasks(plan, plan.cases, None, False))
     assert [t.index for t in tasks] == [0, 1] and all(t.raw is None for t in tasks)
     for t, f in zip(tasks, (0.0, 100.0)):
-        assert t.scenario == load_scenario(scenario_path("tow6_uniform"),
-                                           [("tow.force_N", f), ("simulation.duration_s", 1)])
+        assert t.scenario == load_scenario(
+            scenario_path("tow6_uniform"), [("tow.force_N", f), ("simulation.duration_s", 1)]
+        )
     plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=False)
-    assert all(t.scenario is None and t.raw["tow"]["force_N"] in (0, 100)
-               for t in _tasks(plan, plan.cases, None, False))
+    assert all(
+        t.scenario is None and t.raw["tow"]["force_N"] in (0, 100) for t in _tasks(plan, plan.cases, None, False)
+    )
 
 
 def test_grade_sweep_batches_only_equal_elevations():
@@ -85,6 +96,7 @@ def test_grade_sweep_batches_only_equal_elevations():
     profile); members on the same grade share one, and the stacked run equals the runs alone."""
     from snoworm import load_scenario, simulate
     from snoworm.simulation.driver import batch_key, simulate_batch
+
     base = load_scenario("tow6_uniform", ["simulation.duration_s=3"])
     a, b = base.with_({"terrain.grade_deg": 4.0}), base.with_({"terrain.grade_deg": 8.0})
     assert batch_key(a) != batch_key(b)

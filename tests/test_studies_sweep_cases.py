@@ -1,4 +1,5 @@
 """snoworm.studies.sweep.cases: the grid or zip of the axes, case ids and keys."""
+
 from __future__ import annotations
 
 import pytest
@@ -24,7 +25,8 @@ def test_case_ids_widen_past_9999_and_zip_needs_equal_lengths():
     cases = build_cases([parse_sweep_option("terrain.xt=0.1:1.0:101"), parse_sweep_option("tow.force_N=0:99:100")])
     assert len(cases) == 10100
     assert cases[0].case_id == "00000" and cases[-1].case_id == "10099"
-    assert cases[5].overrides([parse_sweep_option("terrain.xt=0.1:1.0:101"),
-                               parse_sweep_option("tow.force_N=0:99:100")]) == [("terrain.xt", 0.1), ("tow.force_N", 5)]
+    assert cases[5].overrides(
+        [parse_sweep_option("terrain.xt=0.1:1.0:101"), parse_sweep_option("tow.force_N=0:99:100")]
+    ) == [("terrain.xt", 0.1), ("tow.force_N", 5)]
     with pytest.raises(ScenarioError, match="terrain.xt has 2, tow.force_N has 3"):
         build_cases([parse_sweep_option("terrain.xt=0.5,0.6"), parse_sweep_option("tow.force_N=1,2,3")], zip_=True)

@@ -1,4 +1,5 @@
 """snoworm.studies.sweep.executors: serial, process, Dask and batched executors agree; executor failures."""
+
 from __future__ import annotations
 
 import pytest
@@ -24,19 +25,25 @@ def test_serial_and_two_processes_give_identical_rows(tmp_path):
     v = {(r["terrain.xt"], r["tow.force_N"]): r["mean_speed_mps"] for r in serial}
     assert v[(0.9, 200)] < v[(0.9, 0)] and v[(0.7, 0)] < v[(0.9, 0)]
 
+
 def test_dask_cluster_gives_identical_rows(tmp_path):
-    distributed = pytest.importorskip("distributed", reason="dask[distributed] not installed (pip install snoworm[dask])")
+    distributed = pytest.importorskip(
+        "distributed", reason="dask[distributed] not installed (pip install snoworm[dask])"
+    )
     serial = run_sweep(TOW6, SMALL, plot=False)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
         table = run_sweep(TOW6, SMALL, out_dir=tmp_path / "d", scheduler=cluster.scheduler_address, plot=False)
     assert comparable(table) == comparable(serial)
     assert len(csv_rows(tmp_path / "d" / "summary.csv")) == 4
+
 
 def test_missing_dask_gives_an_install_hint(monkeypatch):
     monkeypatch.setitem(__import__("sys").modules, "distributed", None)
     with pytest.raises(ScenarioError, match=r"snoworm\[dask\]"):
         run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], scheduler="tcp://127.0.0.1:1", plot=False)
+
 
 def test_executor_failure_is_reported_and_rows_kept(tmp_path):
     class Dying:
@@ -61,6 +68,7 @@ def test_batch_executor_without_pool_yields_every_task_once():
     def fn(task):
         seen.append(task.index)
         return {"index": task.index, "status": "stub"}
+
     ex = BatchExecutor(batch_size=3, metrics=None)
     out = list(ex.map_unordered(fn, (SweepTask(j, raw="not a mapping") for j in range(7))))
     ex.close()
@@ -72,6 +80,7 @@ def _listener(answer: bytes):
     """A local TCP service that is not Dask: it accepts and stays silent (``b""``) or answers junk."""
     import socket
     import threading
+
     srv = socket.socket()
     srv.bind(("127.0.0.1", 0))
     srv.listen(4)
@@ -86,6 +95,7 @@ def _listener(answer: bytes):
             conns.append(c)
             if answer:
                 c.sendall(answer)
+
     threading.Thread(target=serve, daemon=True).start()
     return srv, conns
 
@@ -94,12 +104,12 @@ def _listener(answer: bytes):
 def test_a_service_other_than_dask_is_exit_2_not_a_hang(monkeypatch, answer):
     pytest.importorskip("distributed", reason="dask[distributed] not installed")
     from snoworm.studies.sweep import executors
-    monkeypatch.setattr(executors, "HANDSHAKE_TIMEOUT_S", 1.0)    # the bound under test, shortened
+
+    monkeypatch.setattr(executors, "HANDSHAKE_TIMEOUT_S", 1.0)  # the bound under test, shortened
     srv, conns = _listener(answer)
     try:
         with pytest.raises(ScenarioError, match=r"--scheduler .*cannot connect to the Dask scheduler"):
-            run_sweep(TOW6, ["terrain.xt=0.7", SHORT], scheduler=f"tcp://127.0.0.1:{srv.getsockname()[1]}",
-                      plot=False)
+            run_sweep(TOW6, ["terrain.xt=0.7", SHORT], scheduler=f"tcp://127.0.0.1:{srv.getsockname()[1]}", plot=False)
     finally:
         srv.close()
         for c in conns:

@@ -1,4 +1,5 @@
 """Figures of a sweep's table (snoworm.studies.sweep.figures, SweepTable.plot)."""
+
 import numpy as np
 import pytest
 
@@ -11,13 +12,31 @@ from tests.figure_checks import problems
 def _table(keys, values, zip_=False):
     rows = []
     for i, vals in enumerate(values):
-        r = {"case_id": f"c{i:03d}", "case_key": "", "status": "ok" if i != 1 else "failed", "error": "",
-             "mean_speed_mps": 0.1 * i if i != 1 else None, "mean_slip": 0.01 * i, "max_link_force_N": 10.0 * i,
-             "energy_per_m_J": 100.0 + i, "immobilised": i == 2}
+        r = {
+            "case_id": f"c{i:03d}",
+            "case_key": "",
+            "status": "ok" if i != 1 else "failed",
+            "error": "",
+            "mean_speed_mps": 0.1 * i if i != 1 else None,
+            "mean_slip": 0.01 * i,
+            "max_link_force_N": 10.0 * i,
+            "energy_per_m_J": 100.0 + i,
+            "immobilised": i == 2,
+        }
         r.update(dict(zip(keys, vals)))
         rows.append(r)
-    cols = ["case_id", "case_key", *keys, "status", "error", "mean_speed_mps", "mean_slip", "max_link_force_N",
-            "energy_per_m_J", "immobilised"]
+    cols = [
+        "case_id",
+        "case_key",
+        *keys,
+        "status",
+        "error",
+        "mean_speed_mps",
+        "mean_slip",
+        "max_link_force_N",
+        "energy_per_m_J",
+        "immobilised",
+    ]
     return SweepTable(cols, rows, keys)
 
 

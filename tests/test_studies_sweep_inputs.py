@@ -1,4 +1,5 @@
 """A sweep resumes only with the same inputs: file contents and the snoworm version (issue 24, high)."""
+
 from __future__ import annotations
 
 import json
@@ -37,7 +38,7 @@ def test_a_changed_controller_file_refuses_the_resume_naming_it_unless_restart(t
     p = _project(tmp_path)
     out = tmp_path / "out"
     first = run_sweep(p, ["terrain.xt=0.8,0.9"], out_dir=out, progress=False, plot=False)
-    _project(tmp_path, speed=1.5)                                  # the controller changed
+    _project(tmp_path, speed=1.5)  # the controller changed
     with pytest.raises(ScenarioError) as err:
         run_sweep(p, ["terrain.xt=0.8,0.9"], out_dir=out, progress=False, plot=False)
     assert str(tmp_path / "ctl.py") in str(err.value) and "--restart" in str(err.value)
@@ -61,21 +62,38 @@ def test_an_unchanged_sweep_still_resumes(tmp_path):
 
 def test_another_snoworm_version_refuses_the_resume(tmp_path, monkeypatch):
     out = tmp_path / "out"
-    run_sweep(SCENARIOS / "tow6_uniform.yaml", ["terrain.xt=0.8", "simulation.duration_s=1"], out_dir=out,
-              progress=False, plot=False)
+    run_sweep(
+        SCENARIOS / "tow6_uniform.yaml",
+        ["terrain.xt=0.8", "simulation.duration_s=1"],
+        out_dir=out,
+        progress=False,
+        plot=False,
+    )
     import snoworm.studies.sweep.plan as plan_mod  # the resume key is the plan's
+
     monkeypatch.setattr(plan_mod, "__version__", "999.0")
     with pytest.raises(ScenarioError, match="run by snoworm .* this is 999.0"):
-        run_sweep(SCENARIOS / "tow6_uniform.yaml", ["terrain.xt=0.8", "simulation.duration_s=1"], out_dir=out,
-                  progress=False, plot=False)
+        run_sweep(
+            SCENARIOS / "tow6_uniform.yaml",
+            ["terrain.xt=0.8", "simulation.duration_s=1"],
+            out_dir=out,
+            progress=False,
+            plot=False,
+        )
 
 
 def test_referenced_files_finds_parameter_sets_model_files_controllers_and_swept_paths(tmp_path):
     for name in ("ps.yaml", "m.yaml", "a.yaml", "b.yaml", "c.py"):
         (tmp_path / name).write_text("x: 1\n")
-    raw = {"vehicle": {"parameter_set": "ps.yaml"}, "terrain": {"model_file": "m.yaml"},
-           "mode": {"controller": "c.py:C"}, "description": "not/a/file and text:Here"}
-    axes = as_axes([("terrain.model_file", ["a.yaml", "b.yaml"]), ("mode.controller", ["tests.controller_helpers:Uniform"])])
+    raw = {
+        "vehicle": {"parameter_set": "ps.yaml"},
+        "terrain": {"model_file": "m.yaml"},
+        "mode": {"controller": "c.py:C"},
+        "description": "not/a/file and text:Here",
+    }
+    axes = as_axes(
+        [("terrain.model_file", ["a.yaml", "b.yaml"]), ("mode.controller", ["tests.controller_helpers:Uniform"])]
+    )
     found = referenced_files(raw, axes, tmp_path)
     names = sorted(p.rsplit("/", 1)[-1] for p in found)
     assert names == ["a.yaml", "b.yaml", "c.py", "controller_helpers.py", "m.yaml", "ps.yaml"]

@@ -1,4 +1,5 @@
 """snoworm.studies.sweep.metrics: per-case metrics, statuses and failure handling."""
+
 from __future__ import annotations
 
 import pytest
@@ -11,11 +12,19 @@ from tests.sweep_helpers import SHORT, TOW6, csv_rows
 
 def test_case_metrics_match_a_direct_run():
     table = run_sweep(TOW6, ["terrain.xt=0.8", "tow.force_N=100", SHORT], plot=False)
-    direct = case_metrics(simulate(load_scenario(TOW6, [("terrain.xt", 0.8), ("tow.force_N", 100),
-                                                       ("simulation.duration_s", 6)])))
+    direct = case_metrics(
+        simulate(load_scenario(TOW6, [("terrain.xt", 0.8), ("tow.force_N", 100), ("simulation.duration_s", 6)]))
+    )
     row = table.rows[0]
-    for k in ("distance_m", "mean_speed_mps", "late_speed_mps", "mean_slip", "max_slip", "max_link_force_N",
-              "energy_per_m_J"):
+    for k in (
+        "distance_m",
+        "mean_speed_mps",
+        "late_speed_mps",
+        "mean_slip",
+        "max_slip",
+        "max_link_force_N",
+        "energy_per_m_J",
+    ):
         assert row[k] == pytest.approx(direct[k], rel=1e-12), k
     for j, f in enumerate(direct["final_link_forces_N"]):
         assert row[f"final_link_force_{j}_N"] == pytest.approx(f, rel=1e-12)
@@ -23,9 +32,11 @@ def test_case_metrics_match_a_direct_run():
     assert row["final_link_force_4_N"] == pytest.approx(100 * 5 / 6, rel=0.05)
     assert row["immobilised"] is False and row["n_segments"] == 6
 
+
 def test_a_failing_case_does_not_stop_the_others(tmp_path, monkeypatch):
     import sys
-    simmod = sys.modules["snoworm.studies.sweep.metrics"]        # where run_case looks simulate up
+
+    simmod = sys.modules["snoworm.studies.sweep.metrics"]  # where run_case looks simulate up
     real = simmod.simulate
 
     def flaky(sc):
@@ -42,10 +53,14 @@ def test_a_failing_case_does_not_stop_the_others(tmp_path, monkeypatch):
     assert st[-1]["distance_m"] is None and st[-1]["immobilised"] is None
     assert len(csv_rows(tmp_path / "summary.csv")) == 3
 
+
 def test_rolling_speed_falls_with_xt_and_immobilised_below_0586():
     xts = [0.5, 0.55, 0.62, 0.7, 0.8, 0.9, 1.0]
-    table = run_sweep(TOW6, [f"terrain.xt={','.join(map(str, xts))}", "tow.force_N=0", "vehicle.segments=1",
-                             "simulation.duration_s=10"], plot=False)
+    table = run_sweep(
+        TOW6,
+        [f"terrain.xt={','.join(map(str, xts))}", "tow.force_N=0", "vehicle.segments=1", "simulation.duration_s=10"],
+        plot=False,
+    )
     assert [r["terrain.xt"] for r in table] == xts
     speed = table["mean_speed_mps"]
     assert all(a < b for a, b in zip(speed, speed[1:]))
@@ -68,6 +83,7 @@ def test_run_case_reports_each_status_without_raising(monkeypatch):
 
     def buggy(sc):
         raise ZeroDivisionError("line one\nline two")
+
     monkeypatch.setattr("snoworm.studies.sweep.metrics.simulate", buggy)
     err = run_case(SweepTask(5, raw=raw))
     assert err["status"] == "error"

@@ -1,5 +1,6 @@
 """A sweep's plan (snoworm.studies.sweep.plan): every case validated up front, invalid ones
 recorded, the resume key, and how many validated scenarios are kept for the executor."""
+
 import pytest
 
 from snoworm.config.schema import ScenarioError
@@ -28,6 +29,6 @@ def test_the_resume_key_depends_on_the_axes_and_validated_scenarios_are_bounded(
     a = plan_sweep(TOW6, ["terrain.xt=0.8,0.9", SHORT], False, False, None, 1)
     b = plan_sweep(TOW6, ["terrain.xt=0.8,0.95", SHORT], False, False, None, 1)
     assert a.definition["scenario_sha256"] == b.definition["scenario_sha256"] and a.definition != b.definition
-    assert a.scenarios == {}                                  # keep=False: validated again where they run
-    monkeypatch.setattr(plan_mod, "KEEP_VALIDATED_MAX", 1)    # more cases than that: none kept
+    assert a.scenarios == {}  # keep=False: validated again where they run
+    monkeypatch.setattr(plan_mod, "KEEP_VALIDATED_MAX", 1)  # more cases than that: none kept
     assert plan_sweep(TOW6, ["terrain.xt=0.8,0.9", SHORT], False, False, None, 1, keep=True).scenarios == {}

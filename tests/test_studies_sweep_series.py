@@ -1,4 +1,5 @@
 """snoworm.studies.sweep.series: every case's time series in one netCDF file (run_sweep series='netcdf')."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -21,8 +22,12 @@ def _direct(xt, tow):
 @pytest.mark.parametrize("batch", [0, 4])
 def test_grid_series_in_one_file(tmp_path, batch):
     table = run_sweep(TOW6, SETS, out_dir=tmp_path, plot=False, series="netcdf", batch=batch)
-    assert sorted(p.name for p in tmp_path.iterdir()) == [".snoworm-manifest.json", "series.nc", "summary.csv",
-                                                                "sweep.json"]  # no cases/
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        ".snoworm-manifest.json",
+        "series.nc",
+        "summary.csv",
+        "sweep.json",
+    ]  # no cases/
     ds = table.series()
     assert ds["v_mps"].dims == ("terrain_xt", "tow_force_N", "simulation_duration_s", "time", "segment")
     assert ds["force_N"].dims[-1] == "link" and ds["force_N"].attrs["units"] == "N"
@@ -32,7 +37,7 @@ def test_grid_series_in_one_file(tmp_path, batch):
     res = _direct(0.9, 200)
     case = ds.sel(terrain_xt=0.9, tow_force_N=200.0, simulation_duration_s=1.5)
     np.testing.assert_array_equal(case["t_s"].values, res.t)
-    np.testing.assert_array_equal(ds["time"].values, res.t)         # the same output times for every case
+    np.testing.assert_array_equal(ds["time"].values, res.t)  # the same output times for every case
     # unbatched, a case is the same code path as the direct run on the same machine (exact
     # equality is safe); one stacked solve (batch) agrees with a solve of its own within the
     # solver tolerance
@@ -78,20 +83,28 @@ def test_unknown_series_format():
 
 
 def test_netcdf_without_xarray_is_bad_input(monkeypatch, tmp_path):
-    monkeypatch.setitem(__import__("sys").modules, "xarray", None)     # import xarray -> ImportError
-    with pytest.raises(ScenarioError, match=r"--series netcdf needs xarray and h5netcdf: pip install 'snoworm\[data\]'"):
+    monkeypatch.setitem(__import__("sys").modules, "xarray", None)  # import xarray -> ImportError
+    with pytest.raises(
+        ScenarioError, match=r"--series netcdf needs xarray and h5netcdf: pip install 'snoworm\[data\]'"
+    ):
         run_sweep(TOW6, SETS, out_dir=tmp_path, series="netcdf")
-    assert list(tmp_path.iterdir()) == []                              # nothing written
+    assert list(tmp_path.iterdir()) == []  # nothing written
 
 
 def test_netcdf4_with_units_on_every_variable_and_coordinate(tmp_path):
     """h5netcdf (HDF5, no xarray) opens series.nc; every variable and coordinate has CF units and
     a long_name without a unit; data are compressed; dimension names are identifiers."""
     import h5netcdf
-    run_sweep(TOW6, ["terrain.xt=0.7,0.9", "tow.force_N=0,100", "simulation.duration_s=1"], out_dir=tmp_path,
-              plot=False, series="netcdf")
+
+    run_sweep(
+        TOW6,
+        ["terrain.xt=0.7,0.9", "tow.force_N=0,100", "simulation.duration_s=1"],
+        out_dir=tmp_path,
+        plot=False,
+        series="netcdf",
+    )
     path = tmp_path / "series.nc"
-    assert path.read_bytes()[:4] == b"\x89HDF"                      # netCDF4 is HDF5
+    assert path.read_bytes()[:4] == b"\x89HDF"  # netCDF4 is HDF5
     with h5netcdf.File(path, "r") as f:
         names = set(f.variables)
         dims = set(f.dimensions)
@@ -100,9 +113,11 @@ def test_netcdf4_with_units_on_every_variable_and_coordinate(tmp_path):
         for name in names:
             v = f.variables[name]
             assert "units" in v.attrs and "long_name" in v.attrs, name
-            assert not str(v.attrs["long_name"]).rstrip().endswith("]"), name   # no unit in the long name
+            assert not str(v.attrs["long_name"]).rstrip().endswith("]"), name  # no unit in the long name
         assert f.variables["v_mps"].compression == "gzip"
-        assert f.variables["terrain_xt"].attrs["units"] == "1" and f.variables["terrain_xt"].attrs["key"] == "terrain.xt"
+        assert (
+            f.variables["terrain_xt"].attrs["units"] == "1" and f.variables["terrain_xt"].attrs["key"] == "terrain.xt"
+        )
     ds = load_sweep(tmp_path).series()
     assert all("units" in ds[c].attrs for c in ds.coords)
     label = ds["v_mps"].attrs["long_name"] + " [" + ds["v_mps"].attrs["units"] + "]"
@@ -111,5 +126,6 @@ def test_netcdf4_with_units_on_every_variable_and_coordinate(tmp_path):
 
 def test_netcdf3_of_earlier_versions_still_loads(tmp_path):
     from snoworm.studies.sweep.series import load_series
+
     xr.Dataset({"v_mps": ("time", np.arange(3.0))}).to_netcdf(tmp_path / "old.nc", engine="scipy")
     assert load_series(tmp_path / "old.nc")["v_mps"].values.tolist() == [0.0, 1.0, 2.0]

@@ -1,4 +1,5 @@
 """snoworm.studies.sweep.spec: SPEC parsing (lists, START:STOP:COUNT ranges) and its CLI messages."""
+
 from __future__ import annotations
 
 import pytest
@@ -18,28 +19,33 @@ def test_list_spec_parses_numbers_and_yaml():
     assert parse_spec("mode.speed_mps", "[1.8, 1.5],[1.0, 1.0]") == ([1.8, 1.5], [1.0, 1.0])
     assert parse_spec("simulation.method", "LSODA,BDF") == ("LSODA", "BDF")
 
+
 def test_range_spec_is_inclusive_with_count_values():
     v = parse_spec("terrain.xt", "0.3:1.0:15")
     assert len(v) == 15
     assert v[0] == 0.3 and v[-1] == 1.0
     assert v[1] == pytest.approx(0.35, abs=1e-12)
-    assert parse_spec("terrain.xt", "0.6:1.0:9")[2] == 0.7          # linspace noise rounded away
+    assert parse_spec("terrain.xt", "0.6:1.0:9")[2] == 0.7  # linspace noise rounded away
     ints = parse_spec("tow.force_N", "0:200:3")
     assert ints == (0, 100, 200) and all(isinstance(x, int) for x in ints)
     assert parse_spec("terrain.xt", "0.5:0.5:1") == (0.5,)
 
-@pytest.mark.parametrize("sets, needle", [
-    (["terrain.xt=0.3:1.0"], "START:STOP:COUNT"),
-    (["terrain.xt=0.3:1.0:0"], "COUNT must be at least 1"),
-    (["terrain.xt=0.3:1.0:x"], "COUNT must be a whole number"),
-    (["terrain.xt=a:b:3"], "START and STOP must be numbers"),
-    (["terrain.xt=0,,1"], "empty item"),
-    (["terrain.xt=0.5,0.5"], "appears twice"),
-    (["terrain.xt"], "expected KEY=SPEC"),
-    (["terrain.xt=0.5", "terrain.xt=0.6"], "more than once"),
-    (["terrain.xtt=0.5,0.6"], "Did you mean 'xt'"),
-    (["terrain.xt=0.5,0.6", "tow.force_N=1,2,3", "--zip"], "same number of values"),
-])
+
+@pytest.mark.parametrize(
+    "sets, needle",
+    [
+        (["terrain.xt=0.3:1.0"], "START:STOP:COUNT"),
+        (["terrain.xt=0.3:1.0:0"], "COUNT must be at least 1"),
+        (["terrain.xt=0.3:1.0:x"], "COUNT must be a whole number"),
+        (["terrain.xt=a:b:3"], "START and STOP must be numbers"),
+        (["terrain.xt=0,,1"], "empty item"),
+        (["terrain.xt=0.5,0.5"], "appears twice"),
+        (["terrain.xt"], "expected KEY=SPEC"),
+        (["terrain.xt=0.5", "terrain.xt=0.6"], "more than once"),
+        (["terrain.xtt=0.5,0.6"], "Did you mean 'xt'"),
+        (["terrain.xt=0.5,0.6", "tow.force_N=1,2,3", "--zip"], "same number of values"),
+    ],
+)
 def test_bad_spec_exits_2_with_a_clear_message(tmp_path, sets, needle):
     args = ["sweep", TOW6, "--out", str(tmp_path / "o")]
     for s in sets:
@@ -66,8 +72,9 @@ def test_axes_from_strings_pairs_and_none():
 
 
 def test_a_yaml_alias_bomb_in_a_swept_value_is_refused_at_once():
-    levels = ["a: &a [x,x,x,x,x,x,x,x,x]"] + [f"{c}: &{c} [{', '.join(['*' + p] * 9)}]"
-                                               for p, c in zip("abcdef", "bcdefg")]
+    levels = ["a: &a [x,x,x,x,x,x,x,x,x]"] + [
+        f"{c}: &{c} [{', '.join(['*' + p] * 9)}]" for p, c in zip("abcdef", "bcdefg")
+    ]
     bomb = "{" + ", ".join(levels) + "}"
     with pytest.raises(ScenarioError, match=r"mode\.params.*alias"):
         parse_spec("mode.params", bomb)

@@ -1,4 +1,5 @@
 """snoworm.studies.sweep.summary: SweepTable, summary.csv / sweep.json, resumption and refusal."""
+
 from __future__ import annotations
 
 import csv
@@ -25,7 +26,7 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch):
     kept = {next(csv.reader([ln]))[0] for ln in lines[1:3]}
 
     calls = []
-    real = run_mod.run_case                                  # where run_sweep looks run_case up
+    real = run_mod.run_case  # where run_sweep looks run_case up
 
     def counting(task):
         calls.append(task.index)
@@ -33,7 +34,7 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch):
 
     monkeypatch.setattr(run_mod, "run_case", counting)
     resumed = run_sweep(TOW6, sets, out_dir=tmp_path, plot=False)
-    assert len(calls) == 4                                   # 6 cases - 2 kept
+    assert len(calls) == 4  # 6 cases - 2 kept
     assert not {f"{i:04d}" for i in calls} & kept
     assert comparable(resumed) == comparable(full)
     rows = csv_rows(summary)
@@ -43,12 +44,13 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch):
     run_sweep(TOW6, sets, out_dir=tmp_path, plot=False)
     assert calls == []
 
+
 def test_another_sweep_in_the_same_directory_is_refused(tmp_path):
     run_sweep(TOW6, ["terrain.xt=0.8,0.9", SHORT], out_dir=tmp_path, plot=False)
-    r = CliRunner().invoke(main, ["sweep", TOW6, "--set", "terrain.xt=0.7,0.9", "--set", SHORT,
-                                  "--out", str(tmp_path)])
+    r = CliRunner().invoke(main, ["sweep", TOW6, "--set", "terrain.xt=0.7,0.9", "--set", SHORT, "--out", str(tmp_path)])
     assert r.exit_code == 2 and "holds another sweep" in r.output
     assert json.loads((tmp_path / "sweep.json").read_text())["definition"]["axes"][0]["values"] == [0.8, 0.9]
+
 
 def test_table_round_trips_through_csv(tmp_path):
     table = run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], out_dir=tmp_path, plot=False)
@@ -59,15 +61,37 @@ def test_table_round_trips_through_csv(tmp_path):
 
 def test_summary_cells_full_precision_and_empty_for_none(tmp_path):
     cols = ["case_id", "case_key", "mode.speed_mps", "status", "error", "distance_m", "immobilised", "n_segments"]
-    table = sweep_mod.SweepTable(cols, [
-        {"case_id": "0001", "case_key": "k1", "mode.speed_mps": [1.8, 1.5], "status": "ok", "error": "",
-         "distance_m": 0.1 + 0.2, "immobilised": False, "n_segments": 6},
-        {"case_id": "0000", "case_key": "k0", "mode.speed_mps": [1.0, 1.0], "status": "invalid",
-         "error": "a, b", "distance_m": None, "immobilised": None, "n_segments": None}], ["mode.speed_mps"])
+    table = sweep_mod.SweepTable(
+        cols,
+        [
+            {
+                "case_id": "0001",
+                "case_key": "k1",
+                "mode.speed_mps": [1.8, 1.5],
+                "status": "ok",
+                "error": "",
+                "distance_m": 0.1 + 0.2,
+                "immobilised": False,
+                "n_segments": 6,
+            },
+            {
+                "case_id": "0000",
+                "case_key": "k0",
+                "mode.speed_mps": [1.0, 1.0],
+                "status": "invalid",
+                "error": "a, b",
+                "distance_m": None,
+                "immobilised": None,
+                "n_segments": None,
+            },
+        ],
+        ["mode.speed_mps"],
+    )
     assert table.to_csv(tmp_path / "summary.csv") == (
         "case_id,case_key,mode.speed_mps,status,error,distance_m,immobilised,n_segments\n"
         '0000,k0,"[1.0,1.0]",invalid,"a, b",,,\n'
-        '0001,k1,"[1.8,1.5]",ok,,0.30000000000000004,false,6\n')
+        '0001,k1,"[1.8,1.5]",ok,,0.30000000000000004,false,6\n'
+    )
     back = sweep_mod.SweepTable.from_csv(tmp_path / "summary.csv")
     assert back.rows[1]["distance_m"] == 0.1 + 0.2 and back.rows[1]["mode.speed_mps"] == [1.8, 1.5]
     assert back.rows[0]["immobilised"] is None and back.rows[1]["immobilised"] is False
@@ -83,18 +107,27 @@ def sweep_dir(tmp_path_factory):
 
 def _copy(src, tmp_path):
     import shutil
+
     dst = tmp_path / "s"
     shutil.copytree(src, dst)
     return dst
 
 
-@pytest.mark.parametrize("name, text", [
-    ("sweep.json", "{not json"), ("sweep.json", "[" * 100000), ("sweep.json", '{"definition": {"axes": [3]}}'),
-    ("sweep.json", '{"definition": {"axes": [{"key": 5}]}}'), ("sweep.json", '{"definition": []}'),
-    ("summary.csv", "a,b,c\n1,2,3\n"), ("summary.csv", ""),
-])
+@pytest.mark.parametrize(
+    "name, text",
+    [
+        ("sweep.json", "{not json"),
+        ("sweep.json", "[" * 100000),
+        ("sweep.json", '{"definition": {"axes": [3]}}'),
+        ("sweep.json", '{"definition": {"axes": [{"key": 5}]}}'),
+        ("sweep.json", '{"definition": []}'),
+        ("summary.csv", "a,b,c\n1,2,3\n"),
+        ("summary.csv", ""),
+    ],
+)
 def test_a_tampered_sweep_folder_raises_one_error_type_naming_the_file(sweep_dir, tmp_path, name, text):
     from snoworm.results.result import ResultFileError
+
     d = _copy(sweep_dir, tmp_path)
     (d / name).write_text(text)
     with pytest.raises(ResultFileError, match=name.replace(".", r"\.")):

@@ -1,4 +1,5 @@
 """Terrain laws (docs/model.md section 2): hand-computed values and properties (hypothesis)."""
+
 import math
 
 import numpy as np
@@ -11,7 +12,7 @@ from snoworm.terrain import TerrainProfile
 
 TP = terrain_params("frostyboy")
 
-FN = 90 * 9.81 / 4   # static normal force per wheel [N]
+FN = 90 * 9.81 / 4  # static normal force per wheel [N]
 RW = 0.265
 
 
@@ -20,7 +21,7 @@ def test_traction_hand_value():
     inner = math.atan(math.atan(4 * 1.0 * 0.02))
     expected = FN * 0.7 * math.sin(2.8 * 1.0 * inner)
     assert terrain.traction_force(0.02, FN, 1.0, TP) == pytest.approx(expected, rel=1e-12)
-    assert expected == pytest.approx(34.18, abs=0.01)   # by hand: 154.5 N * sin(0.22305)
+    assert expected == pytest.approx(34.18, abs=0.01)  # by hand: 154.5 N * sin(0.22305)
 
 
 def test_resistance_hand_values():
@@ -39,9 +40,9 @@ def test_resistance_torque_matches_table2_torques():
 
 def test_locked_wheel_slip_is_finite():
     assert terrain.slip(0.0, 0.0, 0.05) == 0.0
-    assert terrain.slip(0.0, -0.3, 0.05) == 1.0        # locked, sliding backward: full braking slip
+    assert terrain.slip(0.0, -0.3, 0.05) == 1.0  # locked, sliding backward: full braking slip
     assert terrain.slip(0.0, 0.3, 0.05) == -1.0
-    assert terrain.slip(2.0, 1.9, 0.05) == pytest.approx(0.05)   # equals Eq. 1 when driving
+    assert terrain.slip(2.0, 1.9, 0.05) == pytest.approx(0.05)  # equals Eq. 1 when driving
 
 
 speeds = st.floats(-5, 5, allow_nan=False)

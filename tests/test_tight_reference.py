@@ -14,6 +14,7 @@ Gait runs (inchworm, supervisor) end inside a hand-over: their end values are il
 distance is within 2e-5), so they are compared through last-window averages instead, as in
 tests/reference_quantities.py.
 """
+
 import json
 from pathlib import Path
 

@@ -7,6 +7,7 @@ first).  The edits are applied to a copy of the package in a temporary folder, a
 package runs in a fresh interpreter, which must show the new coefficient, mode or series having
 its effect.  An edit whose line is no longer in the code fails here.
 """
+
 import re
 import shutil
 import subprocess
@@ -41,7 +42,7 @@ def apply_edit(pkg_root: Path, block: str):
     hits = [i for i, line in enumerate(old) if line.strip().startswith(anchor)]
     assert hits, f"{path.name}: no line starts with {anchor!r} (the walkthrough drifted from the code)"
     if how == "replace":
-        old[hits[0]:hits[0] + 1] = new
+        old[hits[0] : hits[0] + 1] = new
     else:
         for i in reversed(hits):
             old[i:i] = new
@@ -56,11 +57,12 @@ def package_copy(tmp_path: Path) -> Path:
 
 def run(code: str, pythonpath: Path, cwd: Path) -> str:
     """Run ``code`` in a fresh interpreter that imports snoworm from ``pythonpath``."""
-    head = (f"import sys; sys.path.insert(0, {str(pythonpath)!r})\n"
-            "import snoworm\n"
-            f"assert snoworm.__file__.startswith({str(pythonpath)!r}), snoworm.__file__\n")
-    proc = subprocess.run([sys.executable, "-c", head + code], capture_output=True, text=True, timeout=300,
-                          cwd=cwd)
+    head = (
+        f"import sys; sys.path.insert(0, {str(pythonpath)!r})\n"
+        "import snoworm\n"
+        f"assert snoworm.__file__.startswith({str(pythonpath)!r}), snoworm.__file__\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", head + code], capture_output=True, text=True, timeout=300, cwd=cwd)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return proc.stdout
 
@@ -71,7 +73,8 @@ def test_adding_a_terrain_coefficient(tmp_path):
     root = package_copy(tmp_path)
     for b in edits:
         apply_edit(root, b)
-    out = run(f"""
+    out = run(
+        f"""
 from snoworm import load_scenario, simulate
 base = load_scenario({str(SCENARIO)!r}, ["simulation.duration_s=6"])
 assert base.terrain.model.c_v == 0.0 and base.to_dict()["terrain"]["model"]["c_v"] == 0.0
@@ -79,7 +82,10 @@ print(base.sources["terrain.model.c_v"])
 r0, r1 = simulate(base), simulate(base.with_({{"terrain.model.c_v": 0.5}}))
 print(r0.summary()["distance_m"], r1.summary()["distance_m"])
 print(r0.segments["resistance_N"][-1].sum(), r1.segments["resistance_N"][-1].sum())
-""", root, tmp_path).splitlines()
+""",
+        root,
+        tmp_path,
+    ).splitlines()
     assert out[0] == "[assumed] no speed dependence"
     d0, d1 = map(float, out[1].split())
     f0, f1 = map(float, out[2].split())
@@ -130,7 +136,8 @@ def test_adding_an_output_series(tmp_path):
     root = package_copy(tmp_path)
     for b in edits:
         apply_edit(root, b)
-    out = run(f"""
+    out = run(
+        f"""
 import numpy as np
 from snoworm import load_scenario, simulate
 r = simulate(load_scenario({str(SCENARIO)!r}, ["simulation.duration_s=3"]))
@@ -138,5 +145,8 @@ p = r.segments["traction_power_W"]
 assert np.allclose(p, r.segments["traction_N"] * r.segments["v_mps"], rtol=1e-12, atol=0), "not the product"
 r.write("run", plot=False)
 print("traction_power_W" in open("run/segments.csv").readline().strip().split(","), float(np.max(p)) > 0)
-""", root, tmp_path)
+""",
+        root,
+        tmp_path,
+    )
     assert out.split() == ["True", "True"]

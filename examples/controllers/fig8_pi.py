@@ -7,6 +7,7 @@ force-control mode's PI loop (snoworm.feedback.link_force_pi) as a sampled contr
     v_sp = clip(v_nom + kp e + q, 0, v_max)
     q += ki e dt                  (only while v_sp is not clipped: anti-windup)
 """
+
 import numpy as np
 
 

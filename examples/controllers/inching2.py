@@ -28,6 +28,6 @@ class InchingGait:
             self.phase, self.switches = "pull", self.switches + 1
         elif self.phase == "pull" and s <= self.s_min + self.margin:
             self.phase, self.switches = "push", self.switches + 1
-        if self.phase == "push":        # rear anchored, front moves, joint extends
+        if self.phase == "push":  # rear anchored, front moves, joint extends
             return {"wheel_speed_mps": [self.v, self.v], "wheel_lock": [False, True], "joint_length_m": [self.s_max]}
         return {"wheel_speed_mps": [self.v, self.v], "wheel_lock": [True, False], "joint_length_m": [self.s_min]}

@@ -10,6 +10,7 @@ Equal slip at a common ground speed means equal traction per wheel on uniform sn
 towed load is shared evenly without measuring any force.  ``slip_max`` caps the chain's mean
 slip: above it every set-point is lowered together.
 """
+
 import numpy as np
 
 

@@ -12,6 +12,6 @@ class UniformSpeed:
         self.n = scenario.vehicle.segments
 
     def __call__(self, obs):
-        if obs.t_s < self.t_start - 1e-9:    # times are sums of periods: allow for rounding
-            return {}                        # nothing commanded yet: motors off
+        if obs.t_s < self.t_start - 1e-9:  # times are sums of periods: allow for rounding
+            return {}  # nothing commanded yet: motors off
         return {"wheel_speed_mps": [self.speed] * self.n}

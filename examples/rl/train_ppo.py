@@ -9,6 +9,7 @@ members stepped as one solve, then prints the wall time and the deterministic po
 return on a single environment, next to two fixed policies: random actions and the paper's
 uniform 1.8 m/s (the scenario's own mode).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -46,7 +47,10 @@ class SB3Adapter(VecEnv):
         infos = [{} for _ in range(self.num_envs)]
         if done.any():
             for b in np.flatnonzero(done):
-                infos[b] = {"terminal_observation": obs[b].copy(), "TimeLimit.truncated": bool(trunc[b] and not term[b])}
+                infos[b] = {
+                    "terminal_observation": obs[b].copy(),
+                    "TimeLimit.truncated": bool(trunc[b] and not term[b]),
+                }
             obs, _ = self.venv.reset(options={"reset_mask": done})
         return obs, rew.astype(np.float32), done, infos
 
@@ -82,33 +86,55 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=100_000, help="environment steps to train (all members)")
     ap.add_argument("--envs", type=int, default=64, help="members of the vector environment")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--energy-weight", type=float, default=1e-4,
-                    help="reward weight of the motors' energy [1/J per m] (the environment's default 1e-3 "
-                         "makes standing still pay best on tow6)")
+    ap.add_argument(
+        "--energy-weight",
+        type=float,
+        default=1e-4,
+        help="reward weight of the motors' energy [1/J per m] (the environment's default 1e-3 "
+        "makes standing still pay best on tow6)",
+    )
     ap.add_argument("--save", help="save the trained policy to this .zip file")
     args = ap.parse_args(argv)
 
-    venv = gymnasium.make_vec("snoworm/Snoworm-v0", num_envs=args.envs, vectorization_mode="vector_entry_point",
-                              energy_weight=args.energy_weight)
+    venv = gymnasium.make_vec(
+        "snoworm/Snoworm-v0",
+        num_envs=args.envs,
+        vectorization_mode="vector_entry_point",
+        energy_weight=args.energy_weight,
+    )
     env = SB3Adapter(venv.unwrapped)
     env.seed(args.seed)
-    model = PPO("MlpPolicy", env, n_steps=64, batch_size=512, n_epochs=5, learning_rate=3e-4, gamma=0.99,
-                seed=args.seed, verbose=0, device="cpu")
+    model = PPO(
+        "MlpPolicy",
+        env,
+        n_steps=64,
+        batch_size=512,
+        n_epochs=5,
+        learning_rate=3e-4,
+        gamma=0.99,
+        seed=args.seed,
+        verbose=0,
+        device="cpu",
+    )
     t0 = time.perf_counter()
     model.learn(total_timesteps=args.steps)
     wall = time.perf_counter() - t0
-    print(f"trained {model.num_timesteps} env steps ({args.envs} members) in {wall:.1f} s "
-          f"({model.num_timesteps / wall:.0f} env-steps/s including the PPO updates)")
+    print(
+        f"trained {model.num_timesteps} env steps ({args.envs} members) in {wall:.1f} s "
+        f"({model.num_timesteps / wall:.0f} env-steps/s including the PPO updates)"
+    )
     if args.save:
         model.save(args.save)
 
     single = gymnasium.make("snoworm/Snoworm-v0", energy_weight=args.energy_weight)
     space = single.action_space
     space.seed(args.seed)
-    uniform = np.full(6, 2 * 1.8 / single.unwrapped.core.high[0] - 1, np.float32)   # 1.8 m/s on [-1, 1]
-    rows = {"trained PPO (deterministic)": lambda o: model.predict(o, deterministic=True)[0],
-            "random actions": lambda o: space.sample(),
-            "uniform 1.8 m/s from t = 0": lambda o: uniform}
+    uniform = np.full(6, 2 * 1.8 / single.unwrapped.core.high[0] - 1, np.float32)  # 1.8 m/s on [-1, 1]
+    rows = {
+        "trained PPO (deterministic)": lambda o: model.predict(o, deterministic=True)[0],
+        "random actions": lambda o: space.sample(),
+        "uniform 1.8 m/s from t = 0": lambda o: uniform,
+    }
     for label, policy in rows.items():
         print(f"  episode return, {label:28s} {episode_return(single, policy, args.seed):9.2f}")
 

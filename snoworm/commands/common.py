@@ -7,6 +7,7 @@ commands take (``--out``, ``--set``, ``--overwrite``, ``--plot-format``, ``--par
 when they finish (:func:`echo_run`, :func:`echo_sweep`, :func:`echo_claims`).  Like :mod:`snoworm.cli`, it imports the
 library only inside the functions that need it, so ``snoworm --help`` starts fast.
 """
+
 from __future__ import annotations
 
 import functools
@@ -18,11 +19,33 @@ import sys
 
 import click
 
-__all__ = ["EXIT_SOLVER", "EXIT_INPUT", "fail", "Terminated", "handle_errors", "CommandGroup", "command_line",
-           "out_option", "allow_code_option", "code_check", "overwrite_option", "set_option", "plot_format_option",
-           "figure_size_option", "param_set_option", "model_file_option", "progress_bar", "StderrHandler",
-           "configure_logging", "echo_scenarios", "echo_written", "echo_run", "echo_sweep", "sweep_interrupted",
-           "echo_claims"]
+__all__ = [
+    "EXIT_SOLVER",
+    "EXIT_INPUT",
+    "fail",
+    "Terminated",
+    "handle_errors",
+    "CommandGroup",
+    "command_line",
+    "out_option",
+    "allow_code_option",
+    "code_check",
+    "overwrite_option",
+    "set_option",
+    "plot_format_option",
+    "figure_size_option",
+    "param_set_option",
+    "model_file_option",
+    "progress_bar",
+    "StderrHandler",
+    "configure_logging",
+    "echo_scenarios",
+    "echo_written",
+    "echo_run",
+    "echo_sweep",
+    "sweep_interrupted",
+    "echo_claims",
+]
 
 EXIT_SOLVER = 1
 EXIT_INPUT = 2
@@ -46,19 +69,21 @@ def _catch_sigterm():
     """Install the SIGTERM handler (main thread only); returns the previous handler or None."""
     try:
         return signal.signal(signal.SIGTERM, _on_sigterm)
-    except (ValueError, AttributeError):   # not the main thread / no SIGTERM on this platform
+    except (ValueError, AttributeError):  # not the main thread / no SIGTERM on this platform
         return None
 
 
 def handle_errors(fn):
     """Turn ScenarioError and OutputError into exit 2, SolverError and ControllerError into exit 1,
     each with a clear message; SIGTERM is handled like Ctrl-C."""
+
     @functools.wraps(fn)
     def wrapper(*a, **kw):
         from ..config.schema import ScenarioError  # lazy: start-up
         from ..infra.folders import OutputError  # lazy: start-up
         from ..modes.controller import ControllerError  # lazy: start-up
         from ..simulation.guard import SolverError  # lazy: start-up
+
         old = _catch_sigterm()
         try:
             return fn(*a, **kw)
@@ -66,25 +91,30 @@ def handle_errors(fn):
             fail(str(exc), EXIT_INPUT)
         except SolverError as exc:
             fail(f"solver failure: {exc}", EXIT_SOLVER)
-        except ControllerError as exc:      # the user's controller raised or returned a bad command
+        except ControllerError as exc:  # the user's controller raised or returned a bad command
             fail(str(exc), EXIT_SOLVER)
         except RecursionError:  # a structure nested beyond Python's stack: bad input, not a bug
-            fail("the input is nested too deeply to read (a scenario needs only a few levels); flatten it.",
-                  EXIT_INPUT)
+            fail("the input is nested too deeply to read (a scenario needs only a few levels); flatten it.", EXIT_INPUT)
         except BrokenPipeError:  # output piped into e.g. `head`: not an error of ours
             sys.stderr.close()
             sys.exit(0)
         except KeyboardInterrupt as exc:
-            fail("interrupted; nothing half-written was left (finished files of a sweep were kept).",
-                  143 if isinstance(exc, Terminated) else 130)
+            fail(
+                "interrupted; nothing half-written was left (finished files of a sweep were kept).",
+                143 if isinstance(exc, Terminated) else 130,
+            )
         except Exception as exc:  # a bug: one paragraph, the traceback on request
             if os.environ.get("SNOWORM_DEBUG"):
                 raise
-            fail(f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
-                  "rerun with SNOWORM_DEBUG=1 for the traceback and report it.", EXIT_SOLVER)
+            fail(
+                f"internal error ({type(exc).__name__}: {exc}). This is a bug in snoworm; "
+                "rerun with SNOWORM_DEBUG=1 for the traceback and report it.",
+                EXIT_SOLVER,
+            )
         finally:
             if old is not None:
                 signal.signal(signal.SIGTERM, old)
+
     return wrapper
 
 
@@ -108,19 +138,23 @@ def _check_out(ctx, param, value):
     """``--out`` must name a directory (an empty path would write into the current folder); one line
     on stderr when it holds earlier results."""
     if value is not None and not str(value).strip():
-        raise click.BadParameter("must name a directory, got an empty path (it would write into the current "
-                                 "folder). Give e.g. --out results/.")
+        raise click.BadParameter(
+            "must name a directory, got an empty path (it would write into the current "
+            "folder). Give e.g. --out results/."
+        )
     from ..infra.folders import earlier_output_note  # lazy: start-up
+
     note = earlier_output_note(value, resumes=ctx.command.name == "sweep") if value is not None else None
-    if note:                               # re-running into the same --out: say so, in one line
+    if note:  # re-running into the same --out: say so, in one line
         click.echo(note, err=True)
     return value
 
 
 def out_option(help_text):
     """The ``--out DIR`` option of a command that writes results (checked by :func:`_check_out`)."""
-    return click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out,
-                        help=help_text)
+    return click.option(
+        "--out", "out_dir", required=True, type=click.Path(file_okay=False), callback=_check_out, help=help_text
+    )
 
 
 class StderrHandler(logging.StreamHandler):
@@ -131,30 +165,44 @@ class StderrHandler(logging.StreamHandler):
         super().emit(record)
 
 
-overwrite_option = click.option("--overwrite", is_flag=True,
-                                help="Write into a non-empty --out folder that snoworm did not write (same-named "
-                                     "files are replaced, other files kept). An earlier snoworm output folder is "
-                                     "always replaced as a whole.")
+overwrite_option = click.option(
+    "--overwrite",
+    is_flag=True,
+    help="Write into a non-empty --out folder that snoworm did not write (same-named "
+    "files are replaced, other files kept). An earlier snoworm output folder is "
+    "always replaced as a whole.",
+)
 
 
 def progress_bar(total, desc, unit):
     """A :class:`~snoworm.infra.progress.Progress` bar on stderr (imported on first use)."""
     from ..infra.progress import Progress  # lazy: start-up
+
     return Progress(total, desc, unit)
 
 
-set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
-                          help="Override a scenario value by its dotted key, e.g. --set terrain.xt=0.5 "
-                               "(repeatable; VALUE is parsed as YAML).")
-plot_format_option = click.option("--plot-format", type=click.Choice(["png", "pdf", "svg"]), default="png",
-                                  show_default=True, help="File format of the plots (PNG at 200 dpi; PDF with "
-                                                          "TrueType fonts; SVG with text kept as text).")
+set_option = click.option(
+    "--set",
+    "sets",
+    multiple=True,
+    metavar="KEY=VALUE",
+    help="Override a scenario value by its dotted key, e.g. --set terrain.xt=0.5 "
+    "(repeatable; VALUE is parsed as YAML).",
+)
+plot_format_option = click.option(
+    "--plot-format",
+    type=click.Choice(["png", "pdf", "svg"]),
+    default="png",
+    show_default=True,
+    help="File format of the plots (PNG at 200 dpi; PDF with TrueType fonts; SVG with text kept as text).",
+)
 
 
 def _check_size(ctx, param, value):
     """``--figure-size`` must be column, page or WxH (checked by :func:`snoworm.plotting.style.parse_size`)."""
     if value is not None:
         from ..plotting.style import parse_size  # lazy: matplotlib, only when a size is given
+
         try:
             parse_size(value)
         except ValueError as exc:
@@ -162,21 +210,32 @@ def _check_size(ctx, param, value):
     return value
 
 
-figure_size_option = click.option("--figure-size", metavar="column|page|WxH", default=None, callback=_check_size,
-                                  help="Print size of the figures: column (3.5 in wide), page (7.16 in, the "
-                                       "default) or WxH inches, e.g. 3.5x2.5; text is at least 7 pt at that size.")
+figure_size_option = click.option(
+    "--figure-size",
+    metavar="column|page|WxH",
+    default=None,
+    callback=_check_size,
+    help="Print size of the figures: column (3.5 in wide), page (7.16 in, the "
+    "default) or WxH inches, e.g. 3.5x2.5; text is at least 7 pt at that size.",
+)
 
 
 allow_code_option = click.option(
-    "--allow-code", "allow_code", multiple=True, type=click.Path(), metavar="PATH",
+    "--allow-code",
+    "allow_code",
+    multiple=True,
+    type=click.Path(),
+    metavar="PATH",
     help="Let controller code under PATH (a file or folder) run although it lies outside the scenario's folder "
-         "(repeatable). A scenario with a controller is a program: see docs/controllers.md.")
+    "(repeatable). A scenario with a controller is a program: see docs/controllers.md.",
+)
 
 
 def code_check(sc, allow_code, verb=None):
     """Refuse (exit 2) a controller that may not run; with ``verb``, say on stderr which code runs."""
     if getattr(sc.mode, "type", None) == "controller":
         from ..modes.controller import code_notice  # lazy: start-up (only controller scenarios)
+
         notice = code_notice(sc, allow_code)
         if verb:
             click.echo(f"snoworm: {verb} {notice}", err=True)
@@ -192,18 +251,29 @@ def configure_logging(verbose: bool):
     log.setLevel(logging.INFO if verbose else logging.WARNING)
 
 
-param_set_option = click.option("--parameter-set", "parameter_set_name", default="frostyboy", show_default=True,
-                                help="Named set of physical values (segment and terrain model) to use.")
-model_file_option = click.option("--model-file", type=click.Path(dir_okay=False), default=None,
-                                 help="YAML of terrain-model coefficients (e.g. terrain_model.yaml written by "
-                                      "`snoworm calibrate`) replacing the parameter set's.")
+param_set_option = click.option(
+    "--parameter-set",
+    "parameter_set_name",
+    default="frostyboy",
+    show_default=True,
+    help="Named set of physical values (segment and terrain model) to use.",
+)
+model_file_option = click.option(
+    "--model-file",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="YAML of terrain-model coefficients (e.g. terrain_model.yaml written by "
+    "`snoworm calibrate`) replacing the parameter set's.",
+)
 
 
 # ---------------------------------------------------------------- what the commands print at the end
 
+
 def echo_scenarios():
     """The shipped scenarios, one line each: name and description."""
     from ..config.scenario import shipped_scenarios  # lazy: start-up
+
     items = shipped_scenarios()
     width = max(map(len, items), default=0)
     for name, (_, desc) in items.items():
@@ -219,9 +289,11 @@ def echo_written(text, paths, out_dir):
 def echo_run(name, res, paths, out_dir):
     """``snoworm run``'s report: simulated and wall time, distance, speed, final forces, files written."""
     s = res.summary()
-    click.echo(f"{name}: {s['duration_s']:.1f} s simulated in {res.stats['wall_time_s']:.2f} s "
-               f"({s['duration_s'] / max(res.stats['wall_time_s'], 1e-9):.0f}x real time), "
-               f"distance {s['distance_m']:.2f} m, mean speed {s['mean_speed_mps']:.3f} m/s")
+    click.echo(
+        f"{name}: {s['duration_s']:.1f} s simulated in {res.stats['wall_time_s']:.2f} s "
+        f"({s['duration_s'] / max(res.stats['wall_time_s'], 1e-9):.0f}x real time), "
+        f"distance {s['distance_m']:.2f} m, mean speed {s['mean_speed_mps']:.3f} m/s"
+    )
     if s["final_link_forces_N"]:
         click.echo("final link forces [N]: " + ", ".join(f"{f:.1f}" for f in s["final_link_forces_N"]))
     click.echo("final net wheel forces [N]: " + ", ".join(f"{f:.1f}" for f in s["final_net_forces_N"]))
@@ -231,8 +303,7 @@ def echo_run(name, res, paths, out_dir):
 def sweep_interrupted(exc, out_dir):
     """An interrupted sweep: say where the finished cases are and exit 130 (143 on SIGTERM)."""
     how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
-    click.echo(f"{how}: finished cases are in {out_dir}/summary.csv; run the same command "
-               "again to resume.", err=True)
+    click.echo(f"{how}: finished cases are in {out_dir}/summary.csv; run the same command again to resume.", err=True)
     sys.exit(143 if isinstance(exc, Terminated) else 130)
 
 
@@ -240,8 +311,10 @@ def echo_sweep(table, out_dir):
     """``snoworm sweep``'s report: cases ok, failed and immobilised, and the first five failures."""
     bad = table.failures()
     imm = sum(bool(r["immobilised"]) for r in table.rows if r["status"] == "ok")
-    click.echo(f"{len(table)} cases: {len(table) - len(bad)} ok, {len(bad)} failed, {imm} immobilised; "
-               f"summary in {out_dir}/summary.csv")
+    click.echo(
+        f"{len(table)} cases: {len(table) - len(bad)} ok, {len(bad)} failed, {imm} immobilised; "
+        f"summary in {out_dir}/summary.csv"
+    )
     for r in bad[:5]:
         click.echo(f"  case {r['case_id']} {r['status']}: {r['error']}")
     if len(bad) > 5:
@@ -251,8 +324,10 @@ def echo_sweep(table, out_dir):
 def echo_claims(rep, out_dir, quick) -> int:
     """``snoworm paper``'s report: how many claims hold (returned), and each failing one on stderr."""
     n_ok = sum(c.holds for c in rep.claims)
-    click.echo(f"{n_ok} of {len(rep.claims)} claims hold ({'quick' if quick else 'full'} mode, "
-               f"{rep.wall_time_s:.1f} s); report: {os.path.join(out_dir, 'report.html')}")
+    click.echo(
+        f"{n_ok} of {len(rep.claims)} claims hold ({'quick' if quick else 'full'} mode, "
+        f"{rep.wall_time_s:.1f} s); report: {os.path.join(out_dir, 'report.html')}"
+    )
     for c in rep.claims:
         if not c.holds:
             click.echo(f"FAILS: {c.id}: {c.statement}", err=True)

@@ -6,6 +6,7 @@ and the driver builds the mode from it.  :func:`snoworm.modes.register_mode` add
 built-in mode's module, named in :data:`BUILT_IN_MODES`, is imported when its type is first
 looked up (:class:`ModeRegistry`), since the modes sit above this layer.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -73,9 +74,13 @@ class ModeConfig(Config):
 
 #: The built-in modes: ``type`` -> the module of :mod:`snoworm.modes` whose import registers it.
 #: The one list of them: a new built-in mode adds its line here (docs/architecture.md).
-BUILT_IN_MODES = {"controller": "snoworm.modes.controller", "force_control": "snoworm.modes.force_control",
-                  "inchworm": "snoworm.modes.inchworm", "supervisor": "snoworm.modes.supervisor",
-                  "uniform": "snoworm.modes.uniform"}
+BUILT_IN_MODES = {
+    "controller": "snoworm.modes.controller",
+    "force_control": "snoworm.modes.force_control",
+    "inchworm": "snoworm.modes.inchworm",
+    "supervisor": "snoworm.modes.supervisor",
+    "uniform": "snoworm.modes.uniform",
+}
 
 
 class ModeRegistry(Mapping):
@@ -167,8 +172,11 @@ def build_mode_config(raw, path="mode") -> ModeConfig:
     if kind is None:
         raise ScenarioError(f"{path}.type: is required but missing. Choose one of: {', '.join(reg)}.")
     if not isinstance(kind, str):
-        raise ScenarioError(f"{path}.type: expected the name of a mode ({', '.join(reg)}), got "
-                            f"{type(kind).__name__} {quote(kind)}.")
+        raise ScenarioError(
+            f"{path}.type: expected the name of a mode ({', '.join(reg)}), got {type(kind).__name__} {quote(kind)}."
+        )
     if kind not in reg:
-        raise ScenarioError(f"{path}.type: unknown mode {quote(kind)}.{suggest(kind, reg)} Known modes: {', '.join(reg)}.")
+        raise ScenarioError(
+            f"{path}.type: unknown mode {quote(kind)}.{suggest(kind, reg)} Known modes: {', '.join(reg)}."
+        )
     return build(reg.config_class(kind), raw, path)

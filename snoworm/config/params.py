@@ -22,6 +22,7 @@ The user's own values come from files read here too, with their tags: a paramete
 (``terrain.model_file``, :func:`read_model_file`) and a scenario's ``sources:`` block
 (:func:`source_notes`).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -30,8 +31,17 @@ from ..terrain import TerrainParams
 from . import yamlio
 from .schema import ScenarioError, quote, suggest
 
-__all__ = ["PARAMETER_SETS", "SOURCE_TAGS", "parameter_set", "parameter_sources", "terrain_params", "parameter_entries",
-           "read_parameter_file", "read_model_file", "source_notes"]
+__all__ = [
+    "PARAMETER_SETS",
+    "SOURCE_TAGS",
+    "parameter_set",
+    "parameter_sources",
+    "terrain_params",
+    "parameter_entries",
+    "read_parameter_file",
+    "read_model_file",
+    "source_notes",
+]
 
 #: ``{set name: {section: {key: (value, source)}}}``; sections ``segment``, ``terrain_model``, ``links``.
 PARAMETER_SETS = {
@@ -49,8 +59,11 @@ PARAMETER_SETS = {
             "drivetrain_efficiency": (0.8, "[paper] 20 % loss (for electrical energy)"),
             "speed_kp_Nms_per_rad": (30.0, "[assumed] wheel-speed PI"),
             "speed_ki_Nm_per_rad": (150.0, "[assumed] wheel-speed PI"),
-            "com_height_m": (0.40, "[assumed] no FrostyBoy value published; about the axle height plus half the "
-                                   "chassis depth (only the pitch load transfer on a grade uses it)"),
+            "com_height_m": (
+                0.40,
+                "[assumed] no FrostyBoy value published; about the axle height plus half the "
+                "chassis depth (only the pitch load transfer on a grade uses it)",
+            ),
         },
         "terrain_model": {
             "b_tF": (0.7, "[paper] Table 3"),
@@ -107,8 +120,10 @@ SOURCE_TAGS = ("[paper]", "[field data]", "[fitted]", "[assumed]", "[user]", "[L
 
 def _tag(value, where):
     if not isinstance(value, str) or not value.startswith(SOURCE_TAGS):
-        raise ScenarioError(f"{where}: a source must start with one of {', '.join(SOURCE_TAGS)}, e.g. "
-                            f"'[field data] weighed 2026-01'; got {quote(value)}.")
+        raise ScenarioError(
+            f"{where}: a source must start with one of {', '.join(SOURCE_TAGS)}, e.g. "
+            f"'[field data] weighed 2026-01'; got {quote(value)}."
+        )
     return value
 
 
@@ -132,8 +147,10 @@ def parameter_entries(ps_name, base_dir=None):
     user's own vehicle (relative to the scenario file; see :func:`read_parameter_file`).
     """
     if ps_name is None:
-        raise ScenarioError("vehicle.parameter_set: is required but missing. Name the set of physical values "
-                            f"to start from, one of: {', '.join(PARAMETER_SETS)}, or a YAML parameter-set file.")
+        raise ScenarioError(
+            "vehicle.parameter_set: is required but missing. Name the set of physical values "
+            f"to start from, one of: {', '.join(PARAMETER_SETS)}, or a YAML parameter-set file."
+        )
     if isinstance(ps_name, str) and ps_name in PARAMETER_SETS:
         return _entries_copy(PARAMETER_SETS[ps_name]), ps_name
     if isinstance(ps_name, str) and (ps_name.endswith((".yaml", ".yml")) or "/" in ps_name):
@@ -141,8 +158,10 @@ def parameter_entries(ps_name, base_dir=None):
         if not path.is_absolute() and base_dir is not None:
             path = Path(base_dir) / path
         return read_parameter_file(path), str(path.resolve())
-    raise ScenarioError(f"vehicle.parameter_set: unknown set {quote(ps_name)}.{suggest(str(ps_name), PARAMETER_SETS)} "
-                        f"Known sets: {', '.join(PARAMETER_SETS)}; or give a YAML parameter-set file (path ending .yaml).")
+    raise ScenarioError(
+        f"vehicle.parameter_set: unknown set {quote(ps_name)}.{suggest(str(ps_name), PARAMETER_SETS)} "
+        f"Known sets: {', '.join(PARAMETER_SETS)}; or give a YAML parameter-set file (path ending .yaml)."
+    )
 
 
 def read_parameter_file(path) -> dict:
@@ -163,8 +182,10 @@ def read_parameter_file(path) -> dict:
     ref = PARAMETER_SETS["frostyboy"]
     for key in data:
         if key not in ("name", "description", "base", *ref):
-            raise ScenarioError(f"{where}: unknown key {quote(key)}.{suggest(str(key), [*ref, 'base', 'name'])} "
-                                f"Known keys: name, description, base, {', '.join(ref)}.")
+            raise ScenarioError(
+                f"{where}: unknown key {quote(key)}.{suggest(str(key), [*ref, 'base', 'name'])} "
+                f"Known keys: name, description, base, {', '.join(ref)}."
+            )
     base = data.get("base")
     if base is not None and base not in PARAMETER_SETS:
         raise ScenarioError(f"{where}: base: unknown set {quote(base)}. Known sets: {', '.join(PARAMETER_SETS)}.")
@@ -175,19 +196,27 @@ def read_parameter_file(path) -> dict:
             raise ScenarioError(f"{where}: {sec}: expected a mapping of values, got {quote(given)}.")
         for k, v in given.items():
             if k not in ref[sec]:
-                raise ScenarioError(f"{where}: {sec}.{k}: unknown key.{suggest(str(k), ref[sec])} "
-                                    f"Known keys: {', '.join(ref[sec])}.")
+                raise ScenarioError(
+                    f"{where}: {sec}.{k}: unknown key.{suggest(str(k), ref[sec])} Known keys: {', '.join(ref[sec])}."
+                )
             if isinstance(v, dict):
                 if set(v) - {"value", "source"} or "value" not in v:
-                    raise ScenarioError(f"{where}: {sec}.{k}: give a value, or a mapping {{value: ..., source: "
-                                        f"'[tag] note'}}; got {quote(v)}.")
-                out[sec][k] = (v["value"], _tag(v.get("source", f"[user] {Path(path).name}"), f"{where}: {sec}.{k}.source"))
+                    raise ScenarioError(
+                        f"{where}: {sec}.{k}: give a value, or a mapping {{value: ..., source: "
+                        f"'[tag] note'}}; got {quote(v)}."
+                    )
+                out[sec][k] = (
+                    v["value"],
+                    _tag(v.get("source", f"[user] {Path(path).name}"), f"{where}: {sec}.{k}.source"),
+                )
             else:
                 out[sec][k] = (v, f"[user] {Path(path).name}")
         missing = [k for k in ref[sec] if k not in out[sec]]
         if missing:
-            raise ScenarioError(f"{where}: {sec}: missing {', '.join(missing)}. Give every value of the vehicle, or "
-                                "start from a named set with 'base: frostyboy'.")
+            raise ScenarioError(
+                f"{where}: {sec}: missing {', '.join(missing)}. Give every value of the vehicle, or "
+                "start from a named set with 'base: frostyboy'."
+            )
     return out
 
 
@@ -209,6 +238,8 @@ def read_model_file(mfile, base_dir):
     if isinstance(data, dict) and "terrain_model" in data:
         data = data["terrain_model"]
     if not isinstance(data, dict):
-        raise ScenarioError(f"terrain.model_file: {path} must hold a mapping of terrain-model coefficients "
-                            "(b_tF, b_trF, A, peak_exponent_d, tau0, tau1, ...).")
+        raise ScenarioError(
+            f"terrain.model_file: {path} must hold a mapping of terrain-model coefficients "
+            "(b_tF, b_trF, A, peak_exponent_d, tau0, tau1, ...)."
+        )
     return data

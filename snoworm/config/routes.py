@@ -11,6 +11,7 @@ All compile to one :class:`~snoworm.slope.ElevationProfile`.  Validation (one-li
 exit status 2 at the command line): finite numbers, strictly increasing distances and
 ``|grade| <= MAX_GRADE_DEG`` (40 deg).
 """
+
 from __future__ import annotations
 
 import csv
@@ -21,36 +22,67 @@ from pathlib import Path
 from ..slope import MAX_GRADE_DEG, ElevationProfile
 from .schema import Config, ScenarioError, field
 
-__all__ = ["check_grade_inputs", "resolve_route", "GRADE_DOMAIN", "ROUTE_COLUMNS", "GradePatchConfig", "Route", "read_route", "check_elevation_table",
-           "check_vehicle_on_grade"]
+__all__ = [
+    "check_grade_inputs",
+    "resolve_route",
+    "GRADE_DOMAIN",
+    "ROUTE_COLUMNS",
+    "GradePatchConfig",
+    "Route",
+    "read_route",
+    "check_elevation_table",
+    "check_vehicle_on_grade",
+]
 
 #: Domain of every grade angle a scenario or a study gives [deg].
-GRADE_DOMAIN = dict(ge=-MAX_GRADE_DEG, le=MAX_GRADE_DEG,
-                    why=f"|grade| <= {MAX_GRADE_DEG:g} deg: no snow slope stands beyond its angle of repose "
-                        "(30-40 deg), and the 1-D chain assumes gentle curvature (docs/model.md section 7).")
+GRADE_DOMAIN = dict(
+    ge=-MAX_GRADE_DEG,
+    le=MAX_GRADE_DEG,
+    why=f"|grade| <= {MAX_GRADE_DEG:g} deg: no snow slope stands beyond its angle of repose "
+    "(30-40 deg), and the 1-D chain assumes gentle curvature (docs/model.md section 7).",
+)
 
 #: Columns a route file must have (units in the names); others are ignored.
 ROUTE_COLUMNS = ("distance_m", "elevation_m", "xt")
 
 _FAR_M = 1e7
 
+
 @dataclass(frozen=True)
 class GradePatchConfig(Config):
     """A stretch of other grade on the base ``grade_deg`` (``terrain.grade_patches``)."""
 
     _section = "terrain.grade_patches[]"
-    start_m: float = field(ge=-_FAR_M, le=_FAR_M, unit="m", doc="distance where the patch's grade is reached",
-                           why="A finite distance along the track.")
-    end_m: float = field(ge=-_FAR_M, le=_FAR_M, unit="m", doc="distance where the patch's grade ends",
-                         why="A finite distance along the track.")
+    start_m: float = field(
+        ge=-_FAR_M,
+        le=_FAR_M,
+        unit="m",
+        doc="distance where the patch's grade is reached",
+        why="A finite distance along the track.",
+    )
+    end_m: float = field(
+        ge=-_FAR_M,
+        le=_FAR_M,
+        unit="m",
+        doc="distance where the patch's grade ends",
+        why="A finite distance along the track.",
+    )
     grade_deg: float = field(**GRADE_DOMAIN, unit="deg", doc="grade inside the patch, positive uphill")
-    ramp_m: float = field(0.0, ge=0, le=_FAR_M, unit="m", why="A finite length.",
-                          doc="length over which the grade changes back to the base outside each edge (0: a kink)")
+    ramp_m: float = field(
+        0.0,
+        ge=0,
+        le=_FAR_M,
+        unit="m",
+        why="A finite length.",
+        doc="length over which the grade changes back to the base outside each edge (0: a kink)",
+    )
 
     def _check(self, path):
         if not self.end_m > self.start_m:
-            raise ScenarioError(f"{path}.end_m: must be greater than start_m ({self.start_m} m), got {self.end_m} m. "
-                                "A grade patch covers [start_m, end_m].")
+            raise ScenarioError(
+                f"{path}.end_m: must be greater than start_m ({self.start_m} m), got {self.end_m} m. "
+                "A grade patch covers [start_m, end_m]."
+            )
 
 
 def check_grade_inputs(terrain, path: str) -> None:
@@ -59,21 +91,27 @@ def check_grade_inputs(terrain, path: str) -> None:
     without overlap; the elevation table; the route file, read (once) and checked."""
     grades = [k for k in ("grade_deg", "elevation", "route") if getattr(terrain, k) is not None]
     if len(grades) > 1:
-        raise ScenarioError(f"{path}: give at most one of 'grade_deg', 'elevation' and 'route' (a route file "
-                            f"carries its elevation); got {' and '.join(repr(g) for g in grades)}.")
+        raise ScenarioError(
+            f"{path}: give at most one of 'grade_deg', 'elevation' and 'route' (a route file "
+            f"carries its elevation); got {' and '.join(repr(g) for g in grades)}."
+        )
     if terrain.grade_patches is not None and terrain.grade_deg is None:
-        raise ScenarioError(f"{path}.grade_patches: grade patches lie on a base grade; give 'grade_deg' "
-                            "(the grade outside the patches, 0 for level).")
+        raise ScenarioError(
+            f"{path}.grade_patches: grade patches lie on a base grade; give 'grade_deg' "
+            "(the grade outside the patches, 0 for level)."
+        )
     prev_end, prev_j = -math.inf, None
     for j, pt in enumerate(terrain.grade_patches or ()):
         if pt.start_m - pt.ramp_m < prev_end:
-            raise ScenarioError(f"{path}.grade_patches[{j}]: overlaps grade_patches[{prev_j}] (with its ramps); "
-                                "list grade patches in order along the route, without overlap.")
+            raise ScenarioError(
+                f"{path}.grade_patches[{j}]: overlaps grade_patches[{prev_j}] (with its ramps); "
+                "list grade patches in order along the route, without overlap."
+            )
         prev_end, prev_j = pt.end_m + pt.ramp_m, j
     if terrain.elevation is not None:
         check_elevation_table(terrain.elevation, f"{path}.elevation")
     if terrain.route is not None:
-        terrain.route_data()               # read (and checked) once, at validation
+        terrain.route_data()  # read (and checked) once, at validation
 
 
 def resolve_route(terrain_raw: dict, base_dir) -> dict:
@@ -113,9 +151,11 @@ def _check_step(prev, pair, where):
     lim = math.sin(math.radians(MAX_GRADE_DEG))
     if abs(rise) > lim:
         grade = math.degrees(math.asin(min(abs(rise), 1.0)))
-        raise ScenarioError(f"{where}: the grade from {prev[0]:g} m to {s:g} m is {grade:.1f} deg (rise {rise:.3f} per "
-                            f"metre along the track), over the {MAX_GRADE_DEG:g} deg limit; check the units and the "
-                            "distances (along the track, in metres).")
+        raise ScenarioError(
+            f"{where}: the grade from {prev[0]:g} m to {s:g} m is {grade:.1f} deg (rise {rise:.3f} per "
+            f"metre along the track), over the {MAX_GRADE_DEG:g} deg limit; check the units and the "
+            "distances (along the track, in metres)."
+        )
 
 
 @dataclass(frozen=True)
@@ -158,7 +198,9 @@ def read_route(path) -> Route:
     try:
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise ScenarioError(f"{where}: no such file; give a CSV route file relative to the scenario's folder.") from None
+        raise ScenarioError(
+            f"{where}: no such file; give a CSV route file relative to the scenario's folder."
+        ) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ScenarioError(f"{where}: cannot read it ({exc.__class__.__name__}: {exc}).") from None
     rows = [(n, r) for n, r in enumerate(csv.reader(text.splitlines()), 1) if r and not r[0].lstrip().startswith("#")]
@@ -168,8 +210,10 @@ def read_route(path) -> Route:
     header = [h.strip() for h in header]
     missing = [c for c in ROUTE_COLUMNS if c not in header]
     if missing:
-        raise ScenarioError(f"{where}, line {hline}: the header lacks {', '.join(missing)}; expected the columns "
-                            f"{','.join(ROUTE_COLUMNS)} (units in the names: metres, metres, X_t).")
+        raise ScenarioError(
+            f"{where}, line {hline}: the header lacks {', '.join(missing)}; expected the columns "
+            f"{','.join(ROUTE_COLUMNS)} (units in the names: metres, metres, X_t)."
+        )
     col = {c: header.index(c) for c in ROUTE_COLUMNS}
     dist, elev, xts, prev = [], [], [], None
     for n, row in rows[1:]:
@@ -181,8 +225,10 @@ def read_route(path) -> Route:
                 raise ScenarioError(f"{cell}: missing; the row has {len(row)} columns, the header {len(header)}.")
             vals[c] = _number(row[j], cell)
         if not 0 < vals["xt"] <= 1:
-            raise ScenarioError(f"{where}, line {n}, column {col['xt'] + 1} (xt): X_t must be in (0, 1] "
-                                f"(paper section 3), got {vals['xt']:g}.")
+            raise ScenarioError(
+                f"{where}, line {n}, column {col['xt'] + 1} (xt): X_t must be in (0, 1] "
+                f"(paper section 3), got {vals['xt']:g}."
+            )
         pair = (vals["distance_m"], vals["elevation_m"])
         _check_step(prev, pair, f"{where}, line {n}")
         prev = pair
@@ -203,6 +249,8 @@ def check_vehicle_on_grade(vehicle, elevation: ElevationProfile | None, path: st
     for k, seg in enumerate(vehicle.segment_params()):
         h, b = seg.com_height_m, seg.wheelbase_m
         if h > 0 and (b <= 0 or 2.0 * h * math.tan(theta) >= b):
-            raise ScenarioError(f"{path}.com_height_m: segment {k} tips (an axle lifts off) on the steepest grade "
-                                f"{math.degrees(theta):.1f} deg: needs 2 h tan(theta) < wheelbase ({b:g} m), h = {h:g} m. "
-                                "Lower the centre of mass or the grade.")
+            raise ScenarioError(
+                f"{path}.com_height_m: segment {k} tips (an axle lifts off) on the steepest grade "
+                f"{math.degrees(theta):.1f} deg: needs 2 h tan(theta) < wheelbase ({b:g} m), h = {h:g} m. "
+                "Lower the centre of mass or the grade."
+            )

@@ -5,6 +5,7 @@ fills physical values from the named parameter set (``vehicle.parameter_set``), 
 key (unknown keys are rejected with suggestions) and returns a frozen :class:`Scenario`.
 ``dump_scenario`` writes it back with every value filled in, so it re-runs identically.
 """
+
 from __future__ import annotations
 
 import copy
@@ -36,11 +37,29 @@ from .sections import (
 )
 
 __all__ = [
-    "Scenario", "SegmentConfig", "LinkConfig", "TerrainConfig", "PatchConfig", "RandomTerrainConfig",
-    "TerrainModelConfig", "TowConfig", "VehicleConfig", "SimulationConfig", "load_scenario", "scenario_from_dict", "dump_scenario", "apply_overrides",
-    "parse_set_option", "read_yaml", "ScenarioError", "ScenarioOrigin", "shipped_scenarios",
-    "scenario_path", "read_scenario_yaml",
+    "Scenario",
+    "SegmentConfig",
+    "LinkConfig",
+    "TerrainConfig",
+    "PatchConfig",
+    "RandomTerrainConfig",
+    "TerrainModelConfig",
+    "TowConfig",
+    "VehicleConfig",
+    "SimulationConfig",
+    "load_scenario",
+    "scenario_from_dict",
+    "dump_scenario",
+    "apply_overrides",
+    "parse_set_option",
+    "read_yaml",
+    "ScenarioError",
+    "ScenarioOrigin",
+    "shipped_scenarios",
+    "scenario_path",
+    "read_scenario_yaml",
 ]
+
 
 @dataclass(frozen=True)
 class ScenarioOrigin:
@@ -81,8 +100,7 @@ class Scenario(Config):
     vehicle: VehicleConfig = field(doc="the vehicle")
     terrain: TerrainConfig = field(doc="the terrain")
     tow: TowConfig = field(doc="towed load")
-    mode: ModeConfig = field(doc="mobility mode (a ModeConfig, or a mapping with its type)",
-                             convert=build_mode_config)
+    mode: ModeConfig = field(doc="mobility mode (a ModeConfig, or a mapping with its type)", convert=build_mode_config)
     simulation: SimulationConfig = field(doc="numerics")
     description: str = field("", doc="free text")
     #: where the scenario was read from (set by :func:`scenario_from_dict`; None if made directly)
@@ -93,20 +111,28 @@ class Scenario(Config):
         sim = self.simulation
         n_out = (sim.duration_s / sim.output_dt_s + 1) * self.vehicle.segments
         if n_out > MAX_OUTPUT_SAMPLES:
-            raise ScenarioError(f"simulation.output_dt_s: {sim.duration_s:g} s sampled every {sim.output_dt_s:g} s "
-                                f"for {self.vehicle.segments} segments gives {n_out:.0f} output samples (times x segments), over "
-                                f"the {MAX_OUTPUT_SAMPLES} allowed (memory). Raise output_dt_s or shorten duration_s.")
+            raise ScenarioError(
+                f"simulation.output_dt_s: {sim.duration_s:g} s sampled every {sim.output_dt_s:g} s "
+                f"for {self.vehicle.segments} segments gives {n_out:.0f} output samples (times x segments), over "
+                f"the {MAX_OUTPUT_SAMPLES} allowed (memory). Raise output_dt_s or shorten duration_s."
+            )
         mode.check_vehicle(self.vehicle, "mode")
         check_vehicle_on_grade(self.vehicle, self.terrain.elevation_profile())
-        mode.check_scenario(self, "mode")      # checks needing terrain and tow (e.g. force control)
+        mode.check_scenario(self, "mode")  # checks needing terrain and tow (e.g. force control)
 
     @functools.cached_property
     def chain_model(self) -> ChainModel:
         """The assembled :class:`~snoworm.dynamics.ChainModel` (built once per scenario)."""
         veh = self.vehicle
-        return ChainModel(veh.segment_arrays(), veh.link_arrays(), self.terrain.model.params(),
-                          self.terrain.compile(), self.tow.force_N, force_loop=self.mode.force_loop,
-                          elevation=self.terrain.elevation_profile())
+        return ChainModel(
+            veh.segment_arrays(),
+            veh.link_arrays(),
+            self.terrain.model.params(),
+            self.terrain.compile(),
+            self.tow.force_N,
+            force_loop=self.mode.force_loop,
+            elevation=self.terrain.elevation_profile(),
+        )
 
     @functools.cached_property
     def mode_plan(self):
@@ -121,8 +147,11 @@ class Scenario(Config):
         origin = self.origin
         entries = origin.entries if origin is not None else parameter_entries(self.vehicle.parameter_set)[0]
         notes = origin.notes if origin is not None else {}
-        values = {"segment": dump(self.vehicle.segment), "links": dump(self.vehicle.links),
-                  "terrain_model": dump(self.terrain.model)}
+        values = {
+            "segment": dump(self.vehicle.segment),
+            "links": dump(self.vehicle.links),
+            "terrain_model": dump(self.terrain.model),
+        }
         out = {}
         for sec, prefix in _SECTIONS.items():
             for k, (v, tag) in entries[sec].items():
@@ -136,9 +165,15 @@ class Scenario(Config):
 
     def to_dict(self) -> dict:
         """Plain data of the resolved scenario, every value filled in (what ``scenario.yaml`` holds)."""
-        data = {"name": self.name, "description": self.description, "vehicle": dump(self.vehicle),
-                "terrain": dump(self.terrain), "tow": dump(self.tow), "mode": dump(self.mode),
-                "simulation": dump(self.simulation)}
+        data = {
+            "name": self.name,
+            "description": self.description,
+            "vehicle": dump(self.vehicle),
+            "terrain": dump(self.terrain),
+            "tow": dump(self.tow),
+            "mode": dump(self.mode),
+            "simulation": dump(self.simulation),
+        }
         t = data["terrain"]
         for key in ("xt", "profile", "patches", "random", "grade_deg", "grade_patches", "elevation", "route"):
             if t[key] is None:
@@ -158,9 +193,12 @@ class Scenario(Config):
         """
         items = list((changes or {}).items()) + list(kw.items())
         o = self.origin
-        return scenario_from_dict(apply_overrides(self.to_dict(), items), self.name,
-                                  base_dir=o.base_dir if o is not None else None,
-                                  trust_folder=o is None or o.code_root is not None)
+        return scenario_from_dict(
+            apply_overrides(self.to_dict(), items),
+            self.name,
+            base_dir=o.base_dir if o is not None else None,
+            trust_folder=o is None or o.code_root is not None,
+        )
 
 
 _TOP_KEYS = ("name", "description", "vehicle", "terrain", "tow", "mode", "simulation", "sources")
@@ -202,16 +240,21 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None, *, tr
         With a message naming the dotted field and the fix.
     """
     if not isinstance(raw, dict):
-        raise ScenarioError(f"{source}: a scenario must be a YAML mapping with keys {', '.join(_TOP_KEYS)}; "
-                            f"got {type(raw).__name__}.")
+        raise ScenarioError(
+            f"{source}: a scenario must be a YAML mapping with keys {', '.join(_TOP_KEYS)}; got {type(raw).__name__}."
+        )
     raw = _copy_tree(raw)
     for key in raw:
         if key not in _TOP_KEYS:
-            raise ScenarioError(f"{short_key(key)}: unknown key.{suggest(key, _TOP_KEYS)} Known top-level keys: {', '.join(_TOP_KEYS)}.")
+            raise ScenarioError(
+                f"{short_key(key)}: unknown key.{suggest(key, _TOP_KEYS)} Known top-level keys: {', '.join(_TOP_KEYS)}."
+            )
     for key in ("name", "vehicle", "terrain", "tow", "mode", "simulation"):
         if key not in raw:
-            raise ScenarioError(f"{key}: is required but missing. Add a '{key}:' section to the scenario "
-                                "(see scenarios/tow6_uniform.yaml for an example).")
+            raise ScenarioError(
+                f"{key}: is required but missing. Add a '{key}:' section to the scenario "
+                "(see scenarios/tow6_uniform.yaml for an example)."
+            )
     veh = raw["vehicle"]
     if not isinstance(veh, dict):
         raise ScenarioError(f"vehicle: expected a mapping, got {quote(veh)}.")
@@ -236,8 +279,9 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None, *, tr
     if isinstance(raw["terrain"], dict):
         raw["terrain"] = resolve_route(raw["terrain"], base)
     raw["mode"] = _resolve_mode_paths(raw["mode"], base)
-    origin = ScenarioOrigin(None if base_dir is None else Path(base_dir), notes, entries,
-                            os.path.realpath(base) if trust_folder else None)
+    origin = ScenarioOrigin(
+        None if base_dir is None else Path(base_dir), notes, entries, os.path.realpath(base) if trust_folder else None
+    )
     return build(Scenario, raw, "", internal_values={"origin": origin})
 
 
@@ -286,15 +330,16 @@ def apply_overrides(raw: dict, overrides) -> dict:
                 nxt = {}
                 node[p] = nxt
             if not isinstance(nxt, dict):
-                raise ScenarioError(f"--set {key}: '{'.'.join(parts[:j + 1])}' is a value, not a section; "
-                                    "cannot set a key inside it.")
+                raise ScenarioError(
+                    f"--set {key}: '{'.'.join(parts[: j + 1])}' is a value, not a section; cannot set a key inside it."
+                )
             node = nxt
         leaf = parts[-1]
         if isinstance(node, dict) and leaf.isdigit() and int(leaf) in node:
             leaf = int(leaf)
         node[leaf] = value
         if isinstance(raw.get("sources"), dict) and parts[0] != "sources":
-            raw["sources"].pop(key, None)          # a changed value's note no longer applies
+            raw["sources"].pop(key, None)  # a changed value's note no longer applies
         # a constant xt replaces a profile or random profile and vice versa (patches stay on a new xt)
         if parts[0] == "terrain" and len(parts) == 2 and parts[1] in ("xt", "profile", "random"):
             for other in ("xt", "profile", "random"):
@@ -324,7 +369,7 @@ def shipped_scenarios() -> dict:
     for p in sorted(_shipped_dir().glob("*.yaml")):
         try:
             raw = read_yaml(p)
-        except ScenarioError:      # pragma: no cover - the shipped files are tested
+        except ScenarioError:  # pragma: no cover - the shipped files are tested
             continue
         desc = raw.get("description", "") if isinstance(raw, dict) else ""
         first = " ".join(str(desc).split())
@@ -360,8 +405,9 @@ def read_scenario_yaml(name_or_path):
         if path.exists():
             raise
         names = ", ".join(shipped_scenarios())
-        raise ScenarioError(f"{exc} A shipped scenario is named without a path, one of: {names} "
-                            "(`snoworm scenarios` lists them).") from None
+        raise ScenarioError(
+            f"{exc} A shipped scenario is named without a path, one of: {names} (`snoworm scenarios` lists them)."
+        ) from None
 
 
 def load_scenario(path, overrides=(), *, trust_folder: bool = True) -> Scenario:
@@ -384,7 +430,7 @@ def load_scenario(path, overrides=(), *, trust_folder: bool = True) -> Scenario:
     if ov:
         if not isinstance(raw, dict):
             raise ScenarioError(f"{path}: a scenario must be a YAML mapping.")
-        shipped = Path(path).resolve().parent == _shipped_dir().resolve()   # --set paths are the user's, not ours
+        shipped = Path(path).resolve().parent == _shipped_dir().resolve()  # --set paths are the user's, not ours
         raw = apply_overrides(raw, yamlio.controller_paths_from_cwd(ov) if shipped else ov)
     return scenario_from_dict(raw, str(path), base_dir=Path(path).parent, trust_folder=trust_folder)
 
@@ -392,7 +438,10 @@ def load_scenario(path, overrides=(), *, trust_folder: bool = True) -> Scenario:
 def dump_scenario(sc: Scenario) -> str:
     """The resolved scenario as YAML text, every value filled in (re-runnable), followed by the
     source of every physical value as comments (:attr:`Scenario.sources`)."""
-    lines = ["", "# Sources of the physical values (parameter set "
-             f"{sc.vehicle.parameter_set}; [user] scenario: changed by the scenario):"]
+    lines = [
+        "",
+        "# Sources of the physical values (parameter set "
+        f"{sc.vehicle.parameter_set}; [user] scenario: changed by the scenario):",
+    ]
     lines += [f"#   {k}: {v}" for k, v in sc.sources.items()]
     return yaml.safe_dump(sc.to_dict(), sort_keys=False) + "\n".join(lines) + "\n"

@@ -10,6 +10,7 @@ and values out of bounds raise a one-paragraph :class:`ScenarioError` that names
 field and says how to fix it.  NumPy scalars and arrays are accepted where numbers and lists
 are.  :func:`dump` turns the dataclass back into plain YAML-able data.
 """
+
 from __future__ import annotations
 
 import contextvars
@@ -26,8 +27,19 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Config", "ScenarioError", "field", "internal", "build", "dump", "suggest", "quote", "short_key", "check_field",
-           "domain_text"]
+__all__ = [
+    "Config",
+    "ScenarioError",
+    "field",
+    "internal",
+    "build",
+    "dump",
+    "suggest",
+    "quote",
+    "short_key",
+    "check_field",
+    "domain_text",
+]
 
 _MISSING = dataclasses.MISSING
 
@@ -36,8 +48,21 @@ class ScenarioError(ValueError):
     """Bad user input: the message names the field and the fix (CLI exit status 2)."""
 
 
-def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None, unit="", doc="",
-          default_factory=_MISSING, search=None, why="", convert=None):
+def field(
+    default=_MISSING,
+    *,
+    gt=None,
+    ge=None,
+    lt=None,
+    le=None,
+    choices=None,
+    unit="",
+    doc="",
+    default_factory=_MISSING,
+    search=None,
+    why="",
+    convert=None,
+):
     """A dataclass field with validation metadata.
 
     Parameters
@@ -61,8 +86,7 @@ def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None,
         ``convert(value, path) -> value`` validates the value instead of its type annotation (e.g.
         the scenario's ``mode``, whose class depends on its ``type``).
     """
-    md = dict(gt=gt, ge=ge, lt=lt, le=le, choices=choices, unit=unit, doc=doc, search=search, why=why,
-              convert=convert)
+    md = dict(gt=gt, ge=ge, lt=lt, le=le, choices=choices, unit=unit, doc=doc, search=search, why=why, convert=convert)
     kw = {"metadata": md}
     if default is not _MISSING:
         kw["default"] = default
@@ -72,10 +96,27 @@ def field(default=_MISSING, *, gt=None, ge=None, lt=None, le=None, choices=None,
 
 
 #: Unit suffixes of the project's names (``force_N``, ``speed_mps``) -> the unit they stand for.
-UNIT_SUFFIXES = {"N": "N", "Nm": "N m", "mps": "m/s", "m": "m", "s": "s", "kg": "kg", "W": "W", "J": "J",
-                 "Ns_per_m": "N s/m", "N_per_m": "N/m", "rad": "rad", "deg": "deg", "Hz": "Hz", "J_per_m": "J/m",
-                 "radps": "rad/s", "kgm2": "kg m2", "mps2": "m/s2", "Nms_per_rad": "N m s/rad",
-                 "Nm_per_rad": "N m/rad"}
+UNIT_SUFFIXES = {
+    "N": "N",
+    "Nm": "N m",
+    "mps": "m/s",
+    "m": "m",
+    "s": "s",
+    "kg": "kg",
+    "W": "W",
+    "J": "J",
+    "Ns_per_m": "N s/m",
+    "N_per_m": "N/m",
+    "rad": "rad",
+    "deg": "deg",
+    "Hz": "Hz",
+    "J_per_m": "J/m",
+    "radps": "rad/s",
+    "kgm2": "kg m2",
+    "mps2": "m/s2",
+    "Nms_per_rad": "N m s/rad",
+    "Nm_per_rad": "N m/rad",
+}
 
 
 def split_unit(name: str):
@@ -89,7 +130,7 @@ def split_unit(name: str):
 
 def suggest(word: str, options) -> str:
     """A ' Did you mean ...?' suffix for a misspelt key, or ''."""
-    if len(str(word)) > 100:        # no key or choice is that long (and difflib would take its time)
+    if len(str(word)) > 100:  # no key or choice is that long (and difflib would take its time)
         return ""
     close = difflib.get_close_matches(str(word), [str(o) for o in options], n=3, cutoff=0.6)
     if not close:
@@ -114,7 +155,7 @@ def quote(value, limit: int = 100) -> str:
     """
     is_text = isinstance(value, (str, bytes, bytearray))
     try:  # reprlib shortens containers and other objects; only the head of a string is repr'd
-        text = repr(value[:limit + 1]) if is_text else reprlib.repr(value)
+        text = repr(value[: limit + 1]) if is_text else reprlib.repr(value)
     except ValueError:  # an int beyond Python's str-digit limit
         text = f"<{type(value).__name__}>"
     if len(text) <= limit and not (is_text and len(value) > limit):
@@ -154,13 +195,17 @@ def _describe(md):
 
 
 #: The bounds a field may declare: metadata key, comparison that must hold, word for messages.
-_BOUNDS = (("gt", operator.gt, "greater than"), ("ge", operator.ge, "at least"),
-           ("lt", operator.lt, "less than"), ("le", operator.le, "at most"))
+_BOUNDS = (
+    ("gt", operator.gt, "greater than"),
+    ("ge", operator.ge, "at least"),
+    ("lt", operator.lt, "less than"),
+    ("le", operator.le, "at most"),
+)
 
 
 def _check_number(path, value, md, kind):
     t = type(value)
-    if t is not float and t is not int:        # plain YAML numbers skip straight to the checks below
+    if t is not float and t is not int:  # plain YAML numbers skip straight to the checks below
         if isinstance(value, np.ndarray) and value.ndim == 0:
             value = value.item()
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
@@ -168,12 +213,18 @@ def _check_number(path, value, md, kind):
                 try:
                     value = float(value)
                 except ValueError:
-                    _fail(path, f"expected a number{_describe(md)}, got the text {quote(value)}. Write a plain number, e.g. 1.5.")
+                    _fail(
+                        path,
+                        f"expected a number{_describe(md)}, got the text {quote(value)}. Write a plain number, e.g. 1.5.",
+                    )
             else:
-                _fail(path, f"expected a number{_describe(md)}, got {type(value).__name__} {quote(value)}. Write a plain number.")
+                _fail(
+                    path,
+                    f"expected a number{_describe(md)}, got {type(value).__name__} {quote(value)}. Write a plain number.",
+                )
     if isinstance(value, numbers.Integral):
         value = int(value)
-        if abs(value) > 1e300:      # beyond any bound; float() of it would overflow
+        if abs(value) > 1e300:  # beyond any bound; float() of it would overflow
             _fail(path, f"must be a finite number{_describe(md)}, got an integer of {len(str(abs(value)))} digits.")
     elif not math.isfinite(float(value)):
         dom = f" in {domain_text(md)}" if domain_text(md) else ""
@@ -189,8 +240,11 @@ def _check_number(path, value, md, kind):
         if bound is not None and not holds(value, bound):
             unit = f" {md.get('unit')}" if md.get("unit") else ""
             why = f" {md['why']}" if md.get("why") else ""
-            _fail(path, f"must be {word} {bound:g}{unit}{_describe(md)}, got {value:g}; the allowed range is "
-                        f"{domain_text(md)}.{why} Change it to a value {word} {bound:g}.")
+            _fail(
+                path,
+                f"must be {word} {bound:g}{unit}{_describe(md)}, got {value:g}; the allowed range is "
+                f"{domain_text(md)}.{why} Change it to a value {word} {bound:g}.",
+            )
     return value
 
 
@@ -204,7 +258,7 @@ def _convert(path, value, tp, md):
     if md.get("convert") is not None:
         return md["convert"](value, path)
     origin, args, is_dc = _type_info(tp)
-    if origin is typing.Union or origin is types.UnionType:     # Optional[X] or X | None
+    if origin is typing.Union or origin is types.UnionType:  # Optional[X] or X | None
         if value is None and type(None) in args:
             return None
         non_none = [a for a in args if a is not type(None)]
@@ -216,7 +270,7 @@ def _convert(path, value, tp, md):
                 errors.append(str(exc))
         raise ScenarioError(errors[-1])
     if is_dc:
-        if isinstance(value, tp):       # constructed (and so validated) already
+        if isinstance(value, tp):  # constructed (and so validated) already
             return value
         if not isinstance(value, dict):
             _fail(path, f"expected a mapping of keys for {tp.__name__}, got {type(value).__name__} {quote(value)}.")
@@ -251,7 +305,9 @@ def _convert(path, value, tp, md):
             _fail(path, f"expected text{_describe(md)}, got {type(value).__name__} {quote(value)}.")
     choices = md.get("choices")
     if choices is not None and value not in choices:
-        _fail(path, f"must be one of {', '.join(repr(c) for c in choices)}; got {quote(value)}.{suggest(value, choices)}")
+        _fail(
+            path, f"must be one of {', '.join(repr(c) for c in choices)}; got {quote(value)}.{suggest(value, choices)}"
+        )
     return value
 
 
@@ -288,7 +344,7 @@ class _Validated(type):
         fields = _settings(cls)
         names = [f.name for f in dataclasses.fields(cls) if f.init]
         if len(args) > len(names):
-            return super().__call__(*args, **kwargs)      # the dataclass's own TypeError
+            return super().__call__(*args, **kwargs)  # the dataclass's own TypeError
         for name, value in zip(names, args):
             if name in kwargs:
                 raise TypeError(f"{cls.__name__}() got multiple values for argument {name!r}")
@@ -305,7 +361,7 @@ class _Validated(type):
             elif f.default_factory is not _MISSING:
                 value = f.default_factory()
             else:
-                continue                                   # missing: the dataclass's own TypeError
+                continue  # missing: the dataclass's own TypeError
             kwargs[name] = _convert(f"{prefix}{name}", value, hints[name], f.metadata)
         return super().__call__(**kwargs)
 
@@ -348,7 +404,9 @@ def build(cls, data: dict, path: str = "", internal_values=None):
     prefix = f"{path}." if path else ""
     for key in data:
         if key not in fields:
-            _fail(f"{prefix}{short_key(key)}", f"unknown key.{suggest(key, fields)} Known keys here: {', '.join(fields)}.")
+            _fail(
+                f"{prefix}{short_key(key)}", f"unknown key.{suggest(key, fields)} Known keys here: {', '.join(fields)}."
+            )
     for name, f in fields.items():
         if name not in data and f.default is _MISSING and f.default_factory is _MISSING:
             _fail(f"{prefix}{name}", f"is required but missing{_describe(f.metadata)}. Add it to the scenario.")
@@ -356,7 +414,7 @@ def build(cls, data: dict, path: str = "", internal_values=None):
     try:
         if issubclass(cls, Config):
             return cls(**data, **(internal_values or {}))
-        hints = _type_hints(cls)    # a plain dataclass: convert here
+        hints = _type_hints(cls)  # a plain dataclass: convert here
         return cls(**{k: _convert(f"{prefix}{k}", v, hints[k], fields[k].metadata) for k, v in data.items()})
     finally:
         _PATH.reset(token)

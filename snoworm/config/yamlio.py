@@ -3,6 +3,7 @@
 :func:`read_yaml` and :func:`load_yaml_text` read YAML as :func:`yaml.safe_load` does, but hostile or broken
 input (unknown tags, duplicate keys, alias bombs, deep nesting, huge or non-UTF-8 files) gives a short ScenarioError.
 """
+
 from __future__ import annotations
 
 import codecs
@@ -15,8 +16,16 @@ from yaml.nodes import ScalarNode, SequenceNode
 
 from .schema import ScenarioError, quote
 
-__all__ = ["MAX_BYTES", "MAX_DEPTH", "MAX_INT_CHARS", "MAX_NODES", "load_yaml_text", "quote", "read_yaml",
-           "controller_paths_from_cwd"]
+__all__ = [
+    "MAX_BYTES",
+    "MAX_DEPTH",
+    "MAX_INT_CHARS",
+    "MAX_NODES",
+    "load_yaml_text",
+    "quote",
+    "read_yaml",
+    "controller_paths_from_cwd",
+]
 
 MAX_NODES = 100_000  #: node budget after expanding aliases (scenario ~100, 30 000-point profile 90 000)
 MAX_DEPTH = 50  #: deepest nesting of mappings and sequences, through aliases too (scenarios use 4)
@@ -75,8 +84,12 @@ class _Loader(yaml.SafeLoader):
             return 1, 0
         key = id(node)
         if key in self._memo and self._memo[key] is None:  # met again while walking its own children
-            raise _error(self.source, node.start_mark, "recursive alias: this node contains an alias to "
-                         "itself. Recursive structures are not allowed; remove the alias.")
+            raise _error(
+                self.source,
+                node.start_mark,
+                "recursive alias: this node contains an alias to "
+                "itself. Recursive structures are not allowed; remove the alias.",
+            )
         if key not in self._memo:
             if level >= MAX_DEPTH:
                 raise _error(self.source, node.start_mark, _DEEP)
@@ -102,16 +115,23 @@ class _Loader(yaml.SafeLoader):
             key = self.construct_object(key_node)  # scalars construct to hashable values
             first = seen.setdefault(key, key_node)
             if first is not key_node:
-                raise _error(self.source, key_node.start_mark, f"duplicate key {quote(key)} (first at line "
-                             f"{first.start_mark.line + 1}); YAML would silently keep only the last. "
-                             "Remove or rename one.")
+                raise _error(
+                    self.source,
+                    key_node.start_mark,
+                    f"duplicate key {quote(key)} (first at line "
+                    f"{first.start_mark.line + 1}); YAML would silently keep only the last. "
+                    "Remove or rename one.",
+                )
         return [n for pair in node.value for n in pair]
 
     def construct_object(self, node, deep=False):
         """Construct a node; a value its tag cannot read, or an absurdly long int, is a ScenarioError."""
         if node.tag == "tag:yaml.org,2002:int" and len(node.value) > MAX_INT_CHARS:
-            raise _error(self.source, node.start_mark,
-                         f"integer {quote(node.value)} is too long (more than {MAX_INT_CHARS} characters).")
+            raise _error(
+                self.source,
+                node.start_mark,
+                f"integer {quote(node.value)} is too long (more than {MAX_INT_CHARS} characters).",
+            )
         try:
             return super().construct_object(node, deep=deep)
         except ScenarioError:
@@ -123,8 +143,12 @@ class _Loader(yaml.SafeLoader):
 
     def construct_unknown(self, node):
         """Refuse any tag SafeLoader does not know (``!!python/object``, custom ``!tags``)."""
-        raise _error(self.source, node.start_mark, f"unknown tag {quote(node.tag)}: tags that create "
-                     "Python objects or custom types are not allowed. Remove the tag.")
+        raise _error(
+            self.source,
+            node.start_mark,
+            f"unknown tag {quote(node.tag)}: tags that create "
+            "Python objects or custom types are not allowed. Remove the tag.",
+        )
 
 
 _Loader.add_constructor(None, _Loader.construct_unknown)
@@ -144,12 +168,17 @@ def _load(text: str, source: str):
     except yaml.MarkedYAMLError as exc:
         at = f" at line {exc.context_mark.line + 1}" if exc.context_mark else ""
         context = f" ({_clip(exc.context)}{at})" if exc.context else ""
-        raise _error(source, exc.problem_mark or exc.context_mark,
-                     f"not valid YAML: {_clip(exc.problem)}{context}. {_SYNTAX_HINT}") from None
+        raise _error(
+            source,
+            exc.problem_mark or exc.context_mark,
+            f"not valid YAML: {_clip(exc.problem)}{context}. {_SYNTAX_HINT}",
+        ) from None
     except yaml.reader.ReaderError as exc:
         line = text.count("\n", 0, exc.position) + 1
-        raise ScenarioError(f"{source}, line {line}: character #x{exc.character:04x} is not allowed in YAML "
-                            "(write control characters as escapes in double quotes). Remove it.") from None
+        raise ScenarioError(
+            f"{source}, line {line}: character #x{exc.character:04x} is not allowed in YAML "
+            "(write control characters as escapes in double quotes). Remove it."
+        ) from None
     except yaml.YAMLError as exc:
         raise ScenarioError(f"{source}: not valid YAML: {_clip(exc)}. {_SYNTAX_HINT}") from None
     except RecursionError:
@@ -210,14 +239,18 @@ def read_yaml(path):
     if len(data) > MAX_BYTES:
         raise ScenarioError(f"{name}: larger than {MAX_BYTES} bytes (a scenario is a few kB); wrong file?")
     if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE) or b"\0" in data:  # UTF-32 BOMs are caught too
-        raise ScenarioError(f"{name}: the file is not UTF-8 text (a UTF-16 or UTF-32 byte-order mark or NUL "
-                            "bytes: UTF-16, UTF-32 or a binary file); save it as UTF-8.")
+        raise ScenarioError(
+            f"{name}: the file is not UTF-8 text (a UTF-16 or UTF-32 byte-order mark or NUL "
+            "bytes: UTF-16, UTF-32 or a binary file); save it as UTF-8."
+        )
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         line = data.count(b"\n", 0, exc.start) + 1
-        raise ScenarioError(f"{name}, line {line}: byte {data[exc.start]:#04x} is not valid UTF-8 (Latin-1, "
-                            "Windows-1252 or another encoding?); save it as UTF-8.") from None
+        raise ScenarioError(
+            f"{name}, line {line}: byte {data[exc.start]:#04x} is not valid UTF-8 (Latin-1, "
+            "Windows-1252 or another encoding?); save it as UTF-8."
+        ) from None
     found, value = _load(text, name)
     if not found:
         raise ScenarioError(f"{name}: the file is empty (no YAML content, only blanks or comments).")

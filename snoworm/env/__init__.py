@@ -44,6 +44,7 @@ import needed).  ``import snoworm`` alone does not register the id: it never imp
 The native vector environment is :class:`snoworm.env.vector.SnowormVectorEnv`.  This package needs
 ``gymnasium`` (``pip install 'snoworm[gym]'``); nothing else in snoworm imports it.
 """
+
 from __future__ import annotations
 
 try:
@@ -55,16 +56,30 @@ from .core import ENV_ID, OBS_LIMIT, OBSERVATION_FIELDS, OBSERVATION_SCALES, Env
 from .single import SnowormEnv, make_env
 from .vector import SnowormVectorEnv
 
-__all__ = ["ENV_ID", "SnowormEnv", "SnowormVectorEnv", "EnvCore", "OBSERVATION_FIELDS", "OBSERVATION_SCALES",
-           "OBS_LIMIT", "default_reward", "make_env", "register", "table_fields"]
+__all__ = [
+    "ENV_ID",
+    "SnowormEnv",
+    "SnowormVectorEnv",
+    "EnvCore",
+    "OBSERVATION_FIELDS",
+    "OBSERVATION_SCALES",
+    "OBS_LIMIT",
+    "default_reward",
+    "make_env",
+    "register",
+    "table_fields",
+]
 
 
 def register():
     """Register :data:`ENV_ID` (done on import of this package; again is a no-op)."""
     if ENV_ID not in gymnasium.registry:
-        gymnasium.register(id=ENV_ID, entry_point="snoworm.env.single:make_env",
-                           vector_entry_point="snoworm.env.vector:SnowormVectorEnv",
-                           kwargs={"scenario": "tow6_uniform"})
+        gymnasium.register(
+            id=ENV_ID,
+            entry_point="snoworm.env.single:make_env",
+            vector_entry_point="snoworm.env.vector:SnowormVectorEnv",
+            kwargs={"scenario": "tow6_uniform"},
+        )
 
 
 register()

@@ -1,5 +1,6 @@
 """What the single and the vector environment share (:mod:`snoworm.env`): options, spaces, the
 map from normalised actions to commands, the normalised observation and the motors' energy."""
+
 from __future__ import annotations
 
 import math
@@ -9,24 +10,50 @@ from gymnasium import spaces
 
 from ..config.scenario import Scenario, load_scenario
 
-__all__ = ["ENV_ID", "EnvCore", "OBSERVATION_FIELDS", "OBSERVATION_SCALES", "OBS_LIMIT", "default_reward",
-           "table_fields"]
+__all__ = [
+    "ENV_ID",
+    "EnvCore",
+    "OBSERVATION_FIELDS",
+    "OBSERVATION_SCALES",
+    "OBS_LIMIT",
+    "default_reward",
+    "table_fields",
+]
 
 #: The registered id (``gymnasium.make(ENV_ID, scenario=...)``).
 ENV_ID = "snoworm/Snoworm-v0"
 
 #: Observation arrays in the order they fill the observation vector (then ``t_s / duration_s``).
-OBSERVATION_FIELDS = ("x_m", "v_mps", "wheel_speed_mps", "slip", "motor_torque_Nm", "xt", "grade_deg",
-                      "link_force_N", "link_length_m", "joint_extension_m")
+OBSERVATION_FIELDS = (
+    "x_m",
+    "v_mps",
+    "wheel_speed_mps",
+    "slip",
+    "motor_torque_Nm",
+    "xt",
+    "grade_deg",
+    "link_force_N",
+    "link_length_m",
+    "joint_extension_m",
+)
 
 #: The scale each field is divided by (names of :meth:`EnvCore.scales`): ``distance`` = the fastest
 #: no-load wheel speed times ``duration_s``, ``speed`` = the fastest no-load wheel speed R_w w_nl,
 #: ``torque`` = each motor's torque limit, ``weight`` = the chain's weight, ``spacing`` = each link's
 #: rest spacing, ``stroke`` = each joint's largest stroke (1 m for fixed links), ``right_angle`` =
 #: 90 deg (a grade maps into [-1, 1]), ``one`` = 1.
-OBSERVATION_SCALES = {"x_m": "distance", "v_mps": "speed", "wheel_speed_mps": "speed", "slip": "one",
-                      "motor_torque_Nm": "torque", "xt": "one", "grade_deg": "right_angle",
-                      "link_force_N": "weight", "link_length_m": "spacing", "joint_extension_m": "stroke"}
+OBSERVATION_SCALES = {
+    "x_m": "distance",
+    "v_mps": "speed",
+    "wheel_speed_mps": "speed",
+    "slip": "one",
+    "motor_torque_Nm": "torque",
+    "xt": "one",
+    "grade_deg": "right_angle",
+    "link_force_N": "weight",
+    "link_length_m": "spacing",
+    "joint_extension_m": "stroke",
+}
 
 #: Bound of every normalised observation value (values beyond are clipped).
 OBS_LIMIT = 10.0
@@ -50,8 +77,12 @@ def _resolve(scenario):
 
 def _number(name, value, rule, ok):
     """``value`` as a float if finite and ``ok(value)``; else ValueError naming ``name`` and ``rule``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(value) or not ok(value):
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not math.isfinite(value)
+        or not ok(value)
+    ):
         raise ValueError(f"{name}: must be {rule}, got {value!r}")
     return float(value)
 
@@ -75,13 +106,21 @@ class EnvCore:
         Immobilisation test: mean speed below ``stall_speed_mps`` (>= 0) for ``stall_time_s`` (> 0).
     """
 
-    def __init__(self, scenario, dt_s=0.1, action_keys=("wheel_speed_mps",), energy_weight=1e-3,
-                 stall_speed_mps=0.01, stall_time_s=2.0):
+    def __init__(
+        self,
+        scenario,
+        dt_s=0.1,
+        action_keys=("wheel_speed_mps",),
+        energy_weight=1e-3,
+        stall_speed_mps=0.01,
+        stall_time_s=2.0,
+    ):
         self.scenario = _resolve(scenario)
         self.dt_s = _number("dt_s", dt_s, "a positive number of seconds", lambda v: v > 0)
         self.energy_weight = _number("energy_weight", energy_weight, "a finite number >= 0", lambda v: v >= 0)
-        self.stall_speed_mps = _number("stall_speed_mps", stall_speed_mps, "a finite speed >= 0 [m/s]",
-                                       lambda v: v >= 0)
+        self.stall_speed_mps = _number(
+            "stall_speed_mps", stall_speed_mps, "a finite speed >= 0 [m/s]", lambda v: v >= 0
+        )
         self.stall_time_s = _number("stall_time_s", stall_time_s, "a positive number of seconds", lambda v: v > 0)
         if isinstance(action_keys, str):
             action_keys = (action_keys,)
@@ -99,10 +138,12 @@ class EnvCore:
     def _action_bounds(self):
         model = self.model
         seg, links, n = model.seg, model.links, model.n
-        bounds = {"wheel_speed_mps": (np.zeros(n), seg.no_load_speed_radps * seg.wheel_radius_m),
-                  "wheel_torque_Nm": (-seg.torque_limit_Nm, seg.torque_limit_Nm),
-                  "joint_force_N": (-links.force_max_N, links.force_max_N),
-                  "joint_length_m": (links.stroke_min_m, links.stroke_max_m)}
+        bounds = {
+            "wheel_speed_mps": (np.zeros(n), seg.no_load_speed_radps * seg.wheel_radius_m),
+            "wheel_torque_Nm": (-seg.torque_limit_Nm, seg.torque_limit_Nm),
+            "joint_force_N": (-links.force_max_N, links.force_max_N),
+            "joint_length_m": (links.stroke_min_m, links.stroke_max_m),
+        }
         if not self.action_keys:
             raise ValueError(f"action_keys: give at least one of {', '.join(bounds)}")
         for key in self.action_keys:
@@ -124,10 +165,16 @@ class EnvCore:
         seg, links = self.model.seg, self.model.links
         vnl = float(np.max(seg.no_load_speed_radps * seg.wheel_radius_m))
         stroke = np.maximum(np.abs(links.stroke_min_m), np.abs(links.stroke_max_m))
-        return {"distance": vnl * self.duration_s, "speed": vnl, "torque": np.asarray(seg.torque_limit_Nm, float),
-                "weight": float(np.sum(seg.mass_kg * seg.gravity_mps2)), "one": 1.0, "right_angle": 90.0,
-                "spacing": np.asarray(links.rest_spacing_m, float),
-                "stroke": np.where(links.prismatic > 0, np.where(stroke > 0, stroke, 1.0), 1.0)}
+        return {
+            "distance": vnl * self.duration_s,
+            "speed": vnl,
+            "torque": np.asarray(seg.torque_limit_Nm, float),
+            "weight": float(np.sum(seg.mass_kg * seg.gravity_mps2)),
+            "one": 1.0,
+            "right_angle": 90.0,
+            "spacing": np.asarray(links.rest_spacing_m, float),
+            "stroke": np.where(links.prismatic > 0, np.where(stroke > 0, stroke, 1.0), 1.0),
+        }
 
     def _observation_scale(self):
         sc, n = self.scales(), self.model.n
@@ -148,7 +195,7 @@ class EnvCore:
         phys = self.low + (np.clip(a, -1.0, 1.0) + 1.0) * 0.5 * (self.high - self.low)
         cmd, j = {}, 0
         for key, size in zip(self.action_keys, self.sizes):
-            cmd[key] = phys[..., j:j + size]
+            cmd[key] = phys[..., j : j + size]
             j += size
         return cmd
 
@@ -174,5 +221,3 @@ def table_fields(seg, lk, row=-1) -> dict:
     """The :data:`OBSERVATION_FIELDS` arrays at sample ``row`` of output tables ``seg, lk``
     (:func:`snoworm.model.quantities.output_series`)."""
     return {f: (seg if f in seg else lk)[_TABLE_NAME.get(f, f)][row] for f in OBSERVATION_FIELDS}
-
-

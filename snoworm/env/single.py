@@ -1,4 +1,5 @@
 """The single environment :class:`SnowormEnv` (registered as ``snoworm/Snoworm-v0``, see :mod:`snoworm.env`)."""
+
 from __future__ import annotations
 
 import gymnasium
@@ -37,9 +38,19 @@ class SnowormEnv(gymnasium.Env):
 
     metadata = {"render_modes": []}
 
-    def __init__(self, scenario="tow6_uniform", reward=None, dt_s=0.1, action_keys=("wheel_speed_mps",),
-                 energy_weight=1e-3, stall_speed_mps=0.01, stall_time_s=2.0, method="VODE", record=False,
-                 render_mode=None):
+    def __init__(
+        self,
+        scenario="tow6_uniform",
+        reward=None,
+        dt_s=0.1,
+        action_keys=("wheel_speed_mps",),
+        energy_weight=1e-3,
+        stall_speed_mps=0.01,
+        stall_time_s=2.0,
+        method="VODE",
+        record=False,
+        render_mode=None,
+    ):
         if render_mode is not None:
             raise ValueError(f"render_mode: the environment does not render; got {render_mode!r}, use None")
         if reward is not None and not callable(reward):
@@ -91,7 +102,7 @@ class SnowormEnv(gymnasium.Env):
         obs_t = self.sim.step(command, self.dt_s, restart=not held).t_s
         self._command = command
         ts, ys, ctl = self.sim.last_step
-        if ts[0] > t0:          # record=True: the step's samples leave out its start (the Result has it)
+        if ts[0] > t0:  # record=True: the step's samples leave out its start (the Result has it)
             ts, ys = np.append(t0, ts), np.vstack([y0, ys])
         seg, lk = output_series(self.sim.model, ys, ctl)
         energy = float(self.core.energy_J(ts, seg))

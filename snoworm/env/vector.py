@@ -35,6 +35,7 @@ different times of their episodes share one period.
   mask, as Gymnasium's vector infos).
 * A ``reward`` callable is not taken (wrap the vector environment instead).
 """
+
 from __future__ import annotations
 
 from dataclasses import replace
@@ -76,9 +77,19 @@ class SnowormVectorEnv(VectorEnv):
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
 
-    def __init__(self, num_envs=1, scenario="tow6_uniform", dt_s=0.1, action_keys=("wheel_speed_mps",),
-                 energy_weight=1e-3, stall_speed_mps=0.01, stall_time_s=2.0, max_episode_steps=None,
-                 method="VODE", render_mode=None):
+    def __init__(
+        self,
+        num_envs=1,
+        scenario="tow6_uniform",
+        dt_s=0.1,
+        action_keys=("wheel_speed_mps",),
+        energy_weight=1e-3,
+        stall_speed_mps=0.01,
+        stall_time_s=2.0,
+        max_episode_steps=None,
+        method="VODE",
+        render_mode=None,
+    ):
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"num_envs: must be a whole number >= 1, got {num_envs!r}")
         if render_mode is not None:
@@ -87,8 +98,11 @@ class SnowormVectorEnv(VectorEnv):
         self.num_envs = B = int(num_envs)
         self.max_episode_steps = core.max_episode_steps
         if max_episode_steps is not None:
-            if isinstance(max_episode_steps, bool) or not isinstance(max_episode_steps, (int, np.integer)) \
-                    or max_episode_steps < 1:
+            if (
+                isinstance(max_episode_steps, bool)
+                or not isinstance(max_episode_steps, (int, np.integer))
+                or max_episode_steps < 1
+            ):
                 raise ValueError(f"max_episode_steps: must be a whole number >= 1, got {max_episode_steps!r}")
             self.max_episode_steps = min(self.max_episode_steps, int(max_episode_steps))
         sc = core.scenario
@@ -107,8 +121,9 @@ class SnowormVectorEnv(VectorEnv):
         fields0 = table_fields(seg, lk)
         self._obs0 = core.normalised(fields0, 0.0)
         self._xmean0 = float(np.mean(fields0["x_m"]))
-        self._vmax = SPEED_SANITY_FACTOR * float(np.max(self.model.seg.no_load_speed_radps
-                                                        * self.model.seg.wheel_radius_m))
+        self._vmax = SPEED_SANITY_FACTOR * float(
+            np.max(self.model.seg.no_load_speed_radps * self.model.seg.wheel_radius_m)
+        )
         self._grid = np.asarray(output_grid(0.0, core.dt_s, core.scenario.simulation.output_dt_s, include_start=True))
         self.stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "member_solves": 0, "solver_failures": 0}
         #: the interval solve of the stack, kept over the periods: VODE on the stack (see :meth:`step`)
@@ -165,11 +180,11 @@ class SnowormVectorEnv(VectorEnv):
         self._solver.carry_history, self._command = held, command
         ctl = self._cmd.apply(command)
         restart = self._autoreset.copy()
-        if restart.any():           # NEXT_STEP autoreset: these members start again; their action is ignored
+        if restart.any():  # NEXT_STEP autoreset: these members start again; their action is ignored
             self._reset_members(restart)
         ts, ys, failed, errors = self._solve(ctl)
         failed &= ~restart
-        seg, lk = output_series(self.model, ys, ctl)             # (n_t, B, ...): one kernel call
+        seg, lk = output_series(self.model, ys, ctl)  # (n_t, B, ...): one kernel call
         fields = table_fields(seg, lk)
         energy = core.energy_J(ts - ts[0], seg)
         t_new = self._t + self.dt_s
@@ -181,7 +196,7 @@ class SnowormVectorEnv(VectorEnv):
         steps = self._steps + 1
         terminated = stalled >= core.stall_time_s - 1e-9
         truncated = (t_new >= core.duration_s - 1e-9) | (steps >= self.max_episode_steps)
-        ok = ~failed & ~restart     # the restarted members' periods are discarded (they stay at their start)
+        ok = ~failed & ~restart  # the restarted members' periods are discarded (they stay at their start)
         self._y[ok], self._t[ok], self._steps[ok], self._stalled[ok] = ys[-1][ok], t_new[ok], steps[ok], stalled[ok]
         self._xmean[ok], self._obs[ok] = xmean[ok], obs[ok]
         rewards, energy = np.where(failed, 0.0, rewards), np.where(failed, 0.0, energy)
@@ -195,8 +210,14 @@ class SnowormVectorEnv(VectorEnv):
     def _info(self, energy, failed, errors):
         B = self.num_envs
         every = np.ones(B, bool)
-        info = {"t_s": self._t.copy(), "_t_s": every, "motor_energy_J": energy, "_motor_energy_J": every,
-                "solver_failure": failed.copy(), "_solver_failure": every}
+        info = {
+            "t_s": self._t.copy(),
+            "_t_s": every,
+            "motor_energy_J": energy,
+            "_motor_energy_J": every,
+            "solver_failure": failed.copy(),
+            "_solver_failure": every,
+        }
         if failed.any():
             info["solver_error"] = np.array([errors.get(b, "") for b in range(B)], dtype=object)
             info["_solver_error"] = failed.copy()

@@ -16,6 +16,7 @@ In both, ``None`` is an empty cell, integers are written whole, text as it is (q
 CSV rules when it holds a comma, a quote or a line break, unless ``CellFormat.comma`` replaces
 its commas) and any other value (a list, a mapping) as canonical JSON.
 """
+
 from __future__ import annotations
 
 import csv

@@ -6,6 +6,7 @@ renames it into place at the end.  Files written by
 their own ``fsync``; the commit calls :func:`sync_files` on the whole staging folder before the
 rename, so the folder appears only with every file (plots and the manifest too) on disk.
 """
+
 from __future__ import annotations
 
 import contextvars
@@ -33,6 +34,7 @@ def sync_files(folder) -> None:
                 os.close(fd)
         except OSError as exc:
             errors.append(exc)
+
     threads = [threading.Thread(target=sync, args=(p,)) for p in paths]
     for th in threads:
         th.start()

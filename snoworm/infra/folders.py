@@ -14,6 +14,7 @@
 I/O failures (disk full, read-only, a path under a file) raise :class:`OutputError` naming the
 path and the operating system's reason (the CLI: exit status 2).
 """
+
 from __future__ import annotations
 
 import errno
@@ -36,9 +37,25 @@ from .._version import __version__
 from .durable import STAGING as _STAGING, sync_files
 from .manifest import LOCK, MANIFEST, STAGE as _STAGE, ManifestProblem, folder_files, listed_files, load_manifest
 
-__all__ = ["atomic_write_text", "atomic_path", "sync_files", "OutputError", "output_folder", "check_output_folder",
-           "folder_state", "folder_report", "read_manifest", "write_manifest", "remove_listed", "folder_lock",
-           "FolderLocked", "MANIFEST", "LOCK", "os_error_message", "file_mode"]
+__all__ = [
+    "atomic_write_text",
+    "atomic_path",
+    "sync_files",
+    "OutputError",
+    "output_folder",
+    "check_output_folder",
+    "folder_state",
+    "folder_report",
+    "read_manifest",
+    "write_manifest",
+    "remove_listed",
+    "folder_lock",
+    "FolderLocked",
+    "MANIFEST",
+    "LOCK",
+    "os_error_message",
+    "file_mode",
+]
 
 _OLD = ".snoworm-old-"
 
@@ -131,9 +148,13 @@ def _command_line() -> str:
 def write_manifest(folder, command: str | None = None, **extra) -> Path:
     """Write :data:`MANIFEST` listing every file now in ``folder``; returns its path."""
     folder = Path(folder)
-    doc = {"snoworm_version": __version__, "command": command or _command_line(),
-           "written_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), **extra,
-           "files": _files(folder)}
+    doc = {
+        "snoworm_version": __version__,
+        "command": command or _command_line(),
+        "written_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        **extra,
+        "files": _files(folder),
+    }
     return atomic_write_text(folder / MANIFEST, json.dumps(doc, indent=2) + "\n")
 
 
@@ -187,9 +208,11 @@ def earlier_output_note(path, resumes: bool = False) -> str | None:
 
 
 def _refusal(path, why=None) -> str:
-    return (f"{path} is not empty and was not written by snoworm ({why or f'it has no {MANIFEST} listing its files'}). "
-            "Give an empty or new --out folder, or pass --overwrite (overwrite=True in Python) to write into "
-            "it anyway (same-named files are replaced, the others kept).")
+    return (
+        f"{path} is not empty and was not written by snoworm ({why or f'it has no {MANIFEST} listing its files'}). "
+        "Give an empty or new --out folder, or pass --overwrite (overwrite=True in Python) to write into "
+        "it anyway (same-named files are replaced, the others kept)."
+    )
 
 
 def check_output_folder(path, overwrite: bool = False) -> str:
@@ -237,7 +260,7 @@ def _clean_stale(parent: Path, name: str):
         for tag in (_STAGE, _OLD):
             prefix = f".{name}{tag}"
             if e.startswith(prefix):
-                pid = e[len(prefix):].split("-")[0]
+                pid = e[len(prefix) :].split("-")[0]
                 if pid.isdigit() and not _pid_alive(int(pid)):
                     shutil.rmtree(parent / e, ignore_errors=True)
 
@@ -309,8 +332,10 @@ def _check_in_place(stage: Path, target: Path, listed: set):
     for e in os.listdir(stage):
         dst = target / e
         if dst.is_dir() and not dst.is_symlink() and not _ours(dst, listed, target):
-            raise OutputError(f"{dst} is a folder snoworm did not write, and a result file of the same name "
-                              f"would replace it; nothing was written. Move it away or give another --out.")
+            raise OutputError(
+                f"{dst} is a folder snoworm did not write, and a result file of the same name "
+                f"would replace it; nothing was written. Move it away or give another --out."
+            )
 
 
 def _commit_in_place(stage: Path, target: Path):
@@ -327,7 +352,7 @@ def _commit_in_place(stage: Path, target: Path):
     _check_in_place(stage, target, listed)
     if listed:
         remove_listed(target)
-    for e in sorted(os.listdir(stage), key=lambda n: n == MANIFEST):   # the manifest last
+    for e in sorted(os.listdir(stage), key=lambda n: n == MANIFEST):  # the manifest last
         dst = target / e
         if dst.is_dir() and not dst.is_symlink():
             shutil.rmtree(dst)
@@ -372,16 +397,17 @@ def output_folder(path, overwrite: bool = False, command: str | None = None):
             write_manifest(stage, command)
         finally:
             _STAGING.reset(token)
-        sync_files(stage)               # every staged file on disk before the folder appears
-        state = check_output_folder(target, overwrite)           # again: it may have changed meanwhile
+        sync_files(stage)  # every staged file on disk before the folder appears
+        state = check_output_folder(target, overwrite)  # again: it may have changed meanwhile
         if in_place or state == "foreign" or target.is_symlink() or _inside_cwd(target):
             _commit_in_place(stage, target)
         else:
             _commit_swap(stage, target)
     except OSError as exc:
         shutil.rmtree(stage, ignore_errors=True)
-        raise OutputError(f"cannot write results: {os_error_message(exc, target)}; nothing was written "
-                          f"to {target}.") from None
+        raise OutputError(
+            f"cannot write results: {os_error_message(exc, target)}; nothing was written to {target}."
+        ) from None
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
         raise
@@ -418,7 +444,7 @@ def folder_lock(folder):
     lp = folder / LOCK
     try:
         fd = _acquire(lp)
-    except OSError as exc:         # FolderLocked is not an OSError: it passes unchanged
+    except OSError as exc:  # FolderLocked is not an OSError: it passes unchanged
         raise OutputError(f"cannot lock the folder: {os_error_message(exc, lp)}") from None
     try:
         yield lp
@@ -431,13 +457,15 @@ def folder_lock(folder):
 
 
 def _busy(lp):
-    return FolderLocked(f"{lp.parent} is in use by {_holder(lp)} (lock file {lp}): another snoworm run is "
-                        "writing there. Wait for it to finish, or give another --out folder.")
+    return FolderLocked(
+        f"{lp.parent} is in use by {_holder(lp)} (lock file {lp}): another snoworm run is "
+        "writing there. Wait for it to finish, or give another --out folder."
+    )
 
 
 def _acquire(lp: Path) -> int:
     for _ in range(20):
-        if fcntl is None:   # pragma: no cover - not POSIX
+        if fcntl is None:  # pragma: no cover - not POSIX
             try:
                 fd = os.open(lp, os.O_CREAT | os.O_EXCL | os.O_RDWR, 0o644)
             except FileExistsError:
@@ -455,7 +483,7 @@ def _acquire(lp: Path) -> int:
                 if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
                     raise _busy(lp) from None
                 raise
-            try:                               # the file may have been unlinked by its releasing holder
+            try:  # the file may have been unlinked by its releasing holder
                 same = os.path.samestat(os.fstat(fd), os.stat(lp))
             except FileNotFoundError:
                 same = False

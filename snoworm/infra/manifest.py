@@ -18,6 +18,7 @@ A manifest failing any check is a :class:`ManifestProblem` (its message names th
 the problem); the folder is then foreign (:func:`snoworm.infra.folders.folder_state`): nothing in it is
 removed on the manifest's word.
 """
+
 from __future__ import annotations
 
 import json
@@ -25,9 +26,21 @@ import os
 import stat
 from pathlib import Path, PurePosixPath
 
-__all__ = ["MANIFEST", "LOCK", "STAGE", "MAX_MANIFEST_BYTES", "MAX_ENTRY_CHARS", "ManifestProblem",
-           "read_small_file", "load_manifest", "entry_problem", "lexists_inside", "listed_files",
-           "folder_files", "short"]
+__all__ = [
+    "MANIFEST",
+    "LOCK",
+    "STAGE",
+    "MAX_MANIFEST_BYTES",
+    "MAX_ENTRY_CHARS",
+    "ManifestProblem",
+    "read_small_file",
+    "load_manifest",
+    "entry_problem",
+    "lexists_inside",
+    "listed_files",
+    "folder_files",
+    "short",
+]
 
 #: Name of the manifest a snoworm output folder holds.
 MANIFEST = ".snoworm-manifest.json"
@@ -48,7 +61,7 @@ class ManifestProblem(ValueError):
 def short(value, limit: int = 100) -> str:
     """``repr`` of a user's value cut to about ``limit`` characters (messages stay short)."""
     text = repr(value)
-    return text if len(text) <= limit else text[:limit - 3] + "..."
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def read_small_file(path, limit: int) -> bytes:
@@ -77,8 +90,9 @@ def read_small_file(path, limit: int) -> bytes:
         if not stat.S_ISREG(st.st_mode):
             raise ManifestProblem(f"{path} is not a regular file (a FIFO, a device or a folder)")
         if st.st_size > limit:
-            raise ManifestProblem(f"{path} is {st.st_size} bytes, more than the {limit} a snoworm file of "
-                                  "its kind holds")
+            raise ManifestProblem(
+                f"{path} is {st.st_size} bytes, more than the {limit} a snoworm file of its kind holds"
+            )
         chunks, size = [], 0
         while size <= limit:
             chunk = os.read(fd, min(1 << 20, limit + 1 - size))
@@ -162,8 +176,9 @@ def lexists_inside(root, entry: str) -> os.stat_result | None:
             raise ManifestProblem(f"{cur}: {exc.strerror or exc}") from None
         if i < len(parts) - 1:
             if stat.S_ISLNK(st.st_mode):
-                raise ManifestProblem(f"{cur} is a symbolic link: the entry {short(entry)} would lead outside "
-                                      "the folder")
+                raise ManifestProblem(
+                    f"{cur} is a symbolic link: the entry {short(entry)} would lead outside the folder"
+                )
             if not stat.S_ISDIR(st.st_mode):
                 return None
     return st
@@ -201,7 +216,7 @@ def folder_files(folder) -> list:
             if STAGE in d:
                 continue
             if os.path.islink(os.path.join(root, d)):
-                names.append(d)          # a symlink to a folder: an entry, never walked
+                names.append(d)  # a symlink to a folder: an entry, never walked
             else:
                 keep.append(d)
         dirs[:] = keep

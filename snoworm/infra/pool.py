@@ -7,6 +7,7 @@ process dies instead of lingering.
 
 This module imports nothing else of snoworm, so any layer may use it.
 """
+
 from __future__ import annotations
 
 import functools
@@ -56,8 +57,11 @@ def start_method() -> str:
     a process with threads (NumPy's BLAS pool counts), and other platforms fork unsafely, so
     those spawn.
     """
-    if sys.platform.startswith("linux") and sys.version_info < (3, 12) \
-            and "fork" in multiprocessing.get_all_start_methods():
+    if (
+        sys.platform.startswith("linux")
+        and sys.version_info < (3, 12)
+        and "fork" in multiprocessing.get_all_start_methods()
+    ):
         return "fork"
     return "spawn"
 
@@ -83,8 +87,12 @@ class ProcessExecutor:
         for k, v in self._env.items():
             if v is None:
                 os.environ[k] = "1"
-        self.pool = ProcessPoolExecutor(self.jobs, mp_context=multiprocessing.get_context(start_method()),
-                                        initializer=_exit_with_parent, initargs=(os.getpid(),))
+        self.pool = ProcessPoolExecutor(
+            self.jobs,
+            mp_context=multiprocessing.get_context(start_method()),
+            initializer=_exit_with_parent,
+            initargs=(os.getpid(),),
+        )
 
     def map_unordered(self, fn, tasks):
         """Yield ``fn(task)`` for every task, in completion order (a task's exception is raised here)."""

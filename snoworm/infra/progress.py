@@ -12,6 +12,7 @@ The library's functions take a ``progress`` callable ``progress(done, total)`` (
 
 Solver fallbacks and retries are logged to ``logging.getLogger("snoworm")`` (:data:`logger`).
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -107,10 +108,25 @@ class Progress:
         self._line_t = self.t0
         tq = _tqdm(notebook) if (mode == "bar" and use_tqdm) else None
         d = _decimals(self.total)
-        fmt = ("{desc}: {percentage:3.0f}%|{bar}| " + f"{{n:.{d}f}}/{{total:.{d}f}}" + (f" {unit}" if unit else "")
-               + " [{elapsed}<{remaining}{postfix}]")
-        self._bar = tq(total=_num(self.total), desc=desc, unit=f" {unit}" if unit else "it", file=self.stream,
-                       leave=True, dynamic_ncols=True, bar_format=fmt) if tq is not None else None
+        fmt = (
+            "{desc}: {percentage:3.0f}%|{bar}| "
+            + f"{{n:.{d}f}}/{{total:.{d}f}}"
+            + (f" {unit}" if unit else "")
+            + " [{elapsed}<{remaining}{postfix}]"
+        )
+        self._bar = (
+            tq(
+                total=_num(self.total),
+                desc=desc,
+                unit=f" {unit}" if unit else "it",
+                file=self.stream,
+                leave=True,
+                dynamic_ncols=True,
+                bar_format=fmt,
+            )
+            if tq is not None
+            else None
+        )
 
     # ---------------------------------------------------------------- updates
     def update(self, n=1, info=None):
@@ -194,11 +210,14 @@ class Progress:
         left = self.total - self.value
         eta = f", ~{hms(el / self.value * left)} left" if self.value > 0 and left > 0 else ""
         info = f", {self.info}" if self.info else ""
-        self._write(f"\r{self.desc} [{'#' * fill}{'.' * (width - fill)}] {self._count()}{info}, "
-                    f"{hms(el)} elapsed{eta}   ")
+        self._write(
+            f"\r{self.desc} [{'#' * fill}{'.' * (width - fill)}] {self._count()}{info}, {hms(el)} elapsed{eta}   "
+        )
 
     def _line(self):
         self._printed, self._line_t = self.value, time.perf_counter()
         info = f", {self.info}" if self.info else ""
-        self._write(f"{self.desc}: {100 * self._frac():3.0f} % ({self._count()}{info}), "
-                    f"{hms(time.perf_counter() - self.t0)} elapsed\n")
+        self._write(
+            f"{self.desc}: {100 * self._frac():3.0f} % ({self._count()}{info}), "
+            f"{hms(time.perf_counter() - self.t0)} elapsed\n"
+        )

@@ -5,6 +5,7 @@ hands the kernel (:class:`snoworm.dynamics.ChainModel`), one value per segment o
 units; :class:`StateLayout` names the fields of the state (docs/model.md section 4): one block of
 ``n_s`` fields per segment, interleaved so the Jacobian is banded.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -55,7 +56,7 @@ class LinkArrays:
     stiffness_N_per_m: np.ndarray
     damping_Ns_per_m: np.ndarray
     rest_spacing_m: np.ndarray
-    prismatic: np.ndarray          # 1.0 for an active prismatic joint, 0.0 for a fixed link
+    prismatic: np.ndarray  # 1.0 for an active prismatic joint, 0.0 for a fixed link
     stroke_min_m: np.ndarray
     stroke_max_m: np.ndarray
     force_max_N: np.ndarray

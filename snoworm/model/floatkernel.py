@@ -25,6 +25,7 @@ of controls (:func:`structure_key`) and every model of the same structure (a swe
 share it; :data:`_SHARED`); the values of the controls are read at run time.  The code is
 Python bytecode (``compile``): no compiled extension, no JIT.
 """
+
 from __future__ import annotations
 
 import copy
@@ -49,12 +50,14 @@ MAX_SEGMENTS = 16
 #: generated function is specific to their values (the others are read at run time).
 STRUCTURAL_FIELDS = ("fc_active", "fc_link", "joint_mover", "joint_anchor", "joint_length_mode", "torque_active")
 
+
 def structure_key(model, ctl: Controls):
     """What a generated function depends on in ``ctl``: the structural fields and the kernel's flags."""
     flags = control_flags(model, ctl)
     key = [np.asarray(getattr(ctl, f)).tobytes() for f in STRUCTURAL_FIELDS]
-    key += [repr(flags.get(k)) if not isinstance(flags.get(k), np.ndarray) else flags[k].tobytes()
-            for k in sorted(flags)]
+    key += [
+        repr(flags.get(k)) if not isinstance(flags.get(k), np.ndarray) else flags[k].tobytes() for k in sorted(flags)
+    ]
     return tuple(key)
 
 
@@ -136,7 +139,7 @@ def _replace_name(src, name, new):
         before = src[j - 1] if j > 0 else " "
         after = src[j + n] if j + n < len(src) else " "
         if (before.isalnum() or before == "_") or (after.isalnum() or after == "_"):
-            out.append(src[i:j + n])
+            out.append(src[i : j + n])
         else:
             out.append(src[i:j])
             out.append(new)
@@ -144,8 +147,7 @@ def _replace_name(src, name, new):
 
 
 #: attributes of a model the trace leaves as they are (objects, caches, the layout, integers)
-_NOT_PARAMETERS = {"float_kernel", "_fd", "_bands", "_ctl_cache", "layout", "profile", "elevation", "tp",
-                   "batch_shape"}
+_NOT_PARAMETERS = {"float_kernel", "_fd", "_bands", "_ctl_cache", "layout", "profile", "elevation", "tp", "batch_shape"}
 
 
 def _walk_parameters(model, leaf):
@@ -155,6 +157,7 @@ def _walk_parameters(model, leaf):
     holds (segment and link arrays, terrain coefficients, precomputed law factors) are
     parameters; integers, flags, strings and objects are not.
     """
+
     def conv(v):
         if isinstance(v, np.ndarray):
             return leaf(v) if v.dtype.kind == "f" else v
@@ -165,6 +168,7 @@ def _walk_parameters(model, leaf):
         if is_dataclass(v) and not isinstance(v, type):
             return replace(v, **{f.name: conv(getattr(v, f.name)) for f in dc_fields(v)})
         return v
+
     pm = copy.copy(model)
     for name, v in vars(model).items():
         if name not in _NOT_PARAMETERS:
@@ -193,13 +197,23 @@ def model_parameters(model):
         shapes.append(a.shape)
         values.extend(a.reshape(-1).tolist())
         return v
+
     _walk_parameters(model, leaf)
     prof = model.profile
     elev = getattr(model, "elevation", None)
-    sig = (_law_fingerprint(model), model.n, model.layout.fields, model.force_loop, model.has_joints,
-           model.tp.torque_balance, None if getattr(prof, "is_constant", False) else prof, model._coef is None,
-           None if elev is None else ("constant grade" if elev.is_constant else elev),
-           getattr(model, "_G_const", None) is None, tuple(shapes))
+    sig = (
+        _law_fingerprint(model),
+        model.n,
+        model.layout.fields,
+        model.force_loop,
+        model.has_joints,
+        model.tp.torque_balance,
+        None if getattr(prof, "is_constant", False) else prof,
+        model._coef is None,
+        None if elev is None else ("constant grade" if elev.is_constant else elev),
+        getattr(model, "_G_const", None) is None,
+        tuple(shapes),
+    )
     return values, sig
 
 
@@ -220,6 +234,7 @@ def generate(model, ctl: Controls):
             flat[k] = Expr(f"p{n_p[0]}")
             n_p[0] += 1
         return arr.view(SymArray) if isinstance(v, np.ndarray) else flat[0]
+
     flags = control_flags(model, ctl)
     pm = _walk_parameters(model, leaf)
     with tracing() as tr, np.errstate(all="ignore"):
@@ -235,8 +250,18 @@ def generate(model, ctl: Controls):
     if n_c:
         lines.append(f"        {', '.join(f'c{k}' for k in range(n_c))}, = c")
     lines += body + [f"        return _array([{', '.join(outs)}])", "    return rhs"]
-    glb = {"_array": np.array, "_tanh": math.tanh, "_sin": math.sin, "_atan": math.atan, "_sqrt": math.sqrt,
-           "_exp": math.exp, "_interp": interp, "inf": math.inf, "nan": math.nan, **tr.consts}
+    glb = {
+        "_array": np.array,
+        "_tanh": math.tanh,
+        "_sin": math.sin,
+        "_atan": math.atan,
+        "_sqrt": math.sqrt,
+        "_exp": math.exp,
+        "_interp": interp,
+        "inf": math.inf,
+        "nan": math.nan,
+        **tr.consts,
+    }
     return "\n".join(lines) + "\n", glb
 
 

@@ -4,6 +4,7 @@ Modes (:mod:`snoworm.modes`) produce :class:`Controls`; the model (:mod:`snoworm
 reads them.  They carry the *settings* of the control laws of :mod:`snoworm.feedback` (set-points,
 references, gains, limits), never states.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -72,7 +73,7 @@ class Controls:
 
     def __post_init__(self):
         n = np.shape(self.motor_on)[-1]
-        for name in ("torque_active", "torque_cmd_Nm"):     # no direct torque unless given
+        for name in ("torque_active", "torque_cmd_Nm"):  # no direct torque unless given
             if getattr(self, name) is None:
                 object.__setattr__(self, name, np.zeros(n))
 
@@ -84,14 +85,25 @@ class Controls:
         return cls(
             motor_on=np.asarray(motor_on, float) * np.ones(n),
             speed_sp_mps=np.asarray(speed_sp_mps, float) * np.ones(n),
-            fc_active=z.copy(), fc_link=np.full(n, n - 1, dtype=int), fc_sigma=np.ones(n),
-            fc_ref_N=z.copy(), fc_nominal_mps=z.copy(), fc_kp=np.ones(n), fc_ki=z.copy(),
+            fc_active=z.copy(),
+            fc_link=np.full(n, n - 1, dtype=int),
+            fc_sigma=np.ones(n),
+            fc_ref_N=z.copy(),
+            fc_nominal_mps=z.copy(),
+            fc_kp=np.ones(n),
+            fc_ki=z.copy(),
             fc_vmax_mps=z.copy(),
-            joint_active=zl.copy(), joint_length_mode=zl.copy(), joint_sref_m=zl.copy(),
-            joint_dir=np.ones_like(zl), joint_ff_N=zl.copy(),
-            joint_kv=zl.copy(), joint_vtarget_mps=zl.copy(), joint_limit_N=zl.copy(),
+            joint_active=zl.copy(),
+            joint_length_mode=zl.copy(),
+            joint_sref_m=zl.copy(),
+            joint_dir=np.ones_like(zl),
+            joint_ff_N=zl.copy(),
+            joint_kv=zl.copy(),
+            joint_vtarget_mps=zl.copy(),
+            joint_limit_N=zl.copy(),
             joint_mover=np.arange(max(n - 1, 0), dtype=int),
-            joint_anchor=np.arange(1, max(n, 1), dtype=int), joint_ka=zl.copy(),
+            joint_anchor=np.arange(1, max(n, 1), dtype=int),
+            joint_ka=zl.copy(),
         )
 
     @classmethod
@@ -123,8 +135,10 @@ def control_flags(model, ctl: Controls) -> dict:
     """Which parts of the laws act in an interval of ``model`` (a :class:`~snoworm.dynamics.ChainModel`)
     under ``ctl``: the kernel's branches on the controls (constant within an interval, so skipping
     the other parts changes no result), from the controls' values."""
-    f = {"all_on": bool(np.all(np.asarray(ctl.motor_on, float) == 1.0)),
-         "torque": (np.asarray(ctl.torque_active) > 0)[..., None] if np.any(ctl.torque_active) else None}
+    f = {
+        "all_on": bool(np.all(np.asarray(ctl.motor_on, float) == 1.0)),
+        "torque": (np.asarray(ctl.torque_active) > 0)[..., None] if np.any(ctl.torque_active) else None,
+    }
     if model.has_joints and model.n > 1:
         f["length_mode"] = np.asarray(ctl.joint_length_mode) > 0
         moving = np.asarray(ctl.joint_active, float) * model.links.prismatic != 0
@@ -140,9 +154,14 @@ def control_flags(model, ctl: Controls) -> dict:
 def control_arrays(model, ctl: Controls, flags: dict) -> dict:
     """The arrays ``model``'s kernel takes from ``ctl``, with the ``flags`` of :func:`control_flags`
     (arithmetic only: the float kernel, :mod:`snoworm.model.floatkernel`, traces it on symbols)."""
-    on = as_float(ctl.motor_on)[..., None]       # on_mask None: all on, no masking (same result)
-    d = dict(flags, on=on, w_ref=(as_float(ctl.speed_sp_mps) / model.seg.wheel_radius_m)[..., None],
-             on_mask=None if flags["all_on"] else on, torque_cmd=as_float(ctl.torque_cmd_Nm)[..., None])
+    on = as_float(ctl.motor_on)[..., None]  # on_mask None: all on, no masking (same result)
+    d = dict(
+        flags,
+        on=on,
+        w_ref=(as_float(ctl.speed_sp_mps) / model.seg.wheel_radius_m)[..., None],
+        on_mask=None if flags["all_on"] else on,
+        torque_cmd=as_float(ctl.torque_cmd_Nm)[..., None],
+    )
     if model.has_joints and model.n > 1:
         d["neg_dir"] = -as_float(ctl.joint_dir)
         d["neg_vt"] = -as_float(ctl.joint_vtarget_mps)

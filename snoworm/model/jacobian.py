@@ -7,6 +7,7 @@ finite-difference Jacobian in LAPACK packed band format from ONE vectorised kern
 layout ``solve_ivp(method="LSODA", lband=..., uband=...)`` expects, and :func:`to_sparse` the
 same as a sparse matrix for BDF and Radau.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -21,10 +22,10 @@ def _blocks(layout, force_loop: bool, joints: bool):
     own = np.ones((ns, ns), bool)
     own[idx["x_m"], :] = False
     own[idx["x_m"], idx["v_mps"]] = True
-    prev = np.zeros((ns, ns), bool)    # rows of segment k, columns of segment k-1
-    nxt = np.zeros((ns, ns), bool)     # rows of segment k, columns of segment k+1
-    ahead_rows = ["v_mps"]             # rows that see link k-1
-    behind_rows = ["v_mps"]            # rows that see link k
+    prev = np.zeros((ns, ns), bool)  # rows of segment k, columns of segment k-1
+    nxt = np.zeros((ns, ns), bool)  # rows of segment k, columns of segment k+1
+    ahead_rows = ["v_mps"]  # rows that see link k-1
+    behind_rows = ["v_mps"]  # rows that see link k
     if joints:
         behind_rows.append("s_m")
     if force_loop:
@@ -63,14 +64,14 @@ def sparsity(model, member: bool = False):
     own, prev, nxt = _blocks(L, model.force_loop, model.has_joints)
     P = np.zeros((n * ns, n * ns), bool)
     for k in range(n):
-        P[k * ns:(k + 1) * ns, k * ns:(k + 1) * ns] = own
+        P[k * ns : (k + 1) * ns, k * ns : (k + 1) * ns] = own
         if k > 0:
-            P[k * ns:(k + 1) * ns, (k - 1) * ns:k * ns] = prev
+            P[k * ns : (k + 1) * ns, (k - 1) * ns : k * ns] = prev
         if k < n - 1:
-            P[k * ns:(k + 1) * ns, (k + 1) * ns:(k + 2) * ns] = nxt
+            P[k * ns : (k + 1) * ns, (k + 1) * ns : (k + 2) * ns] = nxt
     if member or not L.batch_shape:
         return P
-    return block_diag([P] * L.n_batch, format="csr").astype(bool)   # stacked chains
+    return block_diag([P] * L.n_batch, format="csr").astype(bool)  # stacked chains
 
 
 def bandwidths(pattern) -> tuple:
@@ -102,7 +103,7 @@ class BandedDifferences:
         cols = np.arange(n)
         self.group = cols % self.width
         r = np.arange(lband + uband + 1)[:, None]
-        self.rows = cols[None, :] + r - uband                 # row i of packed entry (r, j)
+        self.rows = cols[None, :] + r - uband  # row i of packed entry (r, j)
         self.valid = (self.rows >= 0) & (self.rows < n)
 
     def __call__(self, f_stack, y):
@@ -114,7 +115,7 @@ class BandedDifferences:
         h = self.rel_step * np.maximum(1e-3, np.abs(y))
         Yp = np.tile(y, (w + 1, 1))
         Yp[1 + group, np.arange(n)] += h
-        h = Yp[1 + group, np.arange(n)] - y           # the step actually taken (rounding)
+        h = Yp[1 + group, np.arange(n)] - y  # the step actually taken (rounding)
         F = f_stack(Yp)
         dF = F[1:] - F[0]
         g = np.broadcast_to(group, self.rows.shape)

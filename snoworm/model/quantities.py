@@ -7,6 +7,7 @@ pass of the force kernel (:meth:`snoworm.dynamics.ChainModel.evaluate`).  The re
 observation (:mod:`snoworm.modes.command`) calls it on the one state at the start of a control
 period, so the slip or motor torque a controller sees is the one the results report.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -43,11 +44,17 @@ def output_series(model, ys, ctl):
     Ft = out["traction_axle_N"].sum(-1)
     Ftr = out["resistance_axle_N"].sum(-1)
     seg = {
-        "x_m": Y[..., L.x], "v_mps": Y[..., L.v],
-        "wheel_speed_mps": (w * R[:, None]).mean(-1), "slip": out["slip"].mean(-1),
-        "traction_N": Ft, "resistance_N": Ftr, "net_force_N": Ft - Ftr,
-        "motor_torque_Nm": Tm.mean(-1), "speed_setpoint_mps": np.array(out["speed_sp_mps"], float),
-        "connector_net_N": out["link_net_N"], "xt": out["X"].mean(-1),
+        "x_m": Y[..., L.x],
+        "v_mps": Y[..., L.v],
+        "wheel_speed_mps": (w * R[:, None]).mean(-1),
+        "slip": out["slip"].mean(-1),
+        "traction_N": Ft,
+        "resistance_N": Ftr,
+        "net_force_N": Ft - Ftr,
+        "motor_torque_Nm": Tm.mean(-1),
+        "speed_setpoint_mps": np.array(out["speed_sp_mps"], float),
+        "connector_net_N": out["link_net_N"],
+        "xt": out["X"].mean(-1),
         "motor_power_W": (Tm * w).sum(-1) * nw,
         "terrain_dissipation_W": out["terrain_dissipation_W"],
         "motor_electrical_power_W": (np.maximum(Tm * w, 0.0)).sum(-1) * nw / eta,
@@ -55,11 +62,16 @@ def output_series(model, ys, ctl):
     x = seg["x_m"]
     # the grade under each segment and its potential-energy height (docs/model.md section 7)
     seg["grade_deg"] = np.degrees(np.arcsin(model.grade_terms(x)[0]))
-    seg["elevation_m"] = (np.zeros(x.shape) if model.elevation is None
-                          else model.elevation.mean_elevation(x, model.seg.wheelbase_m / 2.0))
+    seg["elevation_m"] = (
+        np.zeros(x.shape) if model.elevation is None else model.elevation.mean_elevation(x, model.seg.wheelbase_m / 2.0)
+    )
     seg["gravity_N"] = np.asarray(out["gravity_N"], float)
-    lk = {"force_N": out["link_force_N"], "length_m": x[..., :-1] - x[..., 1:],
-          "spring_force_N": out["link_spring_N"], "damper_power_W": out["link_damper_W"]}
+    lk = {
+        "force_N": out["link_force_N"],
+        "length_m": x[..., :-1] - x[..., 1:],
+        "spring_force_N": out["link_spring_N"],
+        "damper_power_W": out["link_damper_W"],
+    }
     if model.has_joints:
         s = Y[..., :-1, L.s]
         ds = dY[..., :-1, L.s]

@@ -8,6 +8,7 @@ bisection with NumPy's formula, :func:`interp`); operations on floats alone are 
 by the same NumPy operation.  A Python branch on a symbol raises ``TypeError`` (the kernel cannot
 be traced then).
 """
+
 from __future__ import annotations
 
 import bisect
@@ -17,15 +18,14 @@ import numpy as np
 
 __all__ = ["Expr", "SymArray", "Trace", "interp", "source", "symbols", "tracing"]
 
-_TRACE = None          # the trace being recorded (tracing is single-threaded and short)
-
+_TRACE = None  # the trace being recorded (tracing is single-threaded and short)
 
 
 class Trace:
     """Lines recorded while the kernel runs on symbols, and the tables they refer to."""
 
     def __init__(self):
-        self.lines = []            # (name, source, names used)
+        self.lines = []  # (name, source, names used)
         self.consts = {}
         self.n = 0
 
@@ -62,8 +62,10 @@ def _num(a):
 
 def _operator(op, reflected=False):
     """``Expr``'s binary operator ``op`` (``reflected``: the Expr is the right operand)."""
+
     def f(self, other):
         return self._bin(op, other, self) if reflected else self._bin(op, self, other)
+
     return f
 
 
@@ -111,6 +113,7 @@ class Expr:
 def _unary(fname, ufunc):
     def f(a):
         return float(ufunc(a)) if _num(a) else _TRACE.emit(f"{fname}({a.name})", (a.name,))
+
     return f
 
 
@@ -127,9 +130,15 @@ def _minimum(a, b):
 
 
 #: NumPy ufuncs traced element by element (the others run on object arrays, calling Expr's operators)
-_ELEMENTWISE = {np.maximum: _maximum, np.minimum: _minimum, np.tanh: _unary("_tanh", np.tanh),
-                np.sin: _unary("_sin", np.sin), np.arctan: _unary("_atan", np.arctan),
-                np.sqrt: _unary("_sqrt", np.sqrt), np.exp: _unary("_exp", np.exp)}
+_ELEMENTWISE = {
+    np.maximum: _maximum,
+    np.minimum: _minimum,
+    np.tanh: _unary("_tanh", np.tanh),
+    np.sin: _unary("_sin", np.sin),
+    np.arctan: _unary("_atan", np.arctan),
+    np.sqrt: _unary("_sqrt", np.sqrt),
+    np.exp: _unary("_exp", np.exp),
+}
 
 
 def _plain(a):
@@ -138,7 +147,7 @@ def _plain(a):
     if isinstance(a, (tuple, list)):
         return type(a)(_plain(x) for x in a)
     if isinstance(a, np.ndarray) and a.dtype != object and a.dtype.kind == "f":
-        return a.astype(object)        # Python floats: arithmetic with symbols folds exactly
+        return a.astype(object)  # Python floats: arithmetic with symbols folds exactly
     return a
 
 
@@ -157,8 +166,9 @@ class SymArray(np.ndarray):
         if method == "__call__" and ufunc in _ELEMENTWISE and not kwargs:
             f = np.frompyfunc(_ELEMENTWISE[ufunc], ufunc.nin, 1)
             return _wrap(np.asarray(f(*[_plain(a) for a in inputs]), dtype=object))
-        if ufunc in _ELEMENTWISE or (ufunc in (np.greater, np.less, np.equal, np.not_equal, np.greater_equal,
-                                               np.less_equal)):
+        if ufunc in _ELEMENTWISE or (
+            ufunc in (np.greater, np.less, np.equal, np.not_equal, np.greater_equal, np.less_equal)
+        ):
             raise TypeError(f"cannot trace {ufunc.__name__}.{method} on states to float code")
         kw = {k: _plain(v) for k, v in kwargs.items()}
         return _wrap(getattr(ufunc, method)(*[_plain(a) for a in inputs], **kw))
@@ -193,6 +203,7 @@ def _interp_traced(x, xp, fp, left=None, right=None, period=None):
         if names is None:
             names = [_TRACE.table(v, p) for v, p in ((xp_t, "XP"), (fp_t, "FP"), (slopes, "SL"))]
         return _TRACE.emit(f"_interp({a.name}, {', '.join(names)})", (a.name,))
+
     return _wrap(np.asarray(np.frompyfunc(one, 1, 1)(_plain(x)), dtype=object))
 
 
@@ -213,4 +224,3 @@ def tracing():
         yield tr
     finally:
         _TRACE = None
-

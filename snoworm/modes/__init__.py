@@ -5,6 +5,7 @@ Built-in modes, one module each: ``uniform`` (Figs 6-7), ``force_control`` (Figs
 rolling immobilises) and ``controller`` (a user's discrete-time controller, docs/controllers.md).  :class:`Mode` declares the contract; :func:`register_mode` adds a mode,
 built-in or the user's own.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -15,16 +16,44 @@ from .command import COMMAND_KEYS, CommandState, Observation, observe
 
 #: Names of the built-in modes' modules, imported on first use (PEP 562) so that a run imports
 #: only its own mode (the registries import a mode's module when its type is looked up).
-_LAZY = {"ControllerConfig": "controller", "ControllerError": "controller", "ControllerMode": "controller",
-         "ForceControlConfig": "force_control", "ForceControlMode": "force_control",
-         "InchwormConfig": "inchworm", "InchwormMode": "inchworm",
-         "SupervisorConfig": "supervisor", "SupervisorMode": "supervisor",
-         "UniformConfig": "uniform", "UniformMode": "uniform"}
+_LAZY = {
+    "ControllerConfig": "controller",
+    "ControllerError": "controller",
+    "ControllerMode": "controller",
+    "ForceControlConfig": "force_control",
+    "ForceControlMode": "force_control",
+    "InchwormConfig": "inchworm",
+    "InchwormMode": "inchworm",
+    "SupervisorConfig": "supervisor",
+    "SupervisorMode": "supervisor",
+    "UniformConfig": "uniform",
+    "UniformMode": "uniform",
+}
 
-__all__ = ["MODES", "Interval", "Mode", "mode_class", "register_mode", "rolling_interval", "start_times",
-           "UniformConfig", "UniformMode", "ForceControlConfig", "ForceControlMode", "InchwormConfig",
-           "InchwormMode", "SupervisorConfig", "SupervisorMode", "COMMAND_KEYS", "CommandState", "Observation",
-           "observe", "ControllerConfig", "ControllerError", "ControllerMode"]
+__all__ = [
+    "MODES",
+    "Interval",
+    "Mode",
+    "mode_class",
+    "register_mode",
+    "rolling_interval",
+    "start_times",
+    "UniformConfig",
+    "UniformMode",
+    "ForceControlConfig",
+    "ForceControlMode",
+    "InchwormConfig",
+    "InchwormMode",
+    "SupervisorConfig",
+    "SupervisorMode",
+    "COMMAND_KEYS",
+    "CommandState",
+    "Observation",
+    "observe",
+    "ControllerConfig",
+    "ControllerError",
+    "ControllerMode",
+]
 
 if TYPE_CHECKING:  # for type checkers and editors; at run time the names come from __getattr__
     from .controller import ControllerConfig, ControllerError, ControllerMode

@@ -9,6 +9,7 @@ A new mode is one module defining a :class:`~snoworm.config.mode_registry.ModeCo
 ``mode:`` section, validated on construction) and a :class:`Mode` subclass naming it, registered
 with :func:`register_mode` -- also from a user's own module, before the scenario is loaded.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field as dc_field
@@ -88,7 +89,7 @@ class Mode:
         self.cfg = cfg
         self.scenario = scenario
         self.model = model
-        self.log = []   # events: dicts with t_s, kind, detail
+        self.log = []  # events: dicts with t_s, kind, detail
 
     def initial_state(self) -> np.ndarray:
         """State at t = 0 (flat); default: the chain at rest, joints at zero extension."""
@@ -130,8 +131,9 @@ def start_times(values, n_segments, path="mode.start_time_s"):
     if v.size == 1:
         return np.full(n_segments, float(v.reshape(-1)[0]))
     if v.size != n_segments:
-        raise ScenarioError(f"{path}: give one start time for all segments or {n_segments} (one per segment); "
-                            f"got {v.size}.")
+        raise ScenarioError(
+            f"{path}: give one start time for all segments or {n_segments} (one per segment); got {v.size}."
+        )
     return v
 
 
@@ -145,4 +147,3 @@ def rolling_interval(t, t_start, breaks, base: Controls, label: str) -> Interval
     later = breaks[breaks > t + 1e-12]
     t_end = float(later[0]) if later.size else np.inf
     return Interval(t_end, base.with_(motor_on=on), [], label)
-

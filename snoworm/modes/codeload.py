@@ -17,6 +17,7 @@ named Python code.  Reading it never does (issue 24):
 * :func:`import_class` (when a simulation starts) runs both checks again, imports the code and
   checks that ``Name`` is a class defined in that module (not a function, not a re-export).
 """
+
 from __future__ import annotations
 
 import ast
@@ -34,8 +35,19 @@ from pathlib import Path
 
 from ..config.schema import ScenarioError, quote
 
-__all__ = ["MAX_SOURCE_BYTES", "MAX_SPEC_CHARS", "split_spec", "is_file_spec", "resolve_spec", "check_reference",
-           "trust_problem", "allow_code", "allowed_roots", "import_class", "code_files"]
+__all__ = [
+    "MAX_SOURCE_BYTES",
+    "MAX_SPEC_CHARS",
+    "split_spec",
+    "is_file_spec",
+    "resolve_spec",
+    "check_reference",
+    "trust_problem",
+    "allow_code",
+    "allowed_roots",
+    "import_class",
+    "code_files",
+]
 
 #: Largest controller source file read (bytes).
 MAX_SOURCE_BYTES = 4 * 2**20
@@ -49,12 +61,16 @@ def split_spec(spec, path):
     """(target, class name) of ``'file.py:Name'`` or ``'package.module:Name'`` (ScenarioError if malformed)."""
     text = str(spec)
     if len(text) > MAX_SPEC_CHARS or "\x00" in text:
-        raise ScenarioError(f"{path}: {quote(spec)} is longer than {MAX_SPEC_CHARS} characters or holds a NUL byte. "
-                            "Give 'file.py:ClassName' or 'package.module:ClassName'.")
+        raise ScenarioError(
+            f"{path}: {quote(spec)} is longer than {MAX_SPEC_CHARS} characters or holds a NUL byte. "
+            "Give 'file.py:ClassName' or 'package.module:ClassName'."
+        )
     target, sep, name = text.rpartition(":")
     if not sep or not target or not name.isidentifier():
-        raise ScenarioError(f"{path}: expected 'file.py:ClassName' or 'package.module:ClassName', got {quote(spec)}. "
-                            "Name the class after a colon.")
+        raise ScenarioError(
+            f"{path}: expected 'file.py:ClassName' or 'package.module:ClassName', got {quote(spec)}. "
+            "Name the class after a colon."
+        )
     return target, name
 
 
@@ -68,8 +84,10 @@ def resolve_spec(spec, path, base: Path) -> str:
     target, name = split_spec(spec, path)
     if is_file_spec(target):
         if not target.endswith(".py"):
-            raise ScenarioError(f"{path}: controller file {quote(target)} does not end in .py. Name a Python file "
-                                "('file.py:ClassName').")
+            raise ScenarioError(
+                f"{path}: controller file {quote(target)} does not end in .py. Name a Python file "
+                "('file.py:ClassName')."
+            )
         p = Path(os.path.expanduser(target))
         target = os.path.realpath(base / p if not p.is_absolute() else p)
     return f"{target}:{name}"
@@ -80,16 +98,22 @@ def _read_source(p: Path, path) -> str:
     try:
         st = os.stat(p)
     except FileNotFoundError:
-        raise ScenarioError(f"{path}: controller file {quote(str(p))} does not exist (a relative path is taken from "
-                            "the scenario file's folder). Fix the path.") from None
-    except (OSError, ValueError) as exc:       # a symlink loop, a name too long
-        raise ScenarioError(f"{path}: controller file {quote(str(p))} cannot be used: "
-                            f"{getattr(exc, 'strerror', None) or exc}. Fix the path.") from None
+        raise ScenarioError(
+            f"{path}: controller file {quote(str(p))} does not exist (a relative path is taken from "
+            "the scenario file's folder). Fix the path."
+        ) from None
+    except (OSError, ValueError) as exc:  # a symlink loop, a name too long
+        raise ScenarioError(
+            f"{path}: controller file {quote(str(p))} cannot be used: "
+            f"{getattr(exc, 'strerror', None) or exc}. Fix the path."
+        ) from None
     if not stat.S_ISREG(st.st_mode):
         raise ScenarioError(f"{path}: controller file {quote(str(p))} is not a regular file. Name a .py file.")
     if st.st_size > MAX_SOURCE_BYTES:
-        raise ScenarioError(f"{path}: controller file {quote(str(p))} is {st.st_size} bytes, over the "
-                            f"{MAX_SOURCE_BYTES} accepted. Name a controller's source file.")
+        raise ScenarioError(
+            f"{path}: controller file {quote(str(p))} is {st.st_size} bytes, over the "
+            f"{MAX_SOURCE_BYTES} accepted. Name a controller's source file."
+        )
     try:
         with open(p, "rb") as fh:
             data = fh.read(MAX_SOURCE_BYTES + 1)
@@ -117,14 +141,17 @@ def _check_class(source: str, name: str, where: str, path):
         tree = ast.parse(source)
     except (SyntaxError, ValueError, RecursionError, MemoryError) as exc:
         line = f" (line {exc.lineno})" if getattr(exc, "lineno", None) else ""
-        raise ScenarioError(f"{path}: {where} does not parse as Python{line}: "
-                            f"{type(exc).__name__}: {quote(str(exc))}.") from None
+        raise ScenarioError(
+            f"{path}: {where} does not parse as Python{line}: {type(exc).__name__}: {quote(str(exc))}."
+        ) from None
     found = _top_level_classes(tree)
     if name not in found:
         listed = ", ".join(sorted(n for n in found if not n.startswith("_"))[:20])
-        raise ScenarioError(f"{path}: {where} defines no class {name!r}"
-                            + (f" (it defines: {listed})." if listed else ".")
-                            + " A controller is a class defined in that file or module.")
+        raise ScenarioError(
+            f"{path}: {where} defines no class {name!r}"
+            + (f" (it defines: {listed})." if listed else ".")
+            + " A controller is a class defined in that file or module."
+        )
 
 
 def _stdlib_dirs() -> list:
@@ -138,8 +165,10 @@ def find_module_source(target: str, path) -> Path:
     if not all(p.isidentifier() for p in parts):
         raise ScenarioError(f"{path}: {quote(target)} is neither a module name (dotted identifiers) nor a .py file.")
     if parts[0] in sys.stdlib_module_names or parts[0] in sys.builtin_module_names:
-        raise ScenarioError(f"{path}: {quote(target)} is part of Python's standard library, not a controller. "
-                            "Name your own module or file.")
+        raise ScenarioError(
+            f"{path}: {quote(target)} is part of Python's standard library, not a controller. "
+            "Name your own module or file."
+        )
     search, spec = None, None
     for i, part in enumerate(parts):
         try:
@@ -147,15 +176,19 @@ def find_module_source(target: str, path) -> Path:
         except (ImportError, ValueError, OSError):
             spec = None
         if spec is None:
-            raise ScenarioError(f"{path}: module {quote('.'.join(parts[:i + 1]))} is not found on the Python path. "
-                                "Give an importable module or a file path ending in .py.")
+            raise ScenarioError(
+                f"{path}: module {quote('.'.join(parts[: i + 1]))} is not found on the Python path. "
+                "Give an importable module or a file path ending in .py."
+            )
         search = spec.submodule_search_locations
         if i < len(parts) - 1 and search is None:
-            raise ScenarioError(f"{path}: {quote('.'.join(parts[:i + 1]))} is a module, not a package.")
+            raise ScenarioError(f"{path}: {quote('.'.join(parts[: i + 1]))} is a module, not a package.")
     origin = spec.origin
     if not origin or not origin.endswith(".py"):
-        raise ScenarioError(f"{path}: module {quote(target)} has no Python source file (a namespace package or "
-                            "a compiled module). Name a module written in Python.")
+        raise ScenarioError(
+            f"{path}: module {quote(target)} has no Python source file (a namespace package or "
+            "a compiled module). Name a module written in Python."
+        )
     src = Path(origin).resolve()
     if any(src.is_relative_to(d) for d in _stdlib_dirs()) and not {"site-packages", "dist-packages"} & set(src.parts):
         raise ScenarioError(f"{path}: {quote(target)} is part of Python's standard library, not a controller.")
@@ -221,11 +254,16 @@ def trust_problem(spec: str, root, path: str = "mode.controller") -> str | None:
     roots = [Path(r) for r in allowed_roots()] + ([Path(os.path.realpath(root))] if root is not None else [])
     if any(real == r or real.is_relative_to(r) for r in roots):
         return None
-    where = (f"outside the scenario's folder {root}" if root is not None
-             else "named by a scenario read back from a results folder (load_result), which never runs code")
-    return (f"{path}: controller file {quote(str(real))} is {where}. A scenario with a controller is a program: "
-            f"snoworm runs it only if you allow it. Pass --allow-code {quote(str(real.parent))} "
-            "(allow_code=[...] in Python), or move the file into the scenario's folder.")
+    where = (
+        f"outside the scenario's folder {root}"
+        if root is not None
+        else "named by a scenario read back from a results folder (load_result), which never runs code"
+    )
+    return (
+        f"{path}: controller file {quote(str(real))} is {where}. A scenario with a controller is a program: "
+        f"snoworm runs it only if you allow it. Pass --allow-code {quote(str(real.parent))} "
+        "(allow_code=[...] in Python), or move the file into the scenario's folder."
+    )
 
 
 #: loaded controller files: absolute path -> (SHA-256 of the source, module)
@@ -233,7 +271,7 @@ _FILES: dict = {}
 
 
 def _exec_file(p: Path, path):
-    digest = hashlib.sha256(p.read_bytes()).hexdigest()      # <= MAX_SOURCE_BYTES (check_reference)
+    digest = hashlib.sha256(p.read_bytes()).hexdigest()  # <= MAX_SOURCE_BYTES (check_reference)
     cached = _FILES.get(str(p))
     if cached and cached[0] == digest:
         return cached[1]
@@ -245,8 +283,9 @@ def _exec_file(p: Path, path):
         spec.loader.exec_module(module)
     except Exception as exc:  # noqa: BLE001 - any error in the user's file is bad input
         sys.modules.pop(modname, None)
-        raise ScenarioError(f"{path}: importing controller file {p} failed: {type(exc).__name__}: "
-                            f"{quote(str(exc))}") from None
+        raise ScenarioError(
+            f"{path}: importing controller file {p} failed: {type(exc).__name__}: {quote(str(exc))}"
+        ) from None
     _FILES[str(p)] = (digest, module)
     return module
 
@@ -265,12 +304,15 @@ def import_class(spec: str, root, path: str = "mode.controller"):
         try:
             module = importlib.import_module(target)
         except Exception as exc:  # noqa: BLE001 - a broken module is bad input
-            raise ScenarioError(f"{path}: cannot import module {quote(target)} ({type(exc).__name__}: "
-                                f"{quote(str(exc))}).") from None
+            raise ScenarioError(
+                f"{path}: cannot import module {quote(target)} ({type(exc).__name__}: {quote(str(exc))})."
+            ) from None
     cls = vars(module).get(name)
     if not isinstance(cls, type) or cls.__module__ != module.__name__:
-        raise ScenarioError(f"{path}: {name!r} in {target} is not a class defined there (a function, an import "
-                            "or a re-export). Name a controller class defined in that file or module.")
+        raise ScenarioError(
+            f"{path}: {name!r} in {target} is not a class defined there (a function, an import "
+            "or a re-export). Name a controller class defined in that file or module."
+        )
     return cls
 
 

@@ -9,6 +9,7 @@ commands become the same :class:`~snoworm.model.inputs.Controls` either way (doc
 * :class:`CommandState` -- the held command: :meth:`CommandState.apply` merges a command mapping
   (keys of :data:`COMMAND_KEYS`; keys left out keep their value) and returns the controls.
 """
+
 from __future__ import annotations
 
 from collections.abc import Mapping
@@ -22,19 +23,27 @@ __all__ = ["Observation", "observe", "CommandState", "COMMAND_KEYS"]
 
 #: Keys a command may hold, with their length ("N": one per segment, "N-1": one per link).
 COMMAND_KEYS = {
-    "wheel_speed_mps": "N",     # set-points R_w*omega_ref of the wheel-speed PI [m/s]
-    "wheel_torque_Nm": "N",     # motor torque per wheel at the wheel, clipped to the motor envelope [N m]
-    "wheel_lock": "N",          # booleans: hold the wheels at zero speed (overrides the two above)
-    "joint_force_N": "N-1",     # link force reference of the prismatic joints, tension positive [N]
-    "joint_length_m": "N-1",    # extension reference of the prismatic joints [m]
+    "wheel_speed_mps": "N",  # set-points R_w*omega_ref of the wheel-speed PI [m/s]
+    "wheel_torque_Nm": "N",  # motor torque per wheel at the wheel, clipped to the motor envelope [N m]
+    "wheel_lock": "N",  # booleans: hold the wheels at zero speed (overrides the two above)
+    "joint_force_N": "N-1",  # link force reference of the prismatic joints, tension positive [N]
+    "joint_length_m": "N-1",  # extension reference of the prismatic joints [m]
 }
 
 
 #: Observation arrays: name -> (table of :func:`output_series`, its column).
-_SOURCES = {"x_m": (0, "x_m"), "v_mps": (0, "v_mps"), "wheel_speed_mps": (0, "wheel_speed_mps"), "slip": (0, "slip"),
-            "motor_torque_Nm": (0, "motor_torque_Nm"), "xt": (0, "xt"), "grade_deg": (0, "grade_deg"),
-            "link_force_N": (1, "force_N"),
-            "link_length_m": (1, "length_m"), "joint_extension_m": (1, "extension_m")}
+_SOURCES = {
+    "x_m": (0, "x_m"),
+    "v_mps": (0, "v_mps"),
+    "wheel_speed_mps": (0, "wheel_speed_mps"),
+    "slip": (0, "slip"),
+    "motor_torque_Nm": (0, "motor_torque_Nm"),
+    "xt": (0, "xt"),
+    "grade_deg": (0, "grade_deg"),
+    "link_force_N": (1, "force_N"),
+    "link_length_m": (1, "length_m"),
+    "joint_extension_m": (1, "extension_m"),
+}
 
 
 class Observation:
@@ -64,11 +73,13 @@ class Observation:
     FIELDS = ("t_s",) + tuple(_SOURCES)
 
     def __init__(self, t_s, **arrays):
-        if "grade_deg" not in arrays and "x_m" in arrays:      # level ground unless given
+        if "grade_deg" not in arrays and "x_m" in arrays:  # level ground unless given
             arrays["grade_deg"] = np.zeros(np.shape(arrays["x_m"]))
         if set(arrays) != set(_SOURCES):
-            raise TypeError(f"Observation needs t_s and exactly {', '.join(_SOURCES)}; "
-                            f"missing {sorted(set(_SOURCES) - set(arrays))}, unknown {sorted(set(arrays) - set(_SOURCES))}")
+            raise TypeError(
+                f"Observation needs t_s and exactly {', '.join(_SOURCES)}; "
+                f"missing {sorted(set(_SOURCES) - set(arrays))}, unknown {sorted(set(arrays) - set(_SOURCES))}"
+            )
         object.__setattr__(self, "_t", float(t_s))
         object.__setattr__(self, "_vals", {k: _frozen(v) for k, v in arrays.items()})
         object.__setattr__(self, "_src", None)
@@ -146,11 +157,11 @@ class CommandState:
         self.model = model
         n = model.n
         self._lead = () if batch is None else (int(batch),)
-        self.source = np.zeros(n, int)        # 0 motors off, 1 speed, 2 torque
+        self.source = np.zeros(n, int)  # 0 motors off, 1 speed, 2 torque
         self.speed = np.zeros(n)
         self.torque = np.zeros(n)
         self.lock = np.zeros(n, bool)
-        self.joint_mode = None                # None: joints hold; "force" or "length"
+        self.joint_mode = None  # None: joints hold; "force" or "length"
         self.joint_value = np.zeros(max(n - 1, 0))
         self.controls = self._build()
 
@@ -162,8 +173,10 @@ class CommandState:
         if command is None:
             return {}
         if not isinstance(command, Mapping):
-            raise ValueError(f"a command must be a mapping with keys among {', '.join(COMMAND_KEYS)}; "
-                             f"got {type(command).__name__} {command!r}")
+            raise ValueError(
+                f"a command must be a mapping with keys among {', '.join(COMMAND_KEYS)}; "
+                f"got {type(command).__name__} {command!r}"
+            )
         sizes, out = self._sizes(), {}
         for key, value in command.items():
             if key not in COMMAND_KEYS:
@@ -174,16 +187,20 @@ class CommandState:
             except (TypeError, ValueError):
                 raise ValueError(f"command key {key!r}: expected {size} numbers, got {value!r}") from None
             if arr.shape != self._lead + (size,):
-                raise ValueError(f"command key {key!r}: expected {size} values ({COMMAND_KEYS[key]}), "
-                                 f"got shape {arr.shape}" + (f" (batch {self._lead[0]})" if self._lead else ""))
-            if key == "wheel_lock" and not all(isinstance(v, (bool, np.bool_)) or v in (0, 1)
-                                               for v in np.asarray(value, object).reshape(-1)):
+                raise ValueError(
+                    f"command key {key!r}: expected {size} values ({COMMAND_KEYS[key]}), "
+                    f"got shape {arr.shape}" + (f" (batch {self._lead[0]})" if self._lead else "")
+                )
+            if key == "wheel_lock" and not all(
+                isinstance(v, (bool, np.bool_)) or v in (0, 1) for v in np.asarray(value, object).reshape(-1)
+            ):
                 raise ValueError(f"command key {key!r}: expected true/false values, got {value!r}")
             if not np.all(np.isfinite(arr)):
                 raise ValueError(f"command key {key!r}: every value must be finite, got {value!r}")
             if key.startswith("joint_") and not self.model.has_joints:
-                raise ValueError(f"command key {key!r}: the vehicle has no prismatic joints "
-                                 "(vehicle.links.type is fixed)")
+                raise ValueError(
+                    f"command key {key!r}: the vehicle has no prismatic joints (vehicle.links.type is fixed)"
+                )
             out[key] = arr
         for a, b in (("wheel_speed_mps", "wheel_torque_Nm"), ("joint_force_N", "joint_length_m")):
             if a in out and b in out:
@@ -232,8 +249,18 @@ class CommandState:
         ones = np.ones(n - 1)
         limit = np.asarray(links.force_max_N, float)
         if self.joint_mode == "force":
-            F = self.joint_value        # T_ref = -dir |F|: dir +1 pushes (compression), -1 pulls (tension)
-            return ctl.with_(joint_active=ones, joint_length_mode=0 * ones, joint_dir=np.where(F > 0, -1.0, 1.0),
-                             joint_ff_N=np.abs(F), joint_limit_N=limit)
-        return ctl.with_(joint_active=ones, joint_length_mode=ones, joint_sref_m=self.joint_value,
-                         joint_vtarget_mps=np.asarray(links.rate_max_mps, float), joint_limit_N=limit)
+            F = self.joint_value  # T_ref = -dir |F|: dir +1 pushes (compression), -1 pulls (tension)
+            return ctl.with_(
+                joint_active=ones,
+                joint_length_mode=0 * ones,
+                joint_dir=np.where(F > 0, -1.0, 1.0),
+                joint_ff_N=np.abs(F),
+                joint_limit_N=limit,
+            )
+        return ctl.with_(
+            joint_active=ones,
+            joint_length_mode=ones,
+            joint_sref_m=self.joint_value,
+            joint_vtarget_mps=np.asarray(links.rate_max_mps, float),
+            joint_limit_N=limit,
+        )

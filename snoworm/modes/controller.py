@@ -14,6 +14,7 @@ hold), the paper's controllers running as ROS nodes at a fixed rate.
 A controller that raises, or returns a bad command, stops the run with :class:`ControllerError`
 (CLI exit status 1) whose message holds the time and the user's own traceback frames.
 """
+
 from __future__ import annotations
 
 import os
@@ -38,8 +39,17 @@ from .codeload import (
 from .command import CommandState, observe
 from .watchdog import WallLimit, wall_limit
 
-__all__ = ["ControllerConfig", "ControllerMode", "ControllerError", "load_controller", "construct", "user_traceback",
-           "code_root", "trust_problem_of", "code_notice"]
+__all__ = [
+    "ControllerConfig",
+    "ControllerMode",
+    "ControllerError",
+    "load_controller",
+    "construct",
+    "user_traceback",
+    "code_root",
+    "trust_problem_of",
+    "code_notice",
+]
 
 _PKG_DIR = Path(__file__).resolve().parents[1]
 
@@ -53,8 +63,9 @@ class ControllerConfig(ModeConfig):
     """``mode: {type: controller, controller: ..., period_s: ..., params: {...}}``."""
 
     type: str = field(choices=("controller",), doc="mode name")
-    controller: str = field(doc="the controller class: 'file.py:ClassName' (relative to the scenario file) "
-                                "or 'package.module:ClassName'")
+    controller: str = field(
+        doc="the controller class: 'file.py:ClassName' (relative to the scenario file) or 'package.module:ClassName'"
+    )
     period_s: float = field(gt=0, le=1e5, unit="s", doc="control period: the command is held this long")
     params: dict[str, Any] = field(default_factory=dict, doc="parameters handed to the controller's constructor")
 
@@ -65,10 +76,10 @@ class ControllerConfig(ModeConfig):
         spec = raw.get("controller")
         if isinstance(spec, str):
             return {**raw, "controller": resolve_spec(spec, "mode.controller", Path(base_dir))}
-        return raw                          # not text: validation reports it
+        return raw  # not text: validation reports it
 
     def _check(self, path):
-        check_reference(self.controller, f"{path}.controller")      # static: nothing imported, nothing run
+        check_reference(self.controller, f"{path}.controller")  # static: nothing imported, nothing run
 
 
 def code_root(scenario) -> str | None:
@@ -115,18 +126,21 @@ def construct(cfg, scenario, path="mode.controller"):
     try:
         return cls(dict(cfg.params), scenario)
     except Exception as exc:  # noqa: BLE001 - a failing constructor is bad input
-        raise ScenarioError(f"{path}: constructing {quote(cfg.controller)} with params {quote(dict(cfg.params))} "
-                            f"failed: {type(exc).__name__}: {quote(str(exc))}\n{user_traceback(exc)}".rstrip()) from None
+        raise ScenarioError(
+            f"{path}: constructing {quote(cfg.controller)} with params {quote(dict(cfg.params))} "
+            f"failed: {type(exc).__name__}: {quote(str(exc))}\n{user_traceback(exc)}".rstrip()
+        ) from None
 
 
 def user_traceback(exc, limit: int = 2000) -> str:
     """The traceback of ``exc`` keeping only the frames outside the snoworm package (the user's),
     cut to about ``limit`` characters (a 1 MB message prints its head and tail)."""
-    frames = [f for f in traceback.extract_tb(exc.__traceback__)
-              if not Path(f.filename).resolve().is_relative_to(_PKG_DIR)]
+    frames = [
+        f for f in traceback.extract_tb(exc.__traceback__) if not Path(f.filename).resolve().is_relative_to(_PKG_DIR)
+    ]
     text = "".join(traceback.format_list(frames) + traceback.format_exception_only(type(exc), exc))
     if len(text) > limit:
-        text = text[:limit // 2] + f"\n... [{len(text) - limit} characters cut] ...\n" + text[-limit // 2:]
+        text = text[: limit // 2] + f"\n... [{len(text) - limit} characters cut] ...\n" + text[-limit // 2 :]
     return text
 
 
@@ -138,12 +152,16 @@ def _guard(deadline, when: str, limit):
         with wall_limit(deadline):
             yield
     except WallLimit:
-        raise ControllerError(f"simulation.max_wall_s: the controller was still running {when} when the "
-                              f"wall-clock limit of {limit:g} s passed (an endless loop?). Fix the controller or "
-                              "raise max_wall_s.") from None
+        raise ControllerError(
+            f"simulation.max_wall_s: the controller was still running {when} when the "
+            f"wall-clock limit of {limit:g} s passed (an endless loop?). Fix the controller or "
+            "raise max_wall_s."
+        ) from None
     except SystemExit as exc:
-        raise ControllerError(f"controller called sys.exit({quote(exc.code, 40)}) {when}; a controller never ends "
-                              "the process. Raise an exception to stop the run.") from None
+        raise ControllerError(
+            f"controller called sys.exit({quote(exc.code, 40)}) {when}; a controller never ends "
+            "the process. Raise an exception to stop the run."
+        ) from None
 
 
 @register_mode
@@ -152,12 +170,12 @@ class ControllerMode(Mode):
 
     name = "controller"
     config_class = ControllerConfig
-    continue_solver = True          # short periods: VODE keeps its history across them
+    continue_solver = True  # short periods: VODE keeps its history across them
 
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)
         limit = scenario.simulation.max_wall_s
-        self.deadline = time.perf_counter() + limit if limit is not None else None   # user code counts too
+        self.deadline = time.perf_counter() + limit if limit is not None else None  # user code counts too
         with _guard(self.deadline, "while importing and constructing it", limit):
             self.controller = construct(cfg, scenario)
         self.commands = CommandState(model)
@@ -176,7 +194,7 @@ class ControllerMode(Mode):
         try:
             with _guard(self.deadline, f"at t = {t:.6g} s", self.scenario.simulation.max_wall_s):
                 command = self.controller(obs)
-        except ControllerError:            # the wall-clock limit or sys.exit (_guard's own message)
+        except ControllerError:  # the wall-clock limit or sys.exit (_guard's own message)
             raise
         except Exception as exc:  # noqa: BLE001 - the user's code: report it with their frames
             raise ControllerError(f"controller raised at t = {t:.6g} s:\n{user_traceback(exc)}".rstrip()) from None

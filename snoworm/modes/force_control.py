@@ -25,6 +25,7 @@ equilibrium of docs/model.md section 5, Fig 11 note).  ``v_sp >= 0`` is the pape
 The targets are turned into link-force references, checked against the available drawbar pull
 and their steady state predicted when the scenario is validated: :mod:`snoworm.modes.force_plan`.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -54,31 +55,44 @@ class TargetsConfig(Config):
     _section = "mode.targets"
 
     link_forces_N: tuple[float, ...] | None = field(
-        None, ge=-1e6, le=1e6, unit="N", doc="link-force references, tension positive, one per link from the front")
+        None, ge=-1e6, le=1e6, unit="N", doc="link-force references, tension positive, one per link from the front"
+    )
     load_shares: str | tuple[float, ...] | None = field(
-        None, doc="fractions of the tow per segment (summing to 1), or a rule: even, drawbar, inverse_slip")
+        None, doc="fractions of the tow per segment (summing to 1), or a rule: even, drawbar, inverse_slip"
+    )
     net_connector_N: dict[int, float] | None = field(
-        None, ge=-1e6, le=1e6, unit="N", doc="net connector force on chosen segments {index: force}, forward positive")
+        None, ge=-1e6, le=1e6, unit="N", doc="net connector force on chosen segments {index: force}, forward positive"
+    )
 
     def _check(self, path):
         given = [k for k in ("link_forces_N", "load_shares", "net_connector_N") if getattr(self, k) is not None]
         if not given:
-            raise ScenarioError(f"{path}: give a target: link_forces_N (one per link), load_shares "
-                                f"(e.g. even, drawbar, or a list of fractions) or net_connector_N "
-                                "(e.g. {1: 0} for zero net connector force on segment 1).")
+            raise ScenarioError(
+                f"{path}: give a target: link_forces_N (one per link), load_shares "
+                f"(e.g. even, drawbar, or a list of fractions) or net_connector_N "
+                "(e.g. {1: 0} for zero net connector force on segment 1)."
+            )
         if self.link_forces_N is not None and len(given) > 1:
-            raise ScenarioError(f"{path}: link_forces_N fixes every link force and cannot be combined with "
-                                f"{' or '.join(g for g in given if g != 'link_forces_N')}; keep only one.")
+            raise ScenarioError(
+                f"{path}: link_forces_N fixes every link force and cannot be combined with "
+                f"{' or '.join(g for g in given if g != 'link_forces_N')}; keep only one."
+            )
         ls = self.load_shares
         if isinstance(ls, str) and ls not in SHARE_RULES:
-            raise ScenarioError(f"{path}.load_shares: unknown rule {ls!r}.{suggest(ls, SHARE_RULES)} "
-                                f"Use one of {', '.join(SHARE_RULES)} or a list of fractions, one per segment.")
+            raise ScenarioError(
+                f"{path}.load_shares: unknown rule {ls!r}.{suggest(ls, SHARE_RULES)} "
+                f"Use one of {', '.join(SHARE_RULES)} or a list of fractions, one per segment."
+            )
         if self.net_connector_N is not None and ls is not None and not isinstance(ls, str):
-            raise ScenarioError(f"{path}.load_shares: with net_connector_N, load_shares names the rule by which "
-                                f"the other segments share the rest ({', '.join(SHARE_RULES)}), not a list.")
+            raise ScenarioError(
+                f"{path}.load_shares: with net_connector_N, load_shares names the rule by which "
+                f"the other segments share the rest ({', '.join(SHARE_RULES)}), not a list."
+            )
         if isinstance(ls, tuple) and abs(sum(ls) - 1.0) > 1e-6:
-            raise ScenarioError(f"{path}.load_shares: the fractions of the tow must sum to 1, got "
-                                f"{sum(ls):.6g}. Scale them, or write load_shares: even.")
+            raise ScenarioError(
+                f"{path}.load_shares: the fractions of the tow must sum to 1, got "
+                f"{sum(ls):.6g}. Scale them, or write load_shares: even."
+            )
 
 
 @dataclass(frozen=True)
@@ -87,22 +101,38 @@ class ForceControlConfig(ModeConfig):
 
     type: str = field(choices=("force_control",), doc="mode name")
     speed_mps: tuple[float, ...] = field(
-        gt=0, le=100, why=FINITE_WHY, unit="m/s",
+        gt=0,
+        le=100,
+        why=FINITE_WHY,
+        unit="m/s",
         doc="nominal wheel speed R_w*omega: the free segment's set-point and the loops' "
-            "feed-forward, one for all segments or one per segment")
-    start_time_s: tuple[float, ...] = field(ge=0, le=1e5, unit="s",
-                                            doc="motor start time, one for all or one per segment")
+        "feed-forward, one for all segments or one per segment",
+    )
+    start_time_s: tuple[float, ...] = field(
+        ge=0, le=1e5, unit="s", doc="motor start time, one for all or one per segment"
+    )
     targets: TargetsConfig = field(doc="link forces, load shares or net connector forces")
     free_segment: int | None = field(
-        None, ge=0, le=1000, why="A segment index (vehicle.segments is at most 200).",
-        doc="segment driven at its nominal speed without a force loop (default: the rear one)")
-    kp_mps_per_N: float = field(1.6e-3, gt=0, le=1, why=FINITE_WHY, unit="m/s per N",
-                                doc="force-loop proportional gain [assumed]")
-    ki_mps_per_Ns: float = field(4.0e-3, ge=0, le=10, why=FINITE_WHY, unit="m/s per N s",
-                                 doc="force-loop integral gain [assumed]")
+        None,
+        ge=0,
+        le=1000,
+        why="A segment index (vehicle.segments is at most 200).",
+        doc="segment driven at its nominal speed without a force loop (default: the rear one)",
+    )
+    kp_mps_per_N: float = field(
+        1.6e-3, gt=0, le=1, why=FINITE_WHY, unit="m/s per N", doc="force-loop proportional gain [assumed]"
+    )
+    ki_mps_per_Ns: float = field(
+        4.0e-3, ge=0, le=10, why=FINITE_WHY, unit="m/s per N s", doc="force-loop integral gain [assumed]"
+    )
     max_speed_mps: float | None = field(
-        None, gt=0, le=100, why=FINITE_WHY, unit="m/s",
-        doc="upper limit of a loop's set-point (default: the no-load wheel speed R_w*w_nl)")
+        None,
+        gt=0,
+        le=100,
+        why=FINITE_WHY,
+        unit="m/s",
+        doc="upper limit of a loop's set-point (default: the no-load wheel speed R_w*w_nl)",
+    )
 
     #: the state carries the outer force-loop integrators
     force_loop = True
@@ -112,8 +142,10 @@ class ForceControlConfig(ModeConfig):
     def check_vehicle(self, vehicle, path):
         n = vehicle.segments
         if n < 2:
-            raise ScenarioError(f"vehicle.segments: force control needs at least 2 segments (a link to control); "
-                                f"got {n}. Use mode type 'uniform' for one segment.")
+            raise ScenarioError(
+                f"vehicle.segments: force control needs at least 2 segments (a link to control); "
+                f"got {n}. Use mode type 'uniform' for one segment."
+            )
         start_times(self.start_time_s, n, f"{path}.start_time_s")
         if len(self.speed_mps) not in (1, n):
             raise ScenarioError(f"{path}.speed_mps: give one speed for all segments or {n}; got {len(self.speed_mps)}.")
@@ -122,8 +154,10 @@ class ForceControlConfig(ModeConfig):
         t = self.targets
         tp = f"{path}.targets"
         if t.link_forces_N is not None and len(t.link_forces_N) != n - 1:
-            raise ScenarioError(f"{tp}.link_forces_N: give one force per link, {n - 1} for {n} segments "
-                                f"(link k joins segment k and k+1); got {len(t.link_forces_N)}.")
+            raise ScenarioError(
+                f"{tp}.link_forces_N: give one force per link, {n - 1} for {n} segments "
+                f"(link k joins segment k and k+1); got {len(t.link_forces_N)}."
+            )
         if isinstance(t.load_shares, tuple) and len(t.load_shares) != n:
             raise ScenarioError(f"{tp}.load_shares: give one fraction per segment ({n}); got {len(t.load_shares)}.")
         if t.net_connector_N is not None:
@@ -131,12 +165,14 @@ class ForceControlConfig(ModeConfig):
                 if not 0 <= k < n:
                     raise ScenarioError(f"{tp}.net_connector_N.{k}: segment index out of range 0..{n - 1}.")
             if len(t.net_connector_N) == n:
-                raise ScenarioError(f"{tp}.net_connector_N: fixes every segment; leave at least one segment out "
-                                    "to share the tow (or give link_forces_N).")
+                raise ScenarioError(
+                    f"{tp}.net_connector_N: fixes every segment; leave at least one segment out "
+                    "to share the tow (or give link_forces_N)."
+                )
 
     def check_scenario(self, sc, path):
         """Feasibility: every segment can pull its share; set-points within [0, v_max] (the plan)."""
-        sc.mode_plan   # noqa: B018 - computing the plan raises ScenarioError if a target is impossible
+        sc.mode_plan  # noqa: B018 - computing the plan raises ScenarioError if a target is impossible
 
     def prepare(self, sc):
         """The :class:`~snoworm.modes.force_plan.ForcePlan`, computed once per scenario (``scenario.mode_plan``)."""
@@ -166,9 +202,15 @@ class ForceControlMode(Mode):
         ref = np.zeros(n)
         ref[p.controlled] = p.link_ref_N[p.fc_link[p.controlled]]
         self._base = Controls.rolling(n, np.zeros(n), p.nominal_mps).with_(
-            fc_active=p.controlled.astype(float), fc_link=p.fc_link, fc_sigma=p.fc_sigma, fc_ref_N=ref,
-            fc_nominal_mps=p.nominal_mps, fc_kp=np.full(n, cfg.kp_mps_per_N), fc_ki=np.full(n, cfg.ki_mps_per_Ns),
-            fc_vmax_mps=p.vmax_mps)
+            fc_active=p.controlled.astype(float),
+            fc_link=p.fc_link,
+            fc_sigma=p.fc_sigma,
+            fc_ref_N=ref,
+            fc_nominal_mps=p.nominal_mps,
+            fc_kp=np.full(n, cfg.kp_mps_per_N),
+            fc_ki=np.full(n, cfg.ki_mps_per_Ns),
+            fc_vmax_mps=p.vmax_mps,
+        )
 
     def interval(self, t, y):
         return rolling_interval(t, self.t_start, self.breaks, self._base, "force control")
@@ -184,24 +226,33 @@ class ForceControlMode(Mode):
             after = t >= self.t_start[k]
             low = sp[after, k] <= SATURATION_TOL_MPS
             high = sp[after, k] >= p.vmax_mps[k] - SATURATION_TOL_MPS
-            frac.append({"segment": int(k), "fraction_at_zero": float(np.mean(low)) if low.size else 0.0,
-                         "fraction_at_max": float(np.mean(high)) if high.size else 0.0})
+            frac.append(
+                {
+                    "segment": int(k),
+                    "fraction_at_zero": float(np.mean(low)) if low.size else 0.0,
+                    "fraction_at_max": float(np.mean(high)) if high.size else 0.0,
+                }
+            )
             if low.size and low[-1]:
                 sat.append({"segment": int(k), "at": "zero"})
             elif high.size and high[-1]:
                 sat.append({"segment": int(k), "at": "max_speed"})
-        return {"force_control": {
-            "free_segment": p.free_segment,
-            "loops": [{"segment": int(k), "link": int(p.fc_link[k]), "side": "behind" if p.fc_sigma[k] > 0 else "ahead"}
-                      for k in np.flatnonzero(p.controlled)],
-            "link_force_refs_N": p.link_ref_N.tolist(),
-            "wheel_net_targets_N": p.wheel_net_N.tolist(),
-            "available_drawbar_N": p.available_drawbar_N.tolist(),
-            "drawbar_limited_by": list(p.limited_by),
-            "predicted_setpoints_mps": p.predicted_setpoint_mps.tolist(),
-            "predicted_ground_speed_mps": p.predicted_ground_speed_mps,
-            "final_setpoints_mps": sp[-1].tolist(),
-            "final_link_force_errors_N": (F_end - p.link_ref_N).tolist(),
-            "saturation": frac,
-            "saturated_at_end": sat,
-        }}
+        return {
+            "force_control": {
+                "free_segment": p.free_segment,
+                "loops": [
+                    {"segment": int(k), "link": int(p.fc_link[k]), "side": "behind" if p.fc_sigma[k] > 0 else "ahead"}
+                    for k in np.flatnonzero(p.controlled)
+                ],
+                "link_force_refs_N": p.link_ref_N.tolist(),
+                "wheel_net_targets_N": p.wheel_net_N.tolist(),
+                "available_drawbar_N": p.available_drawbar_N.tolist(),
+                "drawbar_limited_by": list(p.limited_by),
+                "predicted_setpoints_mps": p.predicted_setpoint_mps.tolist(),
+                "predicted_ground_speed_mps": p.predicted_ground_speed_mps,
+                "final_setpoints_mps": sp[-1].tolist(),
+                "final_link_force_errors_N": (F_end - p.link_ref_N).tolist(),
+                "saturation": frac,
+                "saturated_at_end": sat,
+            }
+        }

@@ -56,6 +56,7 @@ chain's ground speed ``V``; every controlled segment ``k`` then carries ``W_k`` 
 fixes its slip ``i_k`` and its steady set-point ``V / (1 - i_k)``.  For Fig 8 this gives a
 leader set-point of 1.679 m/s; for Figs 9-10 1.800 / 1.747 / 1.800 m/s (docs/model.md section 5).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -116,6 +117,7 @@ def _slip_for(W, X, seg, tp, *, wheel_speed_mps=None, ground_speed_mps=None):
     def f(i):
         ws = wheel_speed_mps if wheel_speed_mps is not None else ground_speed_mps / (1.0 - i)
         return float(steady.net_force_per_segment_N(i, X, ws, seg, tp, moving=True)) - W
+
     lo, hi = f(-i_pk), f(i_pk)
     if lo > 0 or hi < 0:
         return None
@@ -126,20 +128,20 @@ def _slip_for(W, X, seg, tp, *, wheel_speed_mps=None, ground_speed_mps=None):
 class ForcePlan:
     """Resolved force-control targets and the predicted steady state (arrays of length N or N-1)."""
 
-    wheel_net_N: np.ndarray          # (N,) steady net wheel force W_k
-    link_ref_N: np.ndarray           # (N-1,) link-force references T_k
+    wheel_net_N: np.ndarray  # (N,) steady net wheel force W_k
+    link_ref_N: np.ndarray  # (N-1,) link-force references T_k
     free_segment: int
-    controlled: np.ndarray           # (N,) bool: runs a force loop
-    fc_link: np.ndarray              # (N,) int: controlled link (N-1 for the free segment, unused)
-    fc_sigma: np.ndarray             # (N,) +1 link behind, -1 link ahead
+    controlled: np.ndarray  # (N,) bool: runs a force loop
+    fc_link: np.ndarray  # (N,) int: controlled link (N-1 for the free segment, unused)
+    fc_sigma: np.ndarray  # (N,) +1 link behind, -1 link ahead
     available_drawbar_N: np.ndarray  # (N,)
-    limited_by: tuple                # (N,) "terrain" or "motor"
-    xt: np.ndarray                   # (N,) X_t used for the checks
-    nominal_mps: np.ndarray          # (N,)
-    vmax_mps: np.ndarray             # (N,)
+    limited_by: tuple  # (N,) "terrain" or "motor"
+    xt: np.ndarray  # (N,) X_t used for the checks
+    nominal_mps: np.ndarray  # (N,)
+    vmax_mps: np.ndarray  # (N,)
     predicted_ground_speed_mps: float
     predicted_setpoint_mps: np.ndarray  # (N,)
-    predicted_slip: np.ndarray       # (N,)
+    predicted_slip: np.ndarray  # (N,)
 
 
 def _shares(rule, idx, W_total, xt, segs, tp, nominal):
@@ -150,17 +152,21 @@ def _shares(rule, idx, W_total, xt, segs, tp, nominal):
         w = np.array([available_drawbar_N(xt[k], segs[k], tp, nominal[k])[0] for k in idx])
         if np.any(w <= 0):
             bad = [int(k) for k, v in zip(idx, w) if v <= 0]
-            raise ScenarioError(f"mode.targets.load_shares: drawbar shares need every sharing segment to have a "
-                                f"positive available drawbar; segment(s) {bad} have none on this terrain.")
+            raise ScenarioError(
+                f"mode.targets.load_shares: drawbar shares need every sharing segment to have a "
+                f"positive available drawbar; segment(s) {bad} have none on this terrain."
+            )
     else:  # inverse_slip
         even = W_total / len(idx)
         slips = []
         for k in idx:
             i = _slip_for(even, xt[k], segs[k], tp, wheel_speed_mps=nominal[k])
             if i is None or i <= 0:
-                raise ScenarioError(f"mode.targets.load_shares: inverse_slip needs a positive steady slip for each "
-                                    f"sharing segment at an even share ({even:.1f} N); segment {int(k)} has "
-                                    f"{'none' if i is None else f'{i:.3g}'}. Use even or drawbar.")
+                raise ScenarioError(
+                    f"mode.targets.load_shares: inverse_slip needs a positive steady slip for each "
+                    f"sharing segment at an even share ({even:.1f} N); segment {int(k)} has "
+                    f"{'none' if i is None else f'{i:.3g}'}. Use even or drawbar."
+                )
             slips.append(i)
         w = 1.0 / np.array(slips)
     return w / w.sum()
@@ -188,14 +194,16 @@ def _check_drawbar(W, T, F_tow, ch: _Chain, tpath):
         raise ScenarioError(
             f"{tpath}: impossible target: the tow of {F_tow:g} N exceeds the drawbar the whole chain can pull, "
             f"{avail.sum():.1f} N (per segment {np.round(avail, 1).tolist()} N on X_t = {np.round(xt, 3).tolist()}); "
-            "no load sharing can carry it. Lower tow.force_N or add segments.")
+            "no load sharing can carry it. Lower tow.force_N or add segments."
+        )
     for j in range(n):
         if W[j] > avail[j] + 1e-9:
             raise ScenarioError(
                 f"{tpath}: impossible target: segment {j} would have to pull {W[j]:.1f} N (net wheel force; "
                 f"link references {np.round(T, 1).tolist()} N, tow {F_tow:g} N) but can pull at most "
                 f"{avail[j]:.1f} N on X_t = {xt[j]:g} (limited by the {why[j]}). Lower that segment's share, "
-                f"or use load_shares: drawbar.")
+                f"or use load_shares: drawbar."
+            )
     return avail, why
 
 
@@ -206,23 +214,29 @@ def _predict(W, f, controlled, ch: _Chain, path, tpath):
     slip = np.full(n, np.nan)
     i_f = _slip_for(W[f], xt[f], segs[f], tp, wheel_speed_mps=nominal[f])
     if i_f is None:
-        raise ScenarioError(f"{tpath}: impossible target: the free segment {f} cannot develop a net wheel force "
-                            f"of {W[f]:.1f} N at {nominal[f]:g} m/s on X_t = {xt[f]:g}.")
+        raise ScenarioError(
+            f"{tpath}: impossible target: the free segment {f} cannot develop a net wheel force "
+            f"of {W[f]:.1f} N at {nominal[f]:g} m/s on X_t = {xt[f]:g}."
+        )
     slip[f] = i_f
     V = nominal[f] * (1.0 - i_f)
     sp = np.array(nominal, float)
     for j in np.flatnonzero(controlled):
         i = _slip_for(W[j], xt[j], segs[j], tp, ground_speed_mps=V)
         if i is None:
-            raise ScenarioError(f"{tpath}: impossible target: segment {j} cannot develop a net wheel force of "
-                                f"{W[j]:.1f} N while moving at {V:.3f} m/s on X_t = {xt[j]:g} (it would need more "
-                                "braking than locked wheels give). Change the link forces.")
+            raise ScenarioError(
+                f"{tpath}: impossible target: segment {j} cannot develop a net wheel force of "
+                f"{W[j]:.1f} N while moving at {V:.3f} m/s on X_t = {xt[j]:g} (it would need more "
+                "braking than locked wheels give). Change the link forces."
+            )
         slip[j] = i
         sp[j] = V / (1.0 - i)
         if sp[j] > vmax[j]:
-            raise ScenarioError(f"{tpath}: impossible target: segment {j} would need a wheel-speed set-point of "
-                                f"{sp[j]:.3f} m/s, above max_speed_mps = {vmax[j]:.3f} m/s. Raise "
-                                f"{path}.max_speed_mps or lower the segment's share.")
+            raise ScenarioError(
+                f"{tpath}: impossible target: segment {j} would need a wheel-speed set-point of "
+                f"{sp[j]:.3f} m/s, above max_speed_mps = {vmax[j]:.3f} m/s. Raise "
+                f"{path}.max_speed_mps or lower the segment's share."
+            )
     return V, sp, slip
 
 
@@ -242,8 +256,7 @@ def plan(cfg, sc, model, path="mode") -> ForcePlan:
     F_tow = float(sc.tow.force_N)
     nominal = np.asarray(cfg.speed_mps, float) * np.ones(n)
     R = model.seg.wheel_radius_m
-    vmax = (np.full(n, cfg.max_speed_mps) if cfg.max_speed_mps is not None
-            else R * model.seg.no_load_speed_radps)
+    vmax = np.full(n, cfg.max_speed_mps) if cfg.max_speed_mps is not None else R * model.seg.no_load_speed_radps
     # terrain under each segment at its start position (worst axle)
     x0 = model.field(model.unpack(model.initial_state()), "x_m")
     xt = np.min(model.xt_at_axles(x0), axis=-1)
@@ -262,8 +275,11 @@ def plan(cfg, sc, model, path="mode") -> ForcePlan:
         W[rest] = remaining * _shares(t.load_shares or "even", rest, remaining, xt, segs, tp, nominal)
     else:
         ls = t.load_shares
-        s = (np.asarray(ls, float) if not isinstance(ls, str)
-             else _shares(ls, np.arange(n), F_tow, xt, segs, tp, nominal))
+        s = (
+            np.asarray(ls, float)
+            if not isinstance(ls, str)
+            else _shares(ls, np.arange(n), F_tow, xt, segs, tp, nominal)
+        )
         W = s * F_tow
     T = np.cumsum(W)[:-1]
     # loop assignment around the free segment
@@ -276,5 +292,6 @@ def plan(cfg, sc, model, path="mode") -> ForcePlan:
     ch = _Chain(xt, segs, tp, nominal, vmax)
     avail, why = _check_drawbar(W, T, F_tow, ch, tpath)
     V, sp, slip = _predict(W, f, controlled, ch, path, tpath)
-    return ForcePlan(W, T, f, controlled, link.astype(int), sigma, avail, tuple(why), xt, nominal, vmax,
-                     float(V), sp, slip)
+    return ForcePlan(
+        W, T, f, controlled, link.astype(int), sigma, avail, tuple(why), xt, nominal, vmax, float(V), sp, slip
+    )

@@ -17,6 +17,7 @@ extended, hold the front and pull the rear forward, then hold the rear and push 
 :func:`gait_plan` derives every phase's joint roles and checks the gait can run (when the scenario
 is validated); :func:`progress_conditions` states the paper's Eqs. 4-6 for a two-segment push.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -38,13 +39,13 @@ GAITS = {
 class PhasePlan:
     """Joint roles of one gait phase."""
 
-    moving: tuple          # moving segment indices
-    groups: tuple          # tuples of consecutive moving segments
-    role: np.ndarray       # per link: +1 extend, -1 contract, 0 hold
-    group_of_joint: np.ndarray   # per link: index into groups, -1 if holding
-    mover_of_joint: np.ndarray   # per link: the adjacent moving segment (or the link index)
+    moving: tuple  # moving segment indices
+    groups: tuple  # tuples of consecutive moving segments
+    role: np.ndarray  # per link: +1 extend, -1 contract, 0 hold
+    group_of_joint: np.ndarray  # per link: index into groups, -1 if holding
+    mover_of_joint: np.ndarray  # per link: the adjacent moving segment (or the link index)
     cluster_of_joint: np.ndarray  # per link: index into clusters of its anchor, -1 if holding
-    clusters: tuple        # tuples of consecutive held segments
+    clusters: tuple  # tuples of consecutive held segments
 
 
 def _runs(indices):
@@ -87,18 +88,20 @@ def gait_plan(phases, n, link_types, path="mode.gait"):
         cluster_of = np.full(n - 1, -1)
         for g, grp in enumerate(groups):
             joints = []
-            if grp[0] > 0:                       # held segment ahead: pull (contract)
+            if grp[0] > 0:  # held segment ahead: pull (contract)
                 j = grp[0] - 1
                 role[j], group_of[j], mover_of[j] = -1, g, grp[0]
                 joints.append(j)
-            if grp[-1] < n - 1:                  # held segment behind: push (extend)
+            if grp[-1] < n - 1:  # held segment behind: push (extend)
                 j = grp[-1]
                 role[j], group_of[j], mover_of[j] = 1, g, grp[-1]
                 joints.append(j)
             for j in joints:
                 if link_types[j] != "prismatic":
-                    raise ScenarioError(f"vehicle.links.type: link {j} must be 'prismatic' for the gait "
-                                        f"(phase {p} moves segments {list(grp)} through it); it is 'fixed'.")
+                    raise ScenarioError(
+                        f"vehicle.links.type: link {j} must be 'prismatic' for the gait "
+                        f"(phase {p} moves segments {list(grp)} through it); it is 'fixed'."
+                    )
                 anchor = j if role[j] == -1 else j + 1
                 cluster_of[j] = next(c for c, cl in enumerate(clusters) if anchor in cl)
         plans.append(PhasePlan(moving, groups, role, group_of, mover_of, cluster_of, clusters))
@@ -107,14 +110,18 @@ def gait_plan(phases, n, link_types, path="mode.gait"):
         seq = [(p, pl.role[j]) for p, pl in enumerate(plans) if pl.role[j] != 0]
         if len(seq) == 1:
             word = "extends" if seq[0][1] > 0 else "contracts"
-            raise ScenarioError(f"{path}: joint {j} only {word} (phase {seq[0][0]}) and never makes the opposite "
-                                "stroke; it would jam at its stroke limit after one cycle. Add a phase that "
-                                "moves the segment on its other side.")
+            raise ScenarioError(
+                f"{path}: joint {j} only {word} (phase {seq[0][0]}) and never makes the opposite "
+                "stroke; it would jam at its stroke limit after one cycle. Add a phase that "
+                "moves the segment on its other side."
+            )
         for (p1, r1), (p2, r2) in zip(seq, seq[1:] + seq[:1]):
             if len(seq) > 1 and r1 == r2:
                 word = "extends" if r1 > 0 else "contracts"
-                raise ScenarioError(f"{path}: joint {j} {word} in phase {p1} and again in phase {p2} without the "
-                                    "opposite stroke between; it would jam at its stroke limit. Reorder the phases.")
+                raise ScenarioError(
+                    f"{path}: joint {j} {word} in phase {p1} and again in phase {p2} without the "
+                    "opposite stroke between; it would jam at its stroke limit. Reorder the phases."
+                )
     return plans
 
 
@@ -146,5 +153,4 @@ def progress_conditions(F_c, Ft_front, Ftr_front, Ftr_rear, G_front=0.0, G_rear=
     eq4 = F_c + Ft_front - Ftr_front + G_front
     eq5 = Ftr_rear + G_rear - F_c
     eq6 = Ft_front + Ftr_rear - Ftr_front + G_front + G_rear
-    return {"eq4_N": float(eq4), "eq5_N": float(eq5), "eq6_N": float(eq6),
-            "progress": bool(eq4 > 0 and eq5 >= 0)}
+    return {"eq4_N": float(eq4), "eq5_N": float(eq5), "eq6_N": float(eq6), "progress": bool(eq4 > 0 and eq5 >= 0)}

@@ -25,6 +25,7 @@ with ``C_cluster`` the cluster's full terrain resistance plus its locked-wheel t
 force is high while the mover breaks loose and falls to ``F_ff`` once it moves, so the anchors'
 backward sliding peaks shortly after motion starts and then drops off, as in Fig 5.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -51,33 +52,59 @@ class InchwormConfig(ModeConfig):
     """``mode: {type: inchworm, gait: six_segment, ...}`` (paper section 5.1)."""
 
     type: str = field(choices=("inchworm",), doc="mode name")
-    gait: object = field(doc="a named gait (two_segment, six_segment) or a list of phases, each a list of moving segments")
-    target_speed_mps: float = field(gt=0, le=100, why=FINITE_WHY, unit="m/s",
-                                    doc="speed of a moving segment that the joint force loop aims at")
-    mover_wheel_speed_mps: float = field(ge=0, le=100, why=FINITE_WHY, unit="m/s",
-                                         doc="wheel-speed set-point R_w*omega of moving segments (held: 0)")
-    hold_margin: float | None = field(gt=0, le=100,
-                                         doc="fraction of an anchor cluster's resistance the joints may load it with "
-                                                   "(Eq. 5); null: no limit but the joint force limit")
-    joint_control: str = field("speed", choices=("speed", "length", "force"),
-                               doc="speed: force loop on the mover's speed; length: stroke at target_speed_mps; "
-                                   "force: constant joint_force_N")
-    speed_gain_Ns_per_m: float = field(2000.0, ge=0, le=1e6, why=FINITE_WHY, unit="N s/m",
-                                       doc="joint force loop gain K_v on the mover's speed error")
-    joint_force_N: float | None = field(None, gt=0, le=1e6, why=FINITE_WHY, unit="N",
-                                           doc="joint force of joint_control: force")
-    anchor_gain_Ns_per_m: float = field(0.0, ge=0, le=1e6, why=FINITE_WHY, unit="N s/m",
-                                        doc="joint force reduction per m/s of backward sliding of its anchor")
-    force_headroom: float = field(0.2, ge=0, le=100,
-                                  doc="joint force allowed above the feed-forward, as a fraction of it, "
-                                                 "to accelerate the mover (speed and length control)")
+    gait: object = field(
+        doc="a named gait (two_segment, six_segment) or a list of phases, each a list of moving segments"
+    )
+    target_speed_mps: float = field(
+        gt=0, le=100, why=FINITE_WHY, unit="m/s", doc="speed of a moving segment that the joint force loop aims at"
+    )
+    mover_wheel_speed_mps: float = field(
+        ge=0, le=100, why=FINITE_WHY, unit="m/s", doc="wheel-speed set-point R_w*omega of moving segments (held: 0)"
+    )
+    hold_margin: float | None = field(
+        gt=0,
+        le=100,
+        doc="fraction of an anchor cluster's resistance the joints may load it with "
+        "(Eq. 5); null: no limit but the joint force limit",
+    )
+    joint_control: str = field(
+        "speed",
+        choices=("speed", "length", "force"),
+        doc="speed: force loop on the mover's speed; length: stroke at target_speed_mps; force: constant joint_force_N",
+    )
+    speed_gain_Ns_per_m: float = field(
+        2000.0, ge=0, le=1e6, why=FINITE_WHY, unit="N s/m", doc="joint force loop gain K_v on the mover's speed error"
+    )
+    joint_force_N: float | None = field(
+        None, gt=0, le=1e6, why=FINITE_WHY, unit="N", doc="joint force of joint_control: force"
+    )
+    anchor_gain_Ns_per_m: float = field(
+        0.0,
+        ge=0,
+        le=1e6,
+        why=FINITE_WHY,
+        unit="N s/m",
+        doc="joint force reduction per m/s of backward sliding of its anchor",
+    )
+    force_headroom: float = field(
+        0.2,
+        ge=0,
+        le=100,
+        doc="joint force allowed above the feed-forward, as a fraction of it, "
+        "to accelerate the mover (speed and length control)",
+    )
     start_time_s: float = field(0.0, ge=0, le=1e5, unit="s", doc="time the gait starts (motors off before)")
-    feedforward: str = field("resistance", choices=("resistance", "none"),
-                             doc="speed control's force feed-forward: the mover's terrain resistance, or none")
+    feedforward: str = field(
+        "resistance",
+        choices=("resistance", "none"),
+        doc="speed control's force feed-forward: the mover's terrain resistance, or none",
+    )
 
     def inching_settings(self):
         """This mode's own settings (without ``type`` and ``start_time_s``)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in ("type", "start_time_s")}
+        return {
+            f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in ("type", "start_time_s")
+        }
 
     def phases(self):
         """The gait as a tuple of phases (tuples of moving segment indices)."""
@@ -89,20 +116,33 @@ class InchwormConfig(ModeConfig):
         g = self.gait
         if isinstance(g, str):
             if g not in GAITS:
-                raise ScenarioError(f"{path}.gait: unknown gait {g!r}.{suggest(g, GAITS)} Known gaits: "
-                                    f"{', '.join(GAITS)}; or give a list of phases such as [[1], [0]].")
+                raise ScenarioError(
+                    f"{path}.gait: unknown gait {g!r}.{suggest(g, GAITS)} Known gaits: "
+                    f"{', '.join(GAITS)}; or give a list of phases such as [[1], [0]]."
+                )
             return
-        ok = isinstance(g, (list, tuple)) and len(g) > 0 and all(
-            isinstance(ph, (list, tuple)) and len(ph) > 0
-            and all(isinstance(k, int) and not isinstance(k, bool) for k in ph) for ph in g)
+        ok = (
+            isinstance(g, (list, tuple))
+            and len(g) > 0
+            and all(
+                isinstance(ph, (list, tuple))
+                and len(ph) > 0
+                and all(isinstance(k, int) and not isinstance(k, bool) for k in ph)
+                for ph in g
+            )
+        )
         if not ok:
-            raise ScenarioError(f"{path}.gait: expected a gait name ({', '.join(GAITS)}) or a non-empty list of phases, "
-                                f"each a non-empty list of segment indices, e.g. [[0], [1], [2], [3]]; got {g!r}.")
+            raise ScenarioError(
+                f"{path}.gait: expected a gait name ({', '.join(GAITS)}) or a non-empty list of phases, "
+                f"each a non-empty list of segment indices, e.g. [[0], [1], [2], [3]]; got {g!r}."
+            )
 
     def check_vehicle(self, vehicle, path):
         if (self.joint_control == "force") != (self.joint_force_N is not None):
-            raise ScenarioError(f"{path}.joint_force_N: give it exactly when joint_control is 'force' "
-                                f"(joint_control = {self.joint_control!r}, joint_force_N = {self.joint_force_N!r}).")
+            raise ScenarioError(
+                f"{path}.joint_force_N: give it exactly when joint_control is 'force' "
+                f"(joint_control = {self.joint_control!r}, joint_force_N = {self.joint_force_N!r})."
+            )
         gait_plan(self.phases(), vehicle.segments, vehicle.link_types(), f"{path}.gait")
 
 
@@ -218,23 +258,31 @@ class InchwormMode(Mode):
             for js in self._group_joints(plan, active):
                 kv[js] = cfg.speed_gain_Ns_per_m / max(js.size, 1)
         ctl = Controls.rolling(n, np.ones(n), np.where(moving, cfg.mover_wheel_speed_mps, 0.0)).with_(
-            joint_active=active.astype(float), joint_dir=plan.role.astype(float), joint_ff_N=ff,
+            joint_active=active.astype(float),
+            joint_dir=plan.role.astype(float),
+            joint_ff_N=ff,
             joint_length_mode=np.full(n - 1, 1.0 if cfg.joint_control == "length" else 0.0),
             joint_sref_m=np.where(plan.role > 0, L.stroke_max_m, L.stroke_min_m),
-            joint_kv=kv, joint_vtarget_mps=np.full(n - 1, cfg.target_speed_mps),
-            joint_limit_N=limit, joint_mover=plan.mover_of_joint.astype(int),
+            joint_kv=kv,
+            joint_vtarget_mps=np.full(n - 1, cfg.target_speed_mps),
+            joint_limit_N=limit,
+            joint_mover=plan.mover_of_joint.astype(int),
             joint_anchor=np.where(plan.role < 0, np.arange(n - 1), np.arange(n - 1) + 1),
-            joint_ka=np.full(n - 1, cfg.anchor_gain_Ns_per_m if cfg.joint_control != "force" else 0.0))
+            joint_ka=np.full(n - 1, cfg.anchor_gain_Ns_per_m if cfg.joint_control != "force" else 0.0),
+        )
         events, self._event_joints = [], []
         for j in np.nonzero(active)[0]:
-            k = m.layout.flat_index(j, "s_m")      # extension of joint j (the link behind segment j)
+            k = m.layout.flat_index(j, "s_m")  # extension of joint j (the link behind segment j)
             if plan.role[j] > 0:
+
                 def ev(t_, y_, k=k, a=L.stroke_max_m[j] - STROKE_TOL_M):
                     return y_[k] - a
             else:
+
                 def ev(t_, y_, k=k, a=L.stroke_min_m[j] + STROKE_TOL_M):
                     return a - y_[k]
-            ev.direction = 1       # scipy's solve_ivp event API (rising crossings only)
+
+            ev.direction = 1  # scipy's solve_ivp event API (rising crossings only)
             events.append(ev)
             self._event_joints.append(int(j))
         label = f"phase {self.phase} (moving {[k for k in range(n) if moving[k]]})"
@@ -249,17 +297,31 @@ class InchwormMode(Mode):
             Fc = float(limit[js].sum())
             cl = sorted({int(plan.cluster_of_joint[j]) for j in js})
             # Eq. 5 per anchor cluster: its capacity against every planned joint force on it
-            eq5 = min(float(capacity[c] - limit[np.nonzero(active & (plan.cluster_of_joint == c))[0]].sum())
-                      for c in cl)
+            eq5 = min(
+                float(capacity[c] - limit[np.nonzero(active & (plan.cluster_of_joint == c))[0]].sum()) for c in cl
+            )
             # (the anchors' capacity already includes their gravity)
-            pc = progress_conditions(Fc, float(Ft1[list(grp)].sum()), float(Ftr[list(grp)].sum()),
-                                     float(min(capacity[c] for c in cl)), G_front=float(G[list(grp)].sum()))
+            pc = progress_conditions(
+                Fc,
+                float(Ft1[list(grp)].sum()),
+                float(Ftr[list(grp)].sum()),
+                float(min(capacity[c] for c in cl)),
+                G_front=float(G[list(grp)].sum()),
+            )
             pc["eq5_N"] = eq5
             pc["progress"] = bool(pc["eq4_N"] > 0 and eq5 >= 0)
             diag.append({"segments": list(grp), "joints": [int(j) for j in js], "joint_force_limit_N": Fc, **pc})
         x = self.model.field(self.model.unpack(y), "x_m")
-        self.phase_log.append({"phase": self.phase, "t_start_s": float(t), "t_end_s": None,
-                               "moving": list(plan.moving), "x_start_m": x.tolist(), "predicted": diag})
+        self.phase_log.append(
+            {
+                "phase": self.phase,
+                "t_start_s": float(t),
+                "t_end_s": None,
+                "moving": list(plan.moving),
+                "x_start_m": x.tolist(),
+                "predicted": diag,
+            }
+        )
 
     def on_event(self, t, y, index):
         plan = self.plans[self.phase]
@@ -268,17 +330,29 @@ class InchwormMode(Mode):
         self.group_done[g] = True
         word = "extended" if plan.role[j] > 0 else "contracted"
         x0 = float(self.model.field(self.model.unpack(y), "x_m")[0])
-        self.log.append({"t_s": float(t), "kind": "joint_limit", "x_m": x0,
-                         "detail": f"joint {j} fully {word}: segments {list(plan.groups[g])} done"})
+        self.log.append(
+            {
+                "t_s": float(t),
+                "kind": "joint_limit",
+                "x_m": x0,
+                "detail": f"joint {j} fully {word}: segments {list(plan.groups[g])} done",
+            }
+        )
         if self.group_done.all():
             self.phase_log[-1]["t_end_s"] = float(t)
             self.phase = (self.phase + 1) % len(self.plans)
             if self.phase == 0:
                 self.cycles_done += 1
             self.group_done = np.zeros(len(self.plans[self.phase].groups), bool)
-            self.log.append({"t_s": float(t), "kind": "phase_change", "x_m": x0,
-                             "detail": f"phase {self.phase} starts (moving {list(self.plans[self.phase].moving)}) "
-                                       f"after joint {j} reached its stroke limit"})
+            self.log.append(
+                {
+                    "t_s": float(t),
+                    "kind": "phase_change",
+                    "x_m": x0,
+                    "detail": f"phase {self.phase} starts (moving {list(self.plans[self.phase].moving)}) "
+                    f"after joint {j} reached its stroke limit",
+                }
+            )
             self._begin_phase(t, y)
 
     def summary(self, result):
@@ -296,9 +370,11 @@ class InchwormMode(Mode):
             if sel.any():
                 i0, i1 = np.nonzero(sel)[0][[0, -1]]
                 adv = result.segments["x_m"][i1] - result.segments["x_m"][i0]
-                obs = {"advance_m": adv.tolist(),
-                       "peak_backward_speed_mps": float(-back[sel].min()),
-                       "mean_abs_joint_force_N": np.abs(F[sel][:, prism]).mean(0).tolist() if prism.any() else []}
+                obs = {
+                    "advance_m": adv.tolist(),
+                    "peak_backward_speed_mps": float(-back[sel].min()),
+                    "mean_abs_joint_force_N": np.abs(F[sel][:, prism]).mean(0).tolist() if prism.any() else [],
+                }
             phases.append({**ph, "t_end_s": t1, "observed": obs})
         return {
             "gait_cycles": self.cycles_done,

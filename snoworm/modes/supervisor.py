@@ -42,6 +42,7 @@ X_t is above the immobilisation limit (0.586 for FrostyBoy) by a margin set by
 Every switch is an event in ``mode.log`` (``kind`` = ``switch_to_inching`` or
 ``switch_to_rolling``, with time, leader position and cause).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -64,29 +65,35 @@ class SupervisorConfig(ModeConfig):
     """``mode: {type: supervisor, rolling_speed_mps: ..., inching: {...}, ...}``."""
 
     type: str = field(choices=("supervisor",), doc="mode name")
-    rolling_speed_mps: float = field(gt=0, le=100, why=FINITE_WHY, unit="m/s",
-                                     doc="wheel-speed set-point R_w*omega while rolling")
+    rolling_speed_mps: float = field(
+        gt=0, le=100, why=FINITE_WHY, unit="m/s", doc="wheel-speed set-point R_w*omega while rolling"
+    )
     start_time_s: float = field(ge=0, le=1e5, unit="s", doc="motor start time (motors off before)")
-    check_interval_s: float = field(gt=0, le=1e5, unit="s",
-                                    doc="re-evaluation period of the immobilisation rule while rolling")
+    check_interval_s: float = field(
+        gt=0, le=1e5, unit="s", doc="re-evaluation period of the immobilisation rule while rolling"
+    )
     stuck_window_s: float = field(gt=0, le=1e5, unit="s", doc="window of the mean chain ground speed")
-    stuck_speed_mps: float = field(gt=0, le=100, unit="m/s",
-                                   doc="immobilised if the window's mean speed is below this")
+    stuck_speed_mps: float = field(gt=0, le=100, unit="m/s", doc="immobilised if the window's mean speed is below this")
     stuck_slip: float = field(gt=0, le=1, doc="... and the leader's wheel slip is above this")
-    resume_margin_N: float = field(ge=0, le=1e6, unit="N",
-                                   doc="resume rolling when the chain's steady drawbar surplus is at least this")
+    resume_margin_N: float = field(
+        ge=0, le=1e6, unit="N", doc="resume rolling when the chain's steady drawbar surplus is at least this"
+    )
     inching: dict = field(doc="inchworm settings (the keys of the inchworm mode except type and start_time_s)")
 
     def inching_config(self, path="mode") -> InchwormConfig:
         """The :class:`InchwormConfig` used while inching (started at once: ``start_time_s = 0``)."""
         raw = self.inching
         if not isinstance(raw, dict):
-            raise ScenarioError(f"{path}.inching: expected a mapping of inchworm settings (gait, target_speed_mps, "
-                                f"mover_wheel_speed_mps, speed_gain_Ns_per_m, hold_margin), got {raw!r}.")
+            raise ScenarioError(
+                f"{path}.inching: expected a mapping of inchworm settings (gait, target_speed_mps, "
+                f"mover_wheel_speed_mps, speed_gain_Ns_per_m, hold_margin), got {raw!r}."
+            )
         for key in ("type", "start_time_s"):
             if key in raw:
-                raise ScenarioError(f"{path}.inching.{key}: not allowed here; the supervisor sets it (inching starts "
-                                    "when the supervisor detects immobilisation).")
+                raise ScenarioError(
+                    f"{path}.inching.{key}: not allowed here; the supervisor sets it (inching starts "
+                    "when the supervisor detects immobilisation)."
+                )
         return build(InchwormConfig, {**raw, "type": "inchworm", "start_time_s": 0.0}, f"{path}.inching")
 
     def rolling_speed(self):
@@ -98,8 +105,10 @@ class SupervisorConfig(ModeConfig):
     def _check(self, path):
         self.inching_config(path)
         if self.stuck_window_s < self.check_interval_s:
-            raise ScenarioError(f"{path}.stuck_window_s: must be at least check_interval_s ({self.check_interval_s} s), "
-                                f"got {self.stuck_window_s} s.")
+            raise ScenarioError(
+                f"{path}.stuck_window_s: must be at least check_interval_s ({self.check_interval_s} s), "
+                f"got {self.stuck_window_s} s."
+            )
 
     def check_vehicle(self, vehicle, path):
         self.inching_config(path).check_vehicle(vehicle, f"{path}.inching")
@@ -124,12 +133,13 @@ def chain_drawbar_surplus_N(model, segments, x_m, wheel_speed_mps) -> float:
         Rolling wheel-speed set-point [m/s].
     """
     X = model.xt_at_axles(x_m)
-    grade = np.degrees(np.arcsin(model.grade_terms(x_m)[0]))     # the grade under each segment (section 7)
+    grade = np.degrees(np.arcsin(model.grade_terms(x_m)[0]))  # the grade under each segment (section 7)
     total = 0.0
     for k, seg in enumerate(segments):
         for a in range(X.shape[1]):
-            total += 0.5 * steady.max_drawbar_N(float(X[k, a]), seg, model.tp, wheel_speed_mps,
-                                                grade_deg=float(grade[k]))
+            total += 0.5 * steady.max_drawbar_N(
+                float(X[k, a]), seg, model.tp, wheel_speed_mps, grade_deg=float(grade[k])
+            )
     return total - model.tow_force_N
 
 
@@ -154,7 +164,8 @@ class SupervisorMode(Mode):
         self.cycles_total = 0
         seg0 = self.segments[0]
         self.rolling_limit_xt = steady.immobilisation_limit_xt(
-            seg0, model.tp, drawbar_N=model.tow_force_N / model.n, wheel_speed_mps=cfg.rolling_speed_mps)
+            seg0, model.tp, drawbar_N=model.tow_force_N / model.n, wheel_speed_mps=cfg.rolling_speed_mps
+        )
 
     def initial_state(self):
         return self.model.initial_state(joint_extension_m=self.s0)
@@ -176,8 +187,14 @@ class SupervisorMode(Mode):
         self.state = new
         self.since = float(t)
         self.timeline.append((float(t), new))
-        self.log.append({"t_s": float(t), "kind": kind, "x_m": float(self._x(y)[0]),
-                         "detail": detail + f"; X_t under segments {np.round(self._xt_under(y), 3).tolist()}"})
+        self.log.append(
+            {
+                "t_s": float(t),
+                "kind": kind,
+                "x_m": float(self._x(y)[0]),
+                "detail": detail + f"; X_t under segments {np.round(self._xt_under(y), 3).tolist()}",
+            }
+        )
 
     def _stuck(self, t, y):
         """Immobilisation rule: (stuck?, mean speed over the window, leader slip)."""
@@ -202,11 +219,16 @@ class SupervisorMode(Mode):
             self.history_x.append(float(np.mean(self._x(y))))
             stuck, v_mean, s_lead = self._stuck(t, y)
             if stuck:
-                self._switch(t, y, "inching", "switch_to_inching",
-                             f"immobilised: mean chain speed {v_mean:.3f} m/s over {cfg.stuck_window_s:g} s < "
-                             f"{cfg.stuck_speed_mps:g} m/s and leader slip {s_lead:.2f} > {cfg.stuck_slip:g}")
+                self._switch(
+                    t,
+                    y,
+                    "inching",
+                    "switch_to_inching",
+                    f"immobilised: mean chain speed {v_mean:.3f} m/s over {cfg.stuck_window_s:g} s < "
+                    f"{cfg.stuck_speed_mps:g} m/s and leader slip {s_lead:.2f} > {cfg.stuck_slip:g}",
+                )
                 self.inch = InchwormMode(self.inch_cfg, self.scenario, self.model)
-                self.inch.log = self.log          # gait events go to the same log
+                self.inch.log = self.log  # gait events go to the same log
             else:
                 ctl = Controls.rolling(n, np.ones(n), np.full(n, cfg.rolling_speed_mps))
                 return Interval(t + cfg.check_interval_s, ctl, [], "rolling")
@@ -222,9 +244,14 @@ class SupervisorMode(Mode):
         self.cycles_total += 1
         surplus = chain_drawbar_surplus_N(self.model, self.segments, self._x(y), self.cfg.rolling_speed_mps)
         if surplus >= self.cfg.resume_margin_N:
-            self._switch(t, y, "rolling", "switch_to_rolling",
-                         f"rolling feasible after gait cycle: chain drawbar surplus {surplus:.0f} N >= "
-                         f"margin {self.cfg.resume_margin_N:g} N")
+            self._switch(
+                t,
+                y,
+                "rolling",
+                "switch_to_rolling",
+                f"rolling feasible after gait cycle: chain drawbar surplus {surplus:.0f} N >= "
+                f"margin {self.cfg.resume_margin_N:g} N",
+            )
             self.inch = None
             self.history_t, self.history_x = [], []
 
@@ -237,11 +264,15 @@ class SupervisorMode(Mode):
         for (t0, st), t1 in zip(self.timeline, bounds[1:]):
             time_in[st] += max(t1 - t0, 0.0)
             dist_in[st] += float(np.interp(t1, t, xbar) - np.interp(t0, t, xbar))
-        return {"supervisor": {
-            "switches": [e for e in self.log if e["kind"].startswith("switch_")],
-            "time_rolling_s": time_in["rolling"], "time_inching_s": time_in["inching"],
-            "distance_rolling_m": dist_in["rolling"], "distance_inching_m": dist_in["inching"],
-            "gait_cycles": self.cycles_total + (self.inch.cycles_done if self.inch is not None else 0),
-            "rolling_limit_xt": self.rolling_limit_xt,
-            "final_state": self.state,
-        }}
+        return {
+            "supervisor": {
+                "switches": [e for e in self.log if e["kind"].startswith("switch_")],
+                "time_rolling_s": time_in["rolling"],
+                "time_inching_s": time_in["inching"],
+                "distance_rolling_m": dist_in["rolling"],
+                "distance_inching_m": dist_in["inching"],
+                "gait_cycles": self.cycles_total + (self.inch.cycles_done if self.inch is not None else 0),
+                "rolling_limit_xt": self.rolling_limit_xt,
+                "final_state": self.state,
+            }
+        }

@@ -4,6 +4,7 @@ The simplest way to drive the chain, "without using the inter-segment forces as 
 input" (paper section 5.2).  Each segment's motors switch on at its start time; the
 integration restarts there so the switch never falls inside a solver step.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -24,16 +25,23 @@ class UniformConfig(ModeConfig):
     """``mode: {type: uniform, speed_mps: ..., start_time_s: ...}``."""
 
     type: str = field(choices=("uniform",), doc="mode name")
-    speed_mps: tuple[float, ...] = field(ge=0, le=100, why=FINITE_WHY, unit="m/s",
-                                         doc="wheel-speed set-point R_w*omega, one for all segments or one per segment")
-    start_time_s: tuple[float, ...] = field(ge=0, le=1e5, unit="s",
-                                            doc="motor start time, one for all or one per segment")
+    speed_mps: tuple[float, ...] = field(
+        ge=0,
+        le=100,
+        why=FINITE_WHY,
+        unit="m/s",
+        doc="wheel-speed set-point R_w*omega, one for all segments or one per segment",
+    )
+    start_time_s: tuple[float, ...] = field(
+        ge=0, le=1e5, unit="s", doc="motor start time, one for all or one per segment"
+    )
 
     def check_vehicle(self, vehicle, path):
         start_times(self.start_time_s, vehicle.segments, f"{path}.start_time_s")
         if len(self.speed_mps) not in (1, vehicle.segments):
-            raise ScenarioError(f"{path}.speed_mps: give one speed for all segments or {vehicle.segments}; "
-                                f"got {len(self.speed_mps)}.")
+            raise ScenarioError(
+                f"{path}.speed_mps: give one speed for all segments or {vehicle.segments}; got {len(self.speed_mps)}."
+            )
 
     def rolling_speed(self):
         """The first segment's set-point [m/s]."""

@@ -16,6 +16,7 @@ interpreter (a blocking system call that retries on EINTR, a long NumPy operatio
 interrupted only when it returns.  The user's own ``SIGALRM`` timer, if any, is suspended
 during the call and restored after.
 """
+
 from __future__ import annotations
 
 import signal

@@ -3,6 +3,7 @@
 Each run is reduced to one curve per quantity (the chain's mean speed, the leader's position,
 the largest link force, ...), so runs with different numbers of segments compare too.
 """
+
 from __future__ import annotations
 
 import numpy as np

@@ -5,6 +5,7 @@ labels such as ``"phase 1 (moving [1, 4])"``, ``"inching: phase 0 (moving [0, 3]
 run read back from disk (no intervals), from its ``phase_change`` events; :func:`shade_phases`
 draws them as light bands, one colour per phase of the gait.
 """
+
 from __future__ import annotations
 
 import re
@@ -39,8 +40,11 @@ def gait_spans(result) -> list:
     if spans or not result.events:
         return _merge(spans)
     t_end = float(result.t[-1]) if len(result.t) else 0.0
-    marks = [(float(e["t_s"]), e.get("kind"), str(e.get("detail", ""))) for e in result.events
-             if e.get("kind") in ("phase_change", "switch_to_inching", "switch_to_rolling")]
+    marks = [
+        (float(e["t_s"]), e.get("kind"), str(e.get("detail", "")))
+        for e in result.events
+        if e.get("kind") in ("phase_change", "switch_to_inching", "switch_to_rolling")
+    ]
     for (t0, kind, detail), nxt in zip(marks, marks[1:] + [(t_end, None, "")]):
         m = _PHASE.search(detail)
         if kind == "phase_change" and m:
@@ -58,5 +62,7 @@ def shade_phases(axes, spans, legend_ax=None):
             a.axvspan(t0, t1, color=PHASE_COLOURS[k % len(PHASE_COLOURS)], lw=0, zorder=0)
     if legend_ax is None:
         return []
-    return [Patch(color=PHASE_COLOURS[k % len(PHASE_COLOURS)], label=f"moving {seen[k]}" if seen[k] else f"phase {k}")
-            for k in sorted(seen)]
+    return [
+        Patch(color=PHASE_COLOURS[k % len(PHASE_COLOURS)], label=f"moving {seen[k]}" if seen[k] else f"phase {k}")
+        for k in sorted(seen)
+    ]

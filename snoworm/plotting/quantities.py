@@ -4,6 +4,7 @@ Each draws on new or given axes (``ax=``/``fig=``), at print ``size=``, and retu
 gait phases are shaded as in :mod:`.runs`.  Six segments or fewer share a panel (colour, line
 style and marker each); more are drawn as colour charts, a row per segment.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -28,9 +29,16 @@ def per_segment(a, fig, t, Y, ylabel, symmetric=False, chart=False):
         return False
     te = np.concatenate([t[:1], (t[1:] + t[:-1]) / 2, t[-1:]]) if t.size > 1 else np.array([t[0], t[0] + 1])
     lim = max(float(np.max(np.abs(Y))), 1e-9)
-    m = a.pcolormesh(te, np.arange(Y.shape[1] + 1) - 0.5, Y.T, cmap="RdBu_r" if symmetric else "viridis",
-                     vmin=-lim if symmetric else float(np.min(Y)), vmax=lim if symmetric else float(np.max(Y)),
-                     shading="flat", rasterized=True)
+    m = a.pcolormesh(
+        te,
+        np.arange(Y.shape[1] + 1) - 0.5,
+        Y.T,
+        cmap="RdBu_r" if symmetric else "viridis",
+        vmin=-lim if symmetric else float(np.min(Y)),
+        vmax=lim if symmetric else float(np.max(Y)),
+        shading="flat",
+        rasterized=True,
+    )
     a.invert_yaxis()
     a.set_yticks(range(Y.shape[1]), [str(k) for k in range(Y.shape[1])] if Y.shape[1] <= 12 else None)
     a.set_ylabel("segment\n(0 = leader)")
@@ -45,8 +53,9 @@ def plot_slip(result, *, ax=None, fig=None):
     own = ax is None and fig is None
     fig, axes = new_figure(ax, fig, 1, 1, figsize=(9, 4))
     a = axes[0, 0]
-    chart = per_segment(a, fig, result.t, result.segments["slip"], "slip [-]", symmetric=True,
-                        chart=bool(gait_spans(result)))
+    chart = per_segment(
+        a, fig, result.t, result.segments["slip"], "slip [-]", symmetric=True, chart=bool(gait_spans(result))
+    )
     if not chart:
         a.axhline(0.0, color="0.5", lw=0.6)
         legend_outside(a)
@@ -66,8 +75,9 @@ def plot_motor(result, *, ax=None, fig=None):
     a1, a2 = axes[:, 0]
     t = result.t
     gait = bool(gait_spans(result))
-    c1 = per_segment(a1, fig, t, result.segments["motor_torque_Nm"], "motor torque\nper wheel [N m]", symmetric=True,
-                     chart=gait)
+    c1 = per_segment(
+        a1, fig, t, result.segments["motor_torque_Nm"], "motor torque\nper wheel [N m]", symmetric=True, chart=gait
+    )
     per_segment(a2, fig, t, result.segments["motor_electrical_power_W"], "electrical power\n[W]", chart=gait)
     if not c1:
         legend_outside(a1)

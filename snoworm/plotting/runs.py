@@ -1,5 +1,6 @@
 """Figures of one run (a :class:`~snoworm.results.result.Result`): forces, speeds, positions, the
 steady-state force diagram.  Each function draws on new or given axes and returns the Figure."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -22,8 +23,20 @@ from .style import (
     write_figure,
 )
 
-__all__ = ["plot_forces", "plot_speeds", "plot_positions", "plot_force_diagram", "plot_groups", "plot_result",
-           "moving_groups", "plot_route", "PLOT_KINDS", "seg_label", "title", "gait_spans"]
+__all__ = [
+    "plot_forces",
+    "plot_speeds",
+    "plot_positions",
+    "plot_force_diagram",
+    "plot_groups",
+    "plot_result",
+    "moving_groups",
+    "plot_route",
+    "PLOT_KINDS",
+    "seg_label",
+    "title",
+    "gait_spans",
+]
 
 #: Up to this many links a gait's forces share one panel; more get small multiples (a panel each).
 OVERLAY_MAX = 3
@@ -39,8 +52,16 @@ def _tow_line(a, tow, F):
     if lo - 0.3 * span <= tow <= hi + 0.3 * span:
         a.axhline(tow, color="0.5", ls=":", lw=1, label="tow")
     else:
-        a.text(0.99, 0.97 if tow > hi else 0.03, f"tow {tow:g} N (off scale)", transform=a.transAxes, ha="right",
-               va="top" if tow > hi else "bottom", fontsize=small_pt(), color="0.35")
+        a.text(
+            0.99,
+            0.97 if tow > hi else 0.03,
+            f"tow {tow:g} N (off scale)",
+            transform=a.transAxes,
+            ha="right",
+            va="top" if tow > hi else "bottom",
+            fontsize=small_pt(),
+            color="0.35",
+        )
 
 
 def _force_multiples(fig, result, own):
@@ -80,8 +101,9 @@ def _force_chart(a, fig, t, F, label, ylabel):
     """Series (n_t, n) as a colour chart, a row per link/segment, a diverging scale around 0."""
     te = np.concatenate([t[:1], (t[1:] + t[:-1]) / 2, t[-1:]]) if t.size > 1 else np.array([t[0], t[0] + 1])
     lim = max(float(np.max(np.abs(F))), 1e-9)
-    m = a.pcolormesh(te, np.arange(F.shape[1] + 1) - 0.5, F.T, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="flat",
-                     rasterized=True)
+    m = a.pcolormesh(
+        te, np.arange(F.shape[1] + 1) - 0.5, F.T, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="flat", rasterized=True
+    )
     a.invert_yaxis()
     a.set_ylabel(ylabel)
     fig.colorbar(m, ax=a, label=label, pad=0.01)
@@ -151,8 +173,16 @@ def _setpoint_chart(a, fig, result):
     te = np.concatenate([t[:1], (t[1:] + t[:-1]) / 2, t[-1:]]) if t.size > 1 else np.array([t[0], t[0] + 1])
     n = sp.shape[1]
     lo, hi = float(np.min(sp)), float(np.max(sp))
-    m = a.pcolormesh(te, np.arange(n + 1) - 0.5, sp.T, cmap="cividis", shading="flat",
-                     vmin=lo, vmax=hi if hi > lo else lo + 1e-3, rasterized=True)
+    m = a.pcolormesh(
+        te,
+        np.arange(n + 1) - 0.5,
+        sp.T,
+        cmap="cividis",
+        shading="flat",
+        vmin=lo,
+        vmax=hi if hi > lo else lo + 1e-3,
+        rasterized=True,
+    )
     a.set_yticks(range(n), [str(k) for k in range(n)])
     a.invert_yaxis()
     a.set_ylabel("segment\n(0 = leader)")
@@ -208,8 +238,13 @@ def plot_groups(result, groups=None, *, ax=None, fig=None):
     for a, grp in zip(axes[:, 0], groups):
         _legend_with_phase(a, grp, spans)
     axes[-1, 0].set_xlabel("time [s]")
-    title(fig, axes, f"{result.scenario.name}: ground speed of segments moving together "
-                      f"(X_t = {result.segments['xt'][0].mean():.2f})", own)
+    title(
+        fig,
+        axes,
+        f"{result.scenario.name}: ground speed of segments moving together "
+        f"(X_t = {result.segments['xt'][0].mean():.2f})",
+        own,
+    )
     return fig
 
 
@@ -227,8 +262,9 @@ def plot_speeds(result, *, ax=None, fig=None):
     n = len(groups)
     chart = _switching_setpoints(result)
     last = max(1.0, 0.25 * result.n_segments) if chart else 1.6
-    fig, axes = new_figure(ax, fig, n + 1, 1, figsize=(9, 1.9 * n + 2.6), sharex=True,
-                           gridspec_kw={"height_ratios": [2.2] * n + [last]})
+    fig, axes = new_figure(
+        ax, fig, n + 1, 1, figsize=(9, 1.9 * n + 2.6), sharex=True, gridspec_kw={"height_ratios": [2.2] * n + [last]}
+    )
     t, v = result.t, result.segments["v_mps"]
     for a, grp in zip(axes[:n, 0], groups):
         for k in grp:
@@ -280,24 +316,38 @@ def plot_positions(result, *, ax=None, fig=None):
         a1.plot(t, x[:, k], label=seg_label(k), **series_style(k, t.size))
     phase_keys = shade_phases([a1], gait_spans(result), legend_ax=a1)
     # mode switches (supervisor mode): a marked line at the switch, the leader's position there
-    sw_style = {"switch_to_inching": ("#D55E00", "v", "to inching"), "switch_to_rolling": ("#009E73", "^", "to rolling")}
+    sw_style = {
+        "switch_to_inching": ("#D55E00", "v", "to inching"),
+        "switch_to_rolling": ("#009E73", "^", "to rolling"),
+    }
     for ev in result.events:
         if ev.get("kind") in sw_style:
             c, mk, lab = sw_style[ev["kind"]]
             a1.axvline(ev["t_s"], color=c, lw=1.0, ls="--", zorder=1)
             a1.plot([ev["t_s"]], [ev["x_m"]], mk, color=c, ms=6, zorder=3)
-            right = ev["t_s"] > 0.6 * t[-1]          # label on the inner side of the line, inside the axes
-            a1.annotate(lab, (ev["t_s"], ev["x_m"]), textcoords="offset points", xytext=(-4 if right else 4, 6),
-                        ha="right" if right else "left", fontsize=small_pt(), color=c)
+            right = ev["t_s"] > 0.6 * t[-1]  # label on the inner side of the line, inside the axes
+            a1.annotate(
+                lab,
+                (ev["t_s"], ev["x_m"]),
+                textcoords="offset points",
+                xytext=(-4 if right else 4, 6),
+                ha="right" if right else "left",
+                fontsize=small_pt(),
+                color=c,
+            )
     a1.set_xlabel("time [s]")
     handles = a1.get_legend_handles_labels()[0] + phase_keys
-    if varies and own and fig.get_figwidth() < 5.0:     # narrow, with the side panel: the legend over both
+    if varies and own and fig.get_figwidth() < 5.0:  # narrow, with the side panel: the legend over both
         fig.legend(handles=handles, loc="outside lower center", ncol=3, frameon=False, columnspacing=1.0)
     else:
         legend_outside(a1, handles=handles)
     a1.grid(alpha=0.3)
-    title(fig, axes, f"{result.scenario.name}: position-time diagram"
-                      + ("" if varies else f" (uniform terrain, X_t = {X[0]:g})"), own)
+    title(
+        fig,
+        axes,
+        f"{result.scenario.name}: position-time diagram" + ("" if varies else f" (uniform terrain, X_t = {X[0]:g})"),
+        own,
+    )
     return fig
 
 
@@ -330,8 +380,14 @@ def plot_route(result, *, ax=None, fig=None):
     return fig
 
 
-PLOT_KINDS = {"forces": plot_forces, "speeds": plot_speeds, "positions": plot_positions,
-              "force_diagram": plot_force_diagram, "groups": plot_groups, "route": plot_route}
+PLOT_KINDS = {
+    "forces": plot_forces,
+    "speeds": plot_speeds,
+    "positions": plot_positions,
+    "force_diagram": plot_force_diagram,
+    "groups": plot_groups,
+    "route": plot_route,
+}
 
 
 def plot_result(result, out_dir, fmt: str = "png", size=None) -> list:

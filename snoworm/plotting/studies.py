@@ -1,6 +1,7 @@
 """Figures of the studies: field data against the model (paper Table 2), terrain curves (paper
 Figure 3), sweeps (metrics, heat maps) and the mobility map.  Drawn from the tables and dicts
 the studies return; each function draws on new or given axes and returns the Figure."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -21,8 +22,14 @@ from .style import (
     wrap_title,
 )
 
-__all__ = ["plot_table2", "plot_terrain_curves", "plot_sweep", "plot_sweep_heatmap", "plot_mobility_map",
-           "plot_gradeability"]
+__all__ = [
+    "plot_table2",
+    "plot_terrain_curves",
+    "plot_sweep",
+    "plot_sweep_heatmap",
+    "plot_mobility_map",
+    "plot_gradeability",
+]
 
 
 @figure_function
@@ -30,7 +37,7 @@ def plot_table2(rows, *, ax=None, fig=None):
     """Measured against modelled slip and torque per field case (paper Table 2); two panels."""
     lab = [str(r["case"]) for r in rows]
     x = np.arange(len(rows))
-    narrow = ax is None and target_width() < 5.0          # a column: the two panels one above the other
+    narrow = ax is None and target_width() < 5.0  # a column: the two panels one above the other
     fig, axes = new_figure(ax, fig, *((2, 1) if narrow else (1, 2)), figsize=(3.5, 5.0) if narrow else (10, 4.2))
     a1, a2 = axes.flat
     w = 0.38
@@ -46,8 +53,13 @@ def plot_table2(rows, *, ax=None, fig=None):
         a.set_xlabel("case")
         a.grid(alpha=0.3, axis="y")
         a.legend()
-    fig.suptitle(wrap_title("FrostyBoy field cases (paper Table 2): measured vs steady-state model", fig.get_figwidth(),
-                            "figure.titlesize"))
+    fig.suptitle(
+        wrap_title(
+            "FrostyBoy field cases (paper Table 2): measured vs steady-state model",
+            fig.get_figwidth(),
+            "figure.titlesize",
+        )
+    )
     return fig
 
 
@@ -67,15 +79,25 @@ def plot_terrain_curves(curves, title=None, *, ax=None, fig=None):
         zc = curves.zero_crossing_slip[m]
         if np.isfinite(zc):
             a.plot([100 * zc], [0.0], "o", color=col, ms=7, mfc="none")
-            a.annotate(f"{100 * zc:.2f} %", (100 * zc, 0.0), textcoords="offset points", xytext=(6, -14),
-                       color=col, fontsize=small_pt())
+            a.annotate(
+                f"{100 * zc:.2f} %",
+                (100 * zc, 0.0),
+                textcoords="offset points",
+                xytext=(6, -14),
+                color=col,
+                fontsize=small_pt(),
+            )
     a.axhline(0.0, color="0.4", lw=0.8)
     a.set_xlabel("slip [%]")
     a.set_ylabel("longitudinal force per wheel [N]")
-    a.set_title(wrap_title(title or f"Terrain forces per wheel (F_n = {curves.normal_load_N:.1f} N), forward motion",
-                           fig.get_figwidth()))
+    a.set_title(
+        wrap_title(
+            title or f"Terrain forces per wheel (F_n = {curves.normal_load_N:.1f} N), forward motion",
+            fig.get_figwidth(),
+        )
+    )
     a.grid(alpha=0.3)
-    wide = fig.get_figwidth() >= 5.0                # wide: one column beside; narrow: a column per X_t above
+    wide = fig.get_figwidth() >= 5.0  # wide: one column beside; narrow: a column per X_t above
     legend_outside(a, ncol=(1 if len(curves.xt) < 4 else 2) if wide else min(len(curves.xt), 3))
     return fig
 
@@ -114,7 +136,7 @@ def plot_sweep(x, metrics, xlabel, immobilised=None, ok=None, tick_labels=None, 
         a.plot(x[order], y[order], "o-", ms=4, color=COLOURS[0])
         pos = y[np.isfinite(y)]
         if pos.size and pos.min() > 0 and pos.max() > 100 * pos.min():
-            a.set_yscale("log")     # e.g. energy per metre of a nearly immobilised vehicle
+            a.set_yscale("log")  # e.g. energy per metre of a nearly immobilised vehicle
         if immobilised is not None:
             m = np.array([bool(v) for v in immobilised])
             if m.any():
@@ -129,15 +151,20 @@ def plot_sweep(x, metrics, xlabel, immobilised=None, ok=None, tick_labels=None, 
     axs[-1, 0].set_xlabel(quantity_label(xlabel))
     if tick_labels is not None:
         axs[-1, 0].set_xticks(x, tick_labels)
-    axs[0, 0].set_title(wrap_title(f"sweep over the {quantity_label(xlabel)}"
-                                   + (" (dotted lines: failed cases)" if ok is not None and not all(ok) else ""),
-                                   fig.get_figwidth()))
+    axs[0, 0].set_title(
+        wrap_title(
+            f"sweep over the {quantity_label(xlabel)}"
+            + (" (dotted lines: failed cases)" if ok is not None and not all(ok) else ""),
+            fig.get_figwidth(),
+        )
+    )
     return fig
 
 
 @figure_function
-def plot_sweep_heatmap(x_labels, y_labels, values, xlabel, ylabel, label, *, immobilised=None, failed=None,
-                       ax=None, fig=None):
+def plot_sweep_heatmap(
+    x_labels, y_labels, values, xlabel, ylabel, label, *, immobilised=None, failed=None, ax=None, fig=None
+):
     """Heat map of one metric over a two-axis sweep (``heatmap.png``).
 
     Parameters
@@ -210,18 +237,25 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     for r in mmap["rows"]:
         Z[list(tows).index(r["tow_N"]), list(xts).index(r["xt"])] = code[r["region"]]
     colours = ["#d9d9d9", COLOURS[1], COLOURS[5]]
-    narrow = ax is None and target_width() < 5.0          # a column: the two panels one above the other
+    narrow = ax is None and target_width() < 5.0  # a column: the two panels one above the other
     fig, axes = new_figure(ax, fig, *((2, 1) if narrow else (1, 2)), figsize=(3.5, 5.6) if narrow else (13, 4.8))
     a1, a2 = axes.flat
     xe, ye = _cell_edges(xts), _cell_edges(tows)
-    a1.pcolormesh(xe, ye, Z, cmap=ListedColormap(colours[:len(REGIONS)]), vmin=-0.5, vmax=len(REGIONS) - 0.5,
-                  edgecolors="white", lw=0.5)
+    a1.pcolormesh(
+        xe,
+        ye,
+        Z,
+        cmap=ListedColormap(colours[: len(REGIONS)]),
+        vmin=-0.5,
+        vmax=len(REGIONS) - 0.5,
+        edgecolors="white",
+        lw=0.5,
+    )
     a1.set_xlim(xe[0], xe[-1])
     a1.set_ylim(ye[0], ye[-1])
     lim = [(f, mmap["rolling_limit_xt"][f]) for f in mmap["tows"] if mmap["rolling_limit_xt"][f] is not None]
     if lim:
-        a1.plot([x for _, x in lim], [f for f, _ in lim], "k--", lw=1.2, marker="o", ms=3,
-                label="steady rolling limit")
+        a1.plot([x for _, x in lim], [f for f, _ in lim], "k--", lw=1.2, marker="o", ms=3, label="steady rolling limit")
     for r in mmap["rows"]:
         if r["inching_cheaper"]:
             a1.plot(r["xt"], r["tow_N"], "*", color=COLOURS[0], ms=9, clip_on=False)
@@ -251,16 +285,23 @@ def _energy_panel(a2, mmap, panel_width):
         c = COLOURS[j % len(COLOURS)]
         a2.plot(xr, er, ls="-", marker=MARKERS[j % len(MARKERS)], color=c, ms=4, label=f"rolling, tow {f:g} N")
         if xi:
-            a2.plot(xi, ei, ls=LINESTYLES[1], marker=MARKERS[j % len(MARKERS)], mfc="none", color=c, ms=5,
-                    label=f"inching, tow {f:g} N")
+            a2.plot(
+                xi,
+                ei,
+                ls=LINESTYLES[1],
+                marker=MARKERS[j % len(MARKERS)],
+                mfc="none",
+                color=c,
+                ms=5,
+                label=f"inching, tow {f:g} N",
+            )
     a2.set_yscale("log")
     a2.set_xlabel("terrain coefficient X_t")
     a2.set_ylabel("electrical energy per metre [J/m]")
     a2.grid(alpha=0.3, which="both")
     if a2.get_legend_handles_labels()[0]:
         legend_outside(a2)
-    a2.set_title(wrap_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)",
-                            panel_width))
+    a2.set_title(wrap_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)", panel_width))
 
 
 _REGION_COLOURS = ["#d9d9d9", COLOURS[1], COLOURS[5]]
@@ -280,8 +321,16 @@ def _plot_grade_map(mmap, *, ax=None, fig=None):
         for r in mmap["rows"]:
             if r["tow_N"] == f:
                 Z[list(grades).index(r["grade_deg"]), list(xts).index(r["xt"])] = code[r["region"]]
-        a.pcolormesh(xe, ye, Z, cmap=ListedColormap(_REGION_COLOURS[:len(REGIONS)]), vmin=-0.5,
-                     vmax=len(REGIONS) - 0.5, edgecolors="white", lw=0.5)
+        a.pcolormesh(
+            xe,
+            ye,
+            Z,
+            cmap=ListedColormap(_REGION_COLOURS[: len(REGIONS)]),
+            vmin=-0.5,
+            vmax=len(REGIONS) - 0.5,
+            edgecolors="white",
+            lw=0.5,
+        )
         mg = mmap["rolling_max_grade_deg"][f]
         pts = [(x, mg[x]) for x in mmap["xts"] if mg[x] is not None]
         if pts:
@@ -303,7 +352,7 @@ def plot_gradeability(mmap, *, ax=None, fig=None):
     limit; each inchworm gait: the steepest grid grade it climbed), and the electrical energy per
     metre climbed at that grade (``mmap["gradeability"]``, :func:`snoworm.gradeability.gradeability`).
     A colour per gait, a line style per tow.  ``ax``: two axes.  Returns the Figure."""
-    narrow = ax is None and target_width() < 5.0          # a column: the two panels one above the other
+    narrow = ax is None and target_width() < 5.0  # a column: the two panels one above the other
     fig, axes = new_figure(ax, fig, *((2, 1) if narrow else (1, 2)), figsize=(3.5, 5.6) if narrow else (13, 4.8))
     a1, a2 = axes.flat
     for j, f in enumerate(mmap["tows"]):
@@ -315,8 +364,16 @@ def plot_gradeability(mmap, *, ax=None, fig=None):
             return [(x, v) for x, v in zip(xs, vs) if v is not None]
 
         curves = [("rolling (steady limit)", "rolling", g["rolling_max_grade_deg"], g["rolling_J_per_m_climbed"], {})]
-        curves += [(f"{'inching' if lab == 'inching' else lab} (grid)", "inching" if lab == "inching" else lab,
-                    c["grid_deg"], c["J_per_m_climbed"], {"mfc": "none"}) for lab, c in g["inching"].items()]
+        curves += [
+            (
+                f"{'inching' if lab == 'inching' else lab} (grid)",
+                "inching" if lab == "inching" else lab,
+                c["grid_deg"],
+                c["J_per_m_climbed"],
+                {"mfc": "none"},
+            )
+            for lab, c in g["inching"].items()
+        ]
         for k, (lab1, lab2, grade, energy, kw) in enumerate(curves):
             c, mk = COLOURS[k % len(COLOURS)], MARKERS[k % len(MARKERS)]
             for a, vals, lab in ((a1, grade, lab1), (a2, energy, lab2)):
@@ -327,8 +384,12 @@ def plot_gradeability(mmap, *, ax=None, fig=None):
     a1.set_ylim(min(grades) - 1, max(grades) + 1)
     a1.set_xlabel("terrain coefficient X_t")
     a1.set_ylabel("steepest grade climbed [deg]")
-    a1.set_title(wrap_title(f"{mmap['scenario']}: gradeability (grid {min(grades):g} to {max(grades):g} deg)",
-                            fig.get_figwidth() / (2 - narrow)))
+    a1.set_title(
+        wrap_title(
+            f"{mmap['scenario']}: gradeability (grid {min(grades):g} to {max(grades):g} deg)",
+            fig.get_figwidth() / (2 - narrow),
+        )
+    )
     a2.set_xlabel("terrain coefficient X_t")
     a2.set_ylabel("electrical energy per metre climbed [J/m]")
     a2.set_title(wrap_title("at the steepest grid grade climbed", fig.get_figwidth() / (2 - narrow)))

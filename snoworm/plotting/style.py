@@ -16,6 +16,7 @@ Every plotting function draws inside snoworm's own style (:func:`figure_style`, 
 42, no Type 3 fonts) and text kept as ``<text>`` in SVG (``svg.fonttype`` ``none``); :func:`save`
 applies the same font settings while writing.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -34,9 +35,30 @@ from matplotlib.figure import Figure
 from ..config.schema import split_unit
 from ..infra.folders import atomic_path
 
-__all__ = ["COLOURS", "LINESTYLES", "MARKERS", "PLOT_FORMATS", "DPI", "FIGURE_SIZES", "series_style", "new_figure",
-           "save", "quantity_label", "force_text", "legend_outside", "figure_style", "headless", "figure_function",
-           "parse_size", "write_figure", "NotebookFigure", "blank_figure", "small_pt", "wrap_title", "target_width"]
+__all__ = [
+    "COLOURS",
+    "LINESTYLES",
+    "MARKERS",
+    "PLOT_FORMATS",
+    "DPI",
+    "FIGURE_SIZES",
+    "series_style",
+    "new_figure",
+    "save",
+    "quantity_label",
+    "force_text",
+    "legend_outside",
+    "figure_style",
+    "headless",
+    "figure_function",
+    "parse_size",
+    "write_figure",
+    "NotebookFigure",
+    "blank_figure",
+    "small_pt",
+    "wrap_title",
+    "target_width",
+]
 
 #: Okabe & Ito (2008) colour-blind-safe palette (yellow last: it is faint on white).
 COLOURS = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#000000", "#F0E442")
@@ -97,12 +119,28 @@ def target_width() -> float:
 def style_rc(size=None) -> dict:
     """The rcParams of snoworm's figures at ``size`` (see :func:`parse_size`)."""
     big, small = _FONT_PT["column" if _width(size) < 5.0 else "wide"]
-    return {**FONT_RC, "font.size": big, "axes.titlesize": big, "axes.labelsize": big, "figure.titlesize": big + 1,
-            "xtick.labelsize": small, "ytick.labelsize": small, "legend.fontsize": small,
-            "legend.title_fontsize": small, "lines.linewidth": 1.2 if big < 9 else 1.4, "lines.markersize": 3.5,
-            "axes.linewidth": 0.6, "grid.linewidth": 0.5, "xtick.major.width": 0.6, "ytick.major.width": 0.6,
-            "figure.constrained_layout.h_pad": 0.03, "figure.constrained_layout.w_pad": 0.03,
-            "legend.borderaxespad": 0.3, "legend.handlelength": 1.8, "legend.columnspacing": 1.0}
+    return {
+        **FONT_RC,
+        "font.size": big,
+        "axes.titlesize": big,
+        "axes.labelsize": big,
+        "figure.titlesize": big + 1,
+        "xtick.labelsize": small,
+        "ytick.labelsize": small,
+        "legend.fontsize": small,
+        "legend.title_fontsize": small,
+        "lines.linewidth": 1.2 if big < 9 else 1.4,
+        "lines.markersize": 3.5,
+        "axes.linewidth": 0.6,
+        "grid.linewidth": 0.5,
+        "xtick.major.width": 0.6,
+        "ytick.major.width": 0.6,
+        "figure.constrained_layout.h_pad": 0.03,
+        "figure.constrained_layout.w_pad": 0.03,
+        "legend.borderaxespad": 0.3,
+        "legend.handlelength": 1.8,
+        "legend.columnspacing": 1.0,
+    }
 
 
 def figure_style(size=None):
@@ -126,9 +164,10 @@ def headless():
 def figure_function(fn):
     """Decorator of the plotting functions: a ``size=`` keyword (see :func:`parse_size`) and
     drawing inside :func:`figure_style` at that size."""
+
     @functools.wraps(fn)
     def wrapper(*args, size=None, **kwargs):
-        parse_size(size)                      # a bad size fails before any drawing
+        parse_size(size)  # a bad size fails before any drawing
         token = _SIZE.set(size)
         try:
             with figure_style(size):
@@ -137,6 +176,7 @@ def figure_function(fn):
                 return fig
         finally:
             _SIZE.reset(token)
+
     return wrapper
 
 
@@ -168,24 +208,28 @@ class NotebookFigure(Figure):
 
     def _shown_by_its_manager(self) -> bool:
         c = self.canvas
-        return c.manager is not None and (getattr(c, "required_interactive_framework", None) is not None
-                                          or any(k in type(c).__module__ for k in ("ipympl", "nbagg", "webagg")))
+        return c.manager is not None and (
+            getattr(c, "required_interactive_framework", None) is not None
+            or any(k in type(c).__module__ for k in ("ipympl", "nbagg", "webagg"))
+        )
 
     def _ipython_display_(self):
         if self._shown_by_its_manager():
             return
         from IPython.display import display  # lazy: only IPython calls this method, so it is there
+
         buf = io.BytesIO()
         self.savefig(buf, format="png", bbox_inches="tight", facecolor="white")
         display({"image/png": buf.getvalue(), "text/plain": repr(self)}, raw=True)
         if self.canvas.manager is not None:
-            Gcf.destroy_fig(self)     # shown: the inline backend would show it again after the cell
+            Gcf.destroy_fig(self)  # shown: the inline backend would show it again after the cell
 
 
 def _create(figsize):
     if _HEADLESS.get():
         return NotebookFigure(figsize=figsize, layout="constrained")
     import matplotlib.pyplot as plt  # lazy: only figures for notebooks and scripts need pyplot's figure manager
+
     return plt.figure(figsize=figsize, layout="constrained", FigureClass=NotebookFigure)
 
 
@@ -196,9 +240,13 @@ def series_style(k: int, n_points: int = 0) -> dict:
     markers of coinciding traces do not hide one another.
     """
     every = max(n_points // 12, 1)
-    return {"color": COLOURS[k % len(COLOURS)], "ls": LINESTYLES[k % len(LINESTYLES)],
-            "marker": MARKERS[k % len(MARKERS)], "ms": 4,
-            "markevery": (int((k * every) // 7) % every, every) if n_points else None}
+    return {
+        "color": COLOURS[k % len(COLOURS)],
+        "ls": LINESTYLES[k % len(LINESTYLES)],
+        "marker": MARKERS[k % len(MARKERS)],
+        "ms": 4,
+        "markevery": (int((k * every) // 7) % every, every) if n_points else None,
+    }
 
 
 def new_figure(ax=None, fig=None, nrows=1, ncols=1, figsize=(8, 5), **subplot_kw):
@@ -211,8 +259,9 @@ def new_figure(ax=None, fig=None, nrows=1, ncols=1, figsize=(8, 5), **subplot_kw
     if ax is not None:
         axes = np.atleast_1d(np.asarray(ax, dtype=object)).reshape(-1)
         if axes.size != nrows * ncols:
-            raise ValueError(f"this plot draws {nrows * ncols} panel(s): pass as many axes (got {axes.size}), "
-                             "or pass fig= instead")
+            raise ValueError(
+                f"this plot draws {nrows * ncols} panel(s): pass as many axes (got {axes.size}), or pass fig= instead"
+            )
         return axes[0].get_figure(), axes.reshape(nrows, ncols)
     if fig is None:
         fig = _create(figure_size(figsize, nrows))
@@ -256,12 +305,18 @@ def write_figure(path, draw, *args, fmt=None, size=None, **kwargs):
 
 #: Words and units of the scenario keys and quantities the figures show.
 _LABELS = {
-    "terrain.xt": "terrain coefficient X_t", "xt": "terrain coefficient X_t",
-    "tow.force_N": "tow force [N]", "tow_N": "tow force [N]",
+    "terrain.xt": "terrain coefficient X_t",
+    "xt": "terrain coefficient X_t",
+    "tow.force_N": "tow force [N]",
+    "tow_N": "tow force [N]",
     "vehicle.segments": "number of segments",
-    "mean_speed_mps": "mean speed [m/s]", "mean_slip": "mean slip (2nd half)", "max_slip": "max slip",
-    "max_link_force_N": "max |link force| [N]", "energy_per_m_J": "energy per metre [J/m]",
-    "late_speed_mps": "late speed [m/s]", "distance_m": "distance [m]",
+    "mean_speed_mps": "mean speed [m/s]",
+    "mean_slip": "mean slip (2nd half)",
+    "max_slip": "max slip",
+    "max_link_force_N": "max |link force| [N]",
+    "energy_per_m_J": "energy per metre [J/m]",
+    "late_speed_mps": "late speed [m/s]",
+    "distance_m": "distance [m]",
 }
 
 
@@ -302,9 +357,19 @@ def legend_outside(ax, **kw):
         labels = [h.get_label() for h in handles]
     n = len(handles)
     ncol = kw.pop("ncol", None) or (n if n <= 3 else (3 if n % 3 == 0 or n > 8 else 2))
-    leg = ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.02), borderaxespad=0.0,
-                    ncol=min(ncol, max(n, 1)), frameon=False, columnspacing=1.0, handlelength=1.6, **kw)
-    leg.set_gid(_ABOVE)       # a title of these axes becomes the legend's title (see figure_function)
+    leg = ax.legend(
+        handles,
+        labels,
+        loc="lower left",
+        bbox_to_anchor=(0.0, 1.02),
+        borderaxespad=0.0,
+        ncol=min(ncol, max(n, 1)),
+        frameon=False,
+        columnspacing=1.0,
+        handlelength=1.6,
+        **kw,
+    )
+    leg.set_gid(_ABOVE)  # a title of these axes becomes the legend's title (see figure_function)
     return leg
 
 
@@ -318,17 +383,22 @@ def _titles_into_legends(fig):
     for a in fig.axes:
         leg = a.get_legend()
         if leg is not None and leg.get_gid() == _ABOVE and a.get_title():
-            width_in = 0.8 * a.get_position().width * fig.get_figwidth()    # the legend starts at the axes' left
-            leg.set_title(wrap_title(" ".join(a.get_title().split()), width_in),
-                          prop={"size": matplotlib.rcParams["axes.titlesize"]})
+            width_in = 0.8 * a.get_position().width * fig.get_figwidth()  # the legend starts at the axes' left
+            leg.set_title(
+                wrap_title(" ".join(a.get_title().split()), width_in),
+                prop={"size": matplotlib.rcParams["axes.titlesize"]},
+            )
             leg._legend_box.align = "left"
             a.set_title("")
 
 
 def small_pt() -> float:
     """The size [pt] of small text (annotations, ticks, legends) in the current style (>= 7 pt)."""
-    return float(matplotlib.rcParams["xtick.labelsize"]) if isinstance(
-        matplotlib.rcParams["xtick.labelsize"], (int, float)) else 7.0
+    return (
+        float(matplotlib.rcParams["xtick.labelsize"])
+        if isinstance(matplotlib.rcParams["xtick.labelsize"], (int, float))
+        else 7.0
+    )
 
 
 def wrap_title(text: str, width_in: float, size_key: str = "axes.titlesize") -> str:

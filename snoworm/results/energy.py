@@ -24,6 +24,7 @@ route as driven): ``E / d`` and ``CoT = E / (m_total g d)`` (dimensionless).  On
 segment's wheelbase-mean elevation), and the energy per metre climbed is ``E / dz`` (None unless
 the chain climbed).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -61,11 +62,19 @@ def energy_along(result) -> dict:
     t = np.asarray(result.t, float)
     motor = _cumtrapz(result.segments["motor_electrical_power_W"].sum(1), t)
     Pj = result.links["joint_power_W"]
-    joint = (_cumtrapz(np.maximum(Pj, 0.0).sum(1), t) / result.scenario.vehicle.links.joint_efficiency
-             if Pj.shape[1] else np.zeros_like(t))
+    joint = (
+        _cumtrapz(np.maximum(Pj, 0.0).sum(1), t) / result.scenario.vehicle.links.joint_efficiency
+        if Pj.shape[1]
+        else np.zeros_like(t)
+    )
     x = result.segments["x_m"]
-    return {"t_s": t, "distance_m": (x - x[:1]).mean(1) if t.size else t, "motor_electrical_J": motor,
-            "joint_electrical_J": joint, "total_electrical_J": motor + joint}
+    return {
+        "t_s": t,
+        "distance_m": (x - x[:1]).mean(1) if t.size else t,
+        "motor_electrical_J": motor,
+        "joint_electrical_J": joint,
+        "total_electrical_J": motor + joint,
+    }
 
 
 def energy_metrics(result) -> dict:
@@ -106,14 +115,20 @@ def energy_metrics(result) -> dict:
     z = result.segments["elevation_m"]
     rise = float(np.mean(z[-1] - z[0])) if t.size else 0.0
     return {
-        "motor_electrical_J": motor_el.tolist(), "motor_mechanical_J": motor_mech.tolist(),
+        "motor_electrical_J": motor_el.tolist(),
+        "motor_mechanical_J": motor_mech.tolist(),
         "motor_braking_J": braking.tolist(),
-        "joint_mechanical_J": joint_mech.tolist(), "joint_electrical_J": joint_el.tolist(),
-        "motor_electrical_total_J": float(motor_el.sum()), "joint_electrical_total_J": float(joint_el.sum()),
-        "total_electrical_J": total, "distance_m": dist, "mass_total_kg": mass,
+        "joint_mechanical_J": joint_mech.tolist(),
+        "joint_electrical_J": joint_el.tolist(),
+        "motor_electrical_total_J": float(motor_el.sum()),
+        "joint_electrical_total_J": float(joint_el.sum()),
+        "total_electrical_J": total,
+        "distance_m": dist,
+        "mass_total_kg": mass,
         "energy_per_metre_J_per_m": total / dist if moved else None,
         "cost_of_transport": total / (mass * g * dist) if moved else None,
-        "elevation_gain_m": rise, "energy_per_metre_climbed_J_per_m": total / rise if rise > 1e-6 else None,
+        "elevation_gain_m": rise,
+        "energy_per_metre_climbed_J_per_m": total / rise if rise > 1e-6 else None,
     }
 
 
@@ -139,7 +154,7 @@ def energy_balance(result) -> dict:
     k = sc.vehicle.links.stiffness_N_per_m
     v = result.segments["v_mps"]
     w = result.segments["wheel_speed_mps"] / R
-    spring = result.links["spring_force_N"]     # the link spring (in series with damper and actuator)
+    spring = result.links["spring_force_N"]  # the link spring (in series with damper and actuator)
     kinetic = 0.5 * (m * v**2).sum(1) + 0.5 * (J * w**2).sum(1)
     spring_E = 0.5 * (spring**2).sum(1) / k
     terms = {
@@ -150,12 +165,25 @@ def energy_balance(result) -> dict:
         "tow_J": float(np.trapezoid(sc.tow.force_N * v[:, -1], t)),
         "kinetic_change_J": float(kinetic[-1] - kinetic[0]),
         "spring_change_J": float(spring_E[-1] - spring_E[0]),
-        "potential_change_J": float(np.sum(m * np.array([s.gravity_mps2 for s in segs])
-                                           * (result.segments["elevation_m"][-1] - result.segments["elevation_m"][0]))),
+        "potential_change_J": float(
+            np.sum(
+                m
+                * np.array([s.gravity_mps2 for s in segs])
+                * (result.segments["elevation_m"][-1] - result.segments["elevation_m"][0])
+            )
+        ),
     }
-    terms["residual_J"] = (terms["motor_J"] + terms["joint_J"] - terms["terrain_J"] - terms["damper_J"]
-                           - terms["tow_J"] - terms["kinetic_change_J"] - terms["spring_change_J"]
-                           - terms["potential_change_J"])
-    terms["throughput_J"] = float(np.trapezoid(np.abs(result.segments["motor_power_W"]).sum(1)
-                                               + np.abs(result.links["joint_power_W"]).sum(1), t))
+    terms["residual_J"] = (
+        terms["motor_J"]
+        + terms["joint_J"]
+        - terms["terrain_J"]
+        - terms["damper_J"]
+        - terms["tow_J"]
+        - terms["kinetic_change_J"]
+        - terms["spring_change_J"]
+        - terms["potential_change_J"]
+    )
+    terms["throughput_J"] = float(
+        np.trapezoid(np.abs(result.segments["motor_power_W"]).sum(1) + np.abs(result.links["joint_power_W"]).sum(1), t)
+    )
     return terms

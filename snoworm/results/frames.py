@@ -11,6 +11,7 @@ tables of the CSV files: one row per time and segment (or link), the columns ``t
 ``segment`` (or ``link``) and one column per quantity, named with its unit suffix (``slip``
 and ``xt`` are dimensionless).
 """
+
 from __future__ import annotations
 
 import re
@@ -21,8 +22,17 @@ import numpy as np
 from .._version import __version__
 from ..config.scenario import dump_scenario
 
-__all__ = ["versions", "to_pandas", "frames", "to_xarray", "units_of", "require_pandas", "require_xarray",
-           "short_repr", "long_name_of"]
+__all__ = [
+    "versions",
+    "to_pandas",
+    "frames",
+    "to_xarray",
+    "units_of",
+    "require_pandas",
+    "require_xarray",
+    "short_repr",
+    "long_name_of",
+]
 
 _EXTRA = "pip install 'snoworm[data]'"
 
@@ -98,9 +108,11 @@ def short_repr(result) -> str:
     status = st.get("status", "ok")
     name = str(result.scenario.name)[:60]
     mode = str(getattr(result.scenario.mode, "type", "?"))[:40]
-    return (f"<snoworm Result {name!r}: {result.segments['x_m'].shape[1]} segments, mode {mode}, {dur:g} s "
-            f"({t.size} samples), distance {dist:.3f} m; solver {status}{': ' + solver if solver else ''}; "
-            f"{len(result.events)} events.  Detail: .summary(), .segments, .links, .stats, .scenario>")
+    return (
+        f"<snoworm Result {name!r}: {result.segments['x_m'].shape[1]} segments, mode {mode}, {dur:g} s "
+        f"({t.size} samples), distance {dist:.3f} m; solver {status}{': ' + solver if solver else ''}; "
+        f"{len(result.events)} events.  Detail: .summary(), .segments, .links, .stats, .scenario>"
+    )
 
 
 def to_pandas(result):
@@ -119,13 +131,14 @@ def to_pandas(result):
             v = np.asarray(v, float)
             blocks.append(v)
             quantities.append(q)
-            for j in range(v.shape[1]):     # levels in the documented order: codes sorted, fast lookups
+            for j in range(v.shape[1]):  # levels in the documented order: codes sorted, fast lookups
                 for level, code in zip(codes, (kinds.index(kind), len(quantities) - 1, j)):
                     level.append(code)
     data = np.concatenate(blocks, axis=1) if blocks else np.zeros((len(result.t), 0))
     width = max((b.shape[1] for b in blocks), default=0)
-    cols = pd.MultiIndex(levels=[kinds, quantities, list(range(width))], codes=list(codes),
-                         names=["kind", "quantity", "index"])
+    cols = pd.MultiIndex(
+        levels=[kinds, quantities, list(range(width))], codes=list(codes), names=["kind", "quantity", "index"]
+    )
     df = pd.DataFrame(data, index=pd.Index(np.asarray(result.t, float), name="t_s"), columns=cols)
     df.attrs["units"] = {"segment": units_of(seg_cols), "link": units_of(link_cols)}
     df.attrs["scenario"] = result.scenario.name
@@ -144,8 +157,10 @@ def frames(result) -> dict:
     seg_cols, link_cols = _columns(result)
     seg_units, link_units = units_of(seg_cols), units_of(link_cols)
     frames = {}
-    for name, series, idx, units in (("segments", result.segments, "segment", seg_units),
-                                     ("links", result.links, "link", link_units)):
+    for name, series, idx, units in (
+        ("segments", result.segments, "segment", seg_units),
+        ("links", result.links, "link", link_units),
+    ):
         df = pd.DataFrame(_long(np.asarray(result.t, float), series, idx))
         df.attrs["units"] = {"t_s": "s", idx: "1", **units}
         df.attrs["scenario"] = result.scenario.name
@@ -164,17 +179,28 @@ def to_xarray(result):
     xr = require_xarray()
     seg_cols, link_cols = _columns(result)
     data = {}
-    for cols, series, dims in ((seg_cols, result.segments, ("time", "segment")),
-                               (link_cols, result.links, ("time", "link"))):
+    for cols, series, dims in (
+        (seg_cols, result.segments, ("time", "segment")),
+        (link_cols, result.links, ("time", "link")),
+    ):
         units = units_of(cols)
         for k, v in series.items():
             data[k if k not in data else f"link_{k}"] = xr.Variable(
-                dims, np.asarray(v, float), {"units": units[k], "long_name": long_name_of(cols[k])})
+                dims, np.asarray(v, float), {"units": units[k], "long_name": long_name_of(cols[k])}
+            )
     n = result.segments["x_m"].shape[1]
-    coords = {"time": ("time", np.asarray(result.t, float), {"units": "s", "long_name": "output time"}),
-              "segment": ("segment", np.arange(n), {"units": "1", "long_name": "segment index, 0 = leader"}),
-              "link": ("link", np.arange(max(n - 1, 0)),
-                       {"units": "1", "long_name": "link index, link j joins segments j and j+1"})}
-    attrs = {"scenario": result.scenario.name, "scenario_yaml": dump_scenario(result.scenario),
-             **{f"version_{k}": v for k, v in versions().items()}}
+    coords = {
+        "time": ("time", np.asarray(result.t, float), {"units": "s", "long_name": "output time"}),
+        "segment": ("segment", np.arange(n), {"units": "1", "long_name": "segment index, 0 = leader"}),
+        "link": (
+            "link",
+            np.arange(max(n - 1, 0)),
+            {"units": "1", "long_name": "link index, link j joins segments j and j+1"},
+        ),
+    }
+    attrs = {
+        "scenario": result.scenario.name,
+        "scenario_yaml": dump_scenario(result.scenario),
+        **{f"version_{k}": v for k, v in versions().items()},
+    }
     return xr.Dataset(data, coords=coords, attrs=attrs)

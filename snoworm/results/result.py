@@ -3,6 +3,7 @@
 Every output quantity is recomputed from the solved states after the solve, in one vectorised
 pass of the same force kernel the right-hand side uses (:meth:`ChainModel.evaluate`).
 """
+
 from __future__ import annotations
 
 import io
@@ -40,7 +41,7 @@ SEGMENT_COLUMNS = {
     "motor_power_W": "mechanical motor power at the wheels, summed over the wheels [W]",
     "terrain_dissipation_W": "power dissipated at the wheel-terrain contacts of the segment [W]",
     "motor_electrical_power_W": "electrical power drawn by the segment's motors: motoring power / drivetrain "
-                                "efficiency, braking not recovered [W]",
+    "efficiency, braking not recovered [W]",
     "grade_deg": "grade under the segment (the chord between its axles), positive uphill [deg]",
     "elevation_m": "elevation of the segment, the mean over its wheelbase (its potential-energy height) [m]",
     "gravity_N": "gravity along the track on the segment, -m g sin(grade), forward positive [N]",
@@ -104,7 +105,7 @@ class Result:
         t = np.concatenate(ts)
         segments = {k: np.concatenate([p[k] for p in seg_parts]) for k in seg_parts[0]}
         links = {k: np.concatenate([p[k] for p in link_parts]) for k in link_parts[0]}
-        segments = {k: segments[k] for k in SEGMENT_COLUMNS}     # the documented columns, in order
+        segments = {k: segments[k] for k in SEGMENT_COLUMNS}  # the documented columns, in order
         links = {k: links[k] for k in LINK_COLUMNS}
         res = cls(sc, t, segments, links, phases, list(mode.log), stats)
         res.mode_summary = mode.summary(res)
@@ -126,9 +127,13 @@ class Result:
         :func:`snoworm.results.energy.energy_metrics` of this result, to select from.
         """
         e = energy_metrics(self) if metrics is None else metrics
-        return {"motor_electrical_J": e["motor_electrical_J"], "motor_mechanical_J": e["motor_mechanical_J"],
-                "joint_work_J": e["joint_mechanical_J"], "joint_electrical_J": e["joint_electrical_J"],
-                "total_J": e["total_electrical_J"]}
+        return {
+            "motor_electrical_J": e["motor_electrical_J"],
+            "motor_mechanical_J": e["motor_mechanical_J"],
+            "joint_work_J": e["joint_mechanical_J"],
+            "joint_electrical_J": e["joint_electrical_J"],
+            "total_J": e["total_electrical_J"],
+        }
 
     def energy_along(self) -> dict:
         """Electrical energy as it accumulates over the run (:func:`snoworm.results.energy.energy_along`):
@@ -213,6 +218,7 @@ class Result:
         matplotlib backend is never selected or changed.
         """
         from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+
         if kind not in plotting.PLOT_KINDS:
             raise ValueError(f"unknown plot kind {kind!r}; kinds: {', '.join(plotting.PLOT_KINDS)}")
         return plotting.PLOT_KINDS[kind](self, ax=ax, fig=fig, size=size, **kwargs)
@@ -221,19 +227,29 @@ class Result:
     def segments_csv(self) -> str:
         n_t, n = self.segments["x_m"].shape
         cols = ["t_s", "segment"] + list(SEGMENT_COLUMNS)
-        data = np.column_stack([np.repeat(self.t, n), np.tile(np.arange(n), n_t)]
-                               + [self.segments[c].reshape(-1) for c in SEGMENT_COLUMNS])
+        data = np.column_stack(
+            [np.repeat(self.t, n), np.tile(np.arange(n), n_t)] + [self.segments[c].reshape(-1) for c in SEGMENT_COLUMNS]
+        )
         return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
 
     def links_csv(self) -> str:
         n_t, n = self.links["force_N"].shape
         cols = ["t_s", "link"] + list(LINK_COLUMNS)
-        data = np.column_stack([np.repeat(self.t, n), np.tile(np.arange(n), n_t)]
-                               + [self.links[c].reshape(-1) for c in LINK_COLUMNS])
+        data = np.column_stack(
+            [np.repeat(self.t, n), np.tile(np.arange(n), n_t)] + [self.links[c].reshape(-1) for c in LINK_COLUMNS]
+        )
         return _csv(cols, data, int_cols=(1,), t_decimals=time_decimals(self.scenario.simulation.output_dt_s))
 
-    def write(self, out_dir, plot: bool = True, plot_format: str = "png", overwrite: bool = False,
-              figure_size=None, *, command: str | None = None) -> list:
+    def write(
+        self,
+        out_dir,
+        plot: bool = True,
+        plot_format: str = "png",
+        overwrite: bool = False,
+        figure_size=None,
+        *,
+        command: str | None = None,
+    ) -> list:
         """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots,
         ``plot_format`` files: png at 200 dpi, pdf or svg, at print ``figure_size``: column,
         page or WxH).
@@ -258,6 +274,7 @@ class Result:
             ]
             if plot:
                 from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
+
                 paths += plotting.plot_result(self, stage, plot_format, size=figure_size)
         return relocate(paths, stage, out_dir)
 
@@ -269,9 +286,25 @@ def time_decimals(output_dt_s: float) -> int:
 
 
 #: Keys of ``summary.json`` that are not the mode's own (the rest is ``Result.mode_summary``).
-_SUMMARY_KEYS = ("scenario", "snoworm_version", "segments", "duration_s", "distance_m", "mean_speed_mps",
-                 "final_link_forces_N", "final_net_forces_N", "final_slip", "final_speed_mps", "max_abs_link_force_N",
-                 "energy", "energy_per_metre_J_per_m", "energy_metrics", "solver", "events", "sources")
+_SUMMARY_KEYS = (
+    "scenario",
+    "snoworm_version",
+    "segments",
+    "duration_s",
+    "distance_m",
+    "mean_speed_mps",
+    "final_link_forces_N",
+    "final_net_forces_N",
+    "final_slip",
+    "final_speed_mps",
+    "max_abs_link_force_N",
+    "energy",
+    "energy_per_metre_J_per_m",
+    "energy_metrics",
+    "solver",
+    "events",
+    "sources",
+)
 
 
 class ResultFileError(ValueError):
@@ -320,8 +353,10 @@ def _read_table(path, index, columns, n_rows):
     if data.shape[1] != len(header) or not np.isfinite(data).all():
         raise ResultFileError(f"{path}: rows with missing, NaN or infinite values")
     if data.shape[0] % n_rows or not np.array_equal(data[:, 1], np.tile(np.arange(n_rows), data.shape[0] // n_rows)):
-        raise ResultFileError(f"{path}: the {index} column does not run 0..{n_rows - 1} at every time "
-                              f"(the scenario has {n_rows} {index}s)")
+        raise ResultFileError(
+            f"{path}: the {index} column does not run 0..{n_rows - 1} at every time "
+            f"(the scenario has {n_rows} {index}s)"
+        )
     t = data[::n_rows, 0]
     if np.any(data[:, 0] != np.repeat(t, n_rows)) or np.any(np.diff(t) < 0):
         raise ResultFileError(f"{path}: the times t_s are not the same within a sample or go backwards")
@@ -336,8 +371,11 @@ def _read_summary_json(path) -> dict:
         if isinstance(exc, ResultFileError):
             raise
         raise ResultFileError(f"{path}: not valid JSON") from None
-    if not isinstance(summary, dict) or not isinstance(summary.get("events", []), list) \
-            or not isinstance(summary.get("solver", {}), dict):
+    if (
+        not isinstance(summary, dict)
+        or not isinstance(summary.get("events", []), list)
+        or not isinstance(summary.get("solver", {}), dict)
+    ):
         raise ResultFileError(f"{path}: not a run summary (a JSON object with an 'events' list and a 'solver' mapping)")
     return summary
 
@@ -362,7 +400,7 @@ def load_result(run_dir) -> Result:
     if missing:
         raise ResultFileError(f"{d} is not a snoworm run folder: {', '.join(missing)} missing")
     try:
-        sc = load_scenario(d / "scenario.yaml", trust_folder=False)   # its controller, if any, runs from nowhere
+        sc = load_scenario(d / "scenario.yaml", trust_folder=False)  # its controller, if any, runs from nowhere
     except (ScenarioError, RecursionError) as exc:
         raise ResultFileError(f"{d / 'scenario.yaml'}: {quote(str(exc), 300)}") from None
     n = sc.vehicle.segments
@@ -371,15 +409,18 @@ def load_result(run_dir) -> Result:
     if t is None:
         raise ResultFileError(f"{d / 'segments.csv'}: no samples")
     if t_links is not None and not np.array_equal(t_links, t):
-        raise ResultFileError(f"{d / 'links.csv'}: its times differ from segments.csv's ({t_links.size} vs {t.size} samples)")
+        raise ResultFileError(
+            f"{d / 'links.csv'}: its times differ from segments.csv's ({t_links.size} vs {t.size} samples)"
+        )
     if t_links is None and n > 1:
         raise ResultFileError(f"{d / 'links.csv'}: no samples, but the scenario has {n - 1} links")
     if t_links is None:
         links = {c: np.zeros((t.size, 0)) for c in LINK_COLUMNS}
     summary = _read_summary_json(d / "summary.json")
     mode_summary = {k: v for k, v in summary.items() if k not in _SUMMARY_KEYS}
-    return Result(sc, t, segments, links, [], list(summary.get("events", [])), dict(summary.get("solver", {})),
-                  mode_summary)
+    return Result(
+        sc, t, segments, links, [], list(summary.get("events", [])), dict(summary.get("solver", {})), mode_summary
+    )
 
 
 def _csv(cols, data, int_cols=(), t_decimals=4):

@@ -7,6 +7,7 @@ gait phase change (state events), so no switch of a controller falls inside a so
 :class:`~snoworm.simulation.interval.IntervalSolver` (method fallbacks, work limit, VODE stepper).
 A failed run never returns a partial result as if it were whole.
 """
+
 from __future__ import annotations
 
 import logging
@@ -61,8 +62,9 @@ def _integrate(model, modes, sim, name, progress=None):
     t, T = 0.0, sim.duration_s
     y = np.concatenate([md.initial_state() for md in modes])
     pieces, phases = [[] for _ in range(B)], []
-    solver = IntervalSolver(model, sim, name, carry_history=all(getattr(md, "continue_solver", False) for md in modes),
-                            progress=progress)
+    solver = IntervalSolver(
+        model, sim, name, carry_history=all(getattr(md, "continue_solver", False) for md in modes), progress=progress
+    )
     stats, stuck = solver.stats, 0
     while t < T - 1e-12:
         ys_b = y.reshape(B, -1)
@@ -83,8 +85,10 @@ def _integrate(model, modes, sim, name, progress=None):
         phases.append({"t_start_s": t, "t_end_s": t_next, "label": iv.label})
         stuck = stuck + 1 if t_next - t < 1e-9 else 0
         if stuck > MAX_STUCK_INTERVALS:
-            raise SolverError(f"mode of {name!r} keeps ending intervals at t = {t:.6g} s without progress "
-                              f"({iv.label}); its phase-change events re-trigger immediately.")
+            raise SolverError(
+                f"mode of {name!r} keeps ending intervals at t = {t:.6g} s without progress "
+                f"({iv.label}); its phase-change events re-trigger immediately."
+            )
         t, y = t_next, y_next
         if which is not None:
             modes[0].on_event(t, y, which)
@@ -139,9 +143,22 @@ def batch_key(sc):
     model = sc.chain_model
     sim = sc.simulation
     profile = "constant" if model.profile.is_constant else model.profile
-    return (sig, model.n, model.layout.fields, tuple(model.links.prismatic.tolist()), sim.duration_s,
-            sim.output_dt_s, sim.rtol, sim.atol_scale, tuple(sorted(sim.atol_scale_fields.items())), sim.method,
-            sim.max_step_s, model.tp, profile, model.elevation)
+    return (
+        sig,
+        model.n,
+        model.layout.fields,
+        tuple(model.links.prismatic.tolist()),
+        sim.duration_s,
+        sim.output_dt_s,
+        sim.rtol,
+        sim.atol_scale,
+        tuple(sorted(sim.atol_scale_fields.items())),
+        sim.method,
+        sim.max_step_s,
+        model.tp,
+        profile,
+        model.elevation,
+    )
 
 
 @dataclass
@@ -186,9 +203,21 @@ def simulate_batch(scenarios) -> list:
         logger.info("stacked run of %d scenarios failed (%s); running them one by one", len(scs), exc)
         return [_alone(sc) for sc in scs]
     wall = (time.perf_counter() - wall0) / len(scs)
-    return [BatchMember(c.scenario, Result.from_pieces(c.scenario, c.model, c.mode, pieces[b], [dict(p) for p in phases],
-                                                       dict(stats, batch_size=len(scs), wall_time_s=wall)), "ok")
-            for b, c in enumerate(cases)]
+    return [
+        BatchMember(
+            c.scenario,
+            Result.from_pieces(
+                c.scenario,
+                c.model,
+                c.mode,
+                pieces[b],
+                [dict(p) for p in phases],
+                dict(stats, batch_size=len(scs), wall_time_s=wall),
+            ),
+            "ok",
+        )
+        for b, c in enumerate(cases)
+    ]
 
 
 def _alone(sc) -> BatchMember:

@@ -6,6 +6,7 @@ run to :data:`WORK_BASE_NFEV` + :func:`work_rate` right-hand sides per simulated
 own breakdowns into :class:`SolverError`; :func:`check_sane` checks a run's states afterwards.
 None of them changes a number of a run that stays within the limits.
 """
+
 from __future__ import annotations
 
 import time
@@ -13,8 +14,17 @@ import warnings
 
 import numpy as np
 
-__all__ = ["SolverError", "WORK_BASE_NFEV", "WORK_NFEV_PER_S", "SPEED_SANITY_FACTOR", "work_rate", "WorkMeter", "PROGRESS_EVERY_S",
-           "guarded", "check_sane"]
+__all__ = [
+    "SolverError",
+    "WORK_BASE_NFEV",
+    "WORK_NFEV_PER_S",
+    "SPEED_SANITY_FACTOR",
+    "work_rate",
+    "WorkMeter",
+    "PROGRESS_EVERY_S",
+    "guarded",
+    "check_sane",
+]
 
 
 class SolverError(RuntimeError):
@@ -73,13 +83,16 @@ class WorkMeter:
                 f"work limit: {nfev} right-hand-side evaluations by t = {t:.6g} s of {self.name!r} "
                 f"(limit {WORK_BASE_NFEV} + {self.rate:.0f} per simulated second). The system is too stiff or "
                 "too fast to integrate: lower the large gains, stiffnesses, forces or speeds of the scenario, or "
-                "raise simulation.max_step_s / atol_scale if they are tiny.")
+                "raise simulation.max_step_s / atol_scale if they are tiny."
+            )
         if self.max_wall_s is not None:
             wall = time.perf_counter() - self.wall0
             if wall > self.max_wall_s:
-                raise SolverError(f"simulation.max_wall_s: {wall:.1f} s of wall time spent by t = {t:.6g} s "
-                                  f"of {self.name!r} (limit {self.max_wall_s:g} s). Shorten the run, relax "
-                                  "simulation.rtol or raise max_wall_s.")
+                raise SolverError(
+                    f"simulation.max_wall_s: {wall:.1f} s of wall time spent by t = {t:.6g} s "
+                    f"of {self.name!r} (limit {self.max_wall_s:g} s). Shorten the run, relax "
+                    "simulation.rtol or raise max_wall_s."
+                )
         if self.progress is not None and time.perf_counter() - self._shown >= PROGRESS_EVERY_S:
             self._shown = time.perf_counter()
             self.progress(min(t, self.duration_s), self.duration_s)
@@ -99,6 +112,7 @@ class WorkMeter:
             if n > base + rate * (t_max[0] - t0) or (wall and n & 63 == 0):
                 check(n, t_max[0])
             return fun(t, y, *args)
+
         f.calls = calls
         return f
 
@@ -114,15 +128,21 @@ def check_sane(model, pieces, name):
         for ts, ys, _ in piece:
             Y = ys.reshape(ts.size, lay.n, lay.n_s)
             if not np.all(np.isfinite(Y)):
-                raise SolverError(f"non-finite state in {name!r} near t = {ts[0]:.6g} s; the run is meaningless. "
-                                  "Check the scenario's extreme values.")
-            v = max(float(np.max(np.abs(Y[..., lay.v]), initial=0.0)),
-                    float(np.max(np.abs(Y[..., lay.omega]), initial=0.0)) * R)
+                raise SolverError(
+                    f"non-finite state in {name!r} near t = {ts[0]:.6g} s; the run is meaningless. "
+                    "Check the scenario's extreme values."
+                )
+            v = max(
+                float(np.max(np.abs(Y[..., lay.v]), initial=0.0)),
+                float(np.max(np.abs(Y[..., lay.omega]), initial=0.0)) * R,
+            )
             if v > limit:
                 k = int(np.argmax(np.max(np.abs(Y[..., lay.v]), axis=1)))
-                raise SolverError(f"speed {v:.3g} m/s in {name!r} near t = {ts[k]:.6g} s, beyond {limit:.3g} m/s "
-                                  f"({SPEED_SANITY_FACTOR:g} x the no-load wheel speed R_w*omega_nl = {vnl:.3g} m/s): "
-                                  "the chain has run away. Check forces, gains and speeds for extreme values.")
+                raise SolverError(
+                    f"speed {v:.3g} m/s in {name!r} near t = {ts[k]:.6g} s, beyond {limit:.3g} m/s "
+                    f"({SPEED_SANITY_FACTOR:g} x the no-load wheel speed R_w*omega_nl = {vnl:.3g} m/s): "
+                    "the chain has run away. Check forces, gains and speeds for extreme values."
+                )
 
 
 def guarded(fn, name):
@@ -133,9 +153,16 @@ def guarded(fn, name):
         try:
             return fn()
         except (RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
-            if type(exc) not in (RuntimeError, ArithmeticError, ZeroDivisionError, OverflowError,
-                                 np.linalg.LinAlgError):
-                raise           # SolverError, a mode's own error (e.g. ControllerError): as they are
-            raise SolverError(f"the solver broke down in {name!r} ({type(exc).__name__}: {str(exc)[:200]}). "
-                              "The scenario is too stiff or has extreme values; check its gains, stiffnesses "
-                              "and forces, or try a smaller simulation.rtol.") from None
+            if type(exc) not in (
+                RuntimeError,
+                ArithmeticError,
+                ZeroDivisionError,
+                OverflowError,
+                np.linalg.LinAlgError,
+            ):
+                raise  # SolverError, a mode's own error (e.g. ControllerError): as they are
+            raise SolverError(
+                f"the solver broke down in {name!r} ({type(exc).__name__}: {str(exc)[:200]}). "
+                "The scenario is too stiff or has extreme values; check its gains, stiffnesses "
+                "and forces, or try a smaller simulation.rtol."
+            ) from None

@@ -10,6 +10,7 @@ integrates the same way.  An interval that fails with the configured method is r
 implicit methods not yet tried; when every method fails, :class:`SolverError` carries the
 solvers' messages.
 """
+
 from __future__ import annotations
 
 import logging
@@ -28,8 +29,16 @@ logger = logging.getLogger("snoworm")
 
 #: Absolute tolerance of each state field, multiplied by ``simulation.atol_scale`` and the
 #: field's factor in ``simulation.atol_scale_fields``.
-ATOL = {"x_m": 1e-6, "v_mps": 1e-6, "omega_front": 1e-5, "omega_rear": 1e-5,
-        "integral_front_Nm": 1e-4, "integral_rear_Nm": 1e-4, "q_mps": 1e-6, "s_m": 1e-7}
+ATOL = {
+    "x_m": 1e-6,
+    "v_mps": 1e-6,
+    "omega_front": 1e-5,
+    "omega_rear": 1e-5,
+    "integral_front_Nm": 1e-4,
+    "integral_rear_Nm": 1e-4,
+    "q_mps": 1e-6,
+    "s_m": 1e-7,
+}
 
 
 def atol_per_field(sim) -> dict:
@@ -69,8 +78,10 @@ def _fallbacks(method):
 
 def _terminal(ev):
     """A mode's event ``ev(t, y)`` as a terminal solve_ivp event (which also receives ``args``)."""
+
     def f(t, y, _ctl):
         return ev(t, y)
+
     f.terminal = True
     f.direction = getattr(ev, "direction", 0)
     return f
@@ -154,7 +165,7 @@ class IntervalSolver:
         failures, model = [], self.model
         for method in _fallbacks(self.sim.method):
             if method == "VODE" and model.n_batch > 1 and not self.vode_stack:
-                continue                # stacked members: LSODA's max-norm error test (see simulate_batch)
+                continue  # stacked members: LSODA's max-norm error test (see simulate_batch)
             try:
                 out = (self._vode if method == "VODE" else self._solve_ivp)(method, ctl, t, t1, y, events, t_eval)
             except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
@@ -164,29 +175,44 @@ class IntervalSolver:
                 failures.append(f"{method}: {out}")
                 continue
             if failures:
-                logger.info("interval '%s' from t = %.6g s: %s; retried with %s, which succeeded", label, t,
-                            "; ".join(failures), method)
+                logger.info(
+                    "interval '%s' from t = %.6g s: %s; retried with %s, which succeeded",
+                    label,
+                    t,
+                    "; ".join(failures),
+                    method,
+                )
                 self.stats["retries"] = self.stats.get("retries", 0) + len(failures)
             self.stats["intervals"] += 1
             return out
         logger.info("interval '%s' from t = %.6g s: %s", label, t, "; ".join(failures))
-        raise SolverError(f"every method failed at t = {t:.6g} s in interval '{label}': "
-                          + "; ".join(failures) + ". Try a smaller simulation.rtol or max_step_s.")
+        raise SolverError(
+            f"every method failed at t = {t:.6g} s in interval '{label}': "
+            + "; ".join(failures)
+            + ". Try a smaller simulation.rtol or max_step_s."
+        )
 
     def _vode(self, method, ctl, t, t1, y, events, t_eval):
         """One interval on the run's VODE stepper (restarted at ``t`` unless it carries its history)."""
         st = self._stepper
         if st is None:
             o = self.options("VODE")
-            k = 1.0 / np.sqrt(self.model.n_batch)      # 1 for one chain; 1/sqrt(B) for a stack (vode_stack)
-            st = self._stepper = VodeStepper(self.model.rhs, self.model.jacobian_banded, self.model.n_states,
-                                             rtol=o["rtol"] * k, atol=o["atol"] * k, lband=o["lband"],
-                                             uband=o["uband"], max_step=o.get("max_step"))
+            k = 1.0 / np.sqrt(self.model.n_batch)  # 1 for one chain; 1/sqrt(B) for a stack (vode_stack)
+            st = self._stepper = VodeStepper(
+                self.model.rhs,
+                self.model.jacobian_banded,
+                self.model.n_states,
+                rtol=o["rtol"] * k,
+                atol=o["atol"] * k,
+                lband=o["lband"],
+                uband=o["uband"],
+                max_step=o.get("max_step"),
+            )
         before = (st.nfev, st.njev, st.nlu)
         st.ctl = ctl
         if not (self.carry_history and st.t == t and np.array_equal(st.y, y)):
             st.restart(t, y)
-        base = self.stats["nfev"] - before[0]            # the run's count = base + the stepper's own
+        base = self.stats["nfev"] - before[0]  # the run's count = base + the stepper's own
         check = self.meter.check
         try:
             ts, ys, t_next, y_next, which = st.advance(t1, events, t_eval, lambda tt, n: check(base + n, tt))
@@ -201,10 +227,17 @@ class IntervalSolver:
         """One interval with ``solve_ivp`` (a fresh start), its calls counted against the work limit."""
         fun = self.meter.counted(self.model.rhs, self.stats["nfev"])
         try:
-            sol = solve_ivp(fun, (t, t1), y, t_eval=t_eval, events=[_terminal(ev) for ev in events] or None,
-                            args=(ctl,), **self.options(method))
+            sol = solve_ivp(
+                fun,
+                (t, t1),
+                y,
+                t_eval=t_eval,
+                events=[_terminal(ev) for ev in events] or None,
+                args=(ctl,),
+                **self.options(method),
+            )
         except BaseException:
-            self.stats["nfev"] = fun.calls[0]          # the work done before the failure (or the work limit)
+            self.stats["nfev"] = fun.calls[0]  # the work done before the failure (or the work limit)
             raise
         for k in ("nfev", "njev", "nlu"):
             self.stats[k] += int(getattr(sol, k))

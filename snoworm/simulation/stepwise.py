@@ -14,6 +14,7 @@ state; the commands replace its control).  Each step is one interval of the driv
 (:mod:`snoworm.modes.controller`) runs the same intervals with the same observations and
 commands (:mod:`snoworm.modes.command`), so a controller gives the same result either way.
 """
+
 from __future__ import annotations
 
 import math
@@ -130,7 +131,7 @@ class Simulator:
         self.last_step = (ts, ys, ctl)
         self._phases.append({"t_start_s": t, "t_end_s": t_next, "label": "step"})
         if not self.record:
-            self._phases = self._phases[-1:]        # only "a step was made" matters: memory stays flat
+            self._phases = self._phases[-1:]  # only "a step was made" matters: memory stays flat
         self.t_s, self._y = t_next, y_next
         self._stats["wall_time_s"] += time.perf_counter() - wall0
         return self.observation()
@@ -146,12 +147,16 @@ class Simulator:
         n = self.model.n
         dt_max = sim.output_dt_s * MAX_OUTPUT_SAMPLES / n
         if not math.isfinite(value) or not DT_MIN_S <= value <= dt_max:
-            raise ValueError(f"dt: the step length must be a number of seconds from {DT_MIN_S:g} to {dt_max:g} "
-                             f"(at most {MAX_OUTPUT_SAMPLES} output samples x segments a step), got {quote(dt, 60)}")
+            raise ValueError(
+                f"dt: the step length must be a number of seconds from {DT_MIN_S:g} to {dt_max:g} "
+                f"(at most {MAX_OUTPUT_SAMPLES} output samples x segments a step), got {quote(dt, 60)}"
+            )
         if self.record and (self._samples + value / sim.output_dt_s + 2) * n > MAX_OUTPUT_SAMPLES:
-            raise ValueError(f"Simulator: the recorded history would pass {MAX_OUTPUT_SAMPLES} output samples x "
-                             f"segments (memory) at t = {self.t_s:.6g} s. Call reset(), or use "
-                             "Simulator(scenario, record=False) to step without recording.")
+            raise ValueError(
+                f"Simulator: the recorded history would pass {MAX_OUTPUT_SAMPLES} output samples x "
+                f"segments (memory) at t = {self.t_s:.6g} s. Call reset(), or use "
+                "Simulator(scenario, record=False) to step without recording."
+            )
         return value
 
     def result(self) -> Result:
@@ -161,5 +166,11 @@ class Simulator:
         if not self._pieces:
             raise ValueError("Simulator.result: nothing simulated yet; call step() first")
         sc = self.scenario
-        return Result.from_pieces(sc, self.model, Mode(sc.mode, sc, self.model), self._pieces,
-                                  [dict(p) for p in self._phases], dict(self._stats))
+        return Result.from_pieces(
+            sc,
+            self.model,
+            Mode(sc.mode, sc, self.model),
+            self._pieces,
+            [dict(p) for p in self._phases],
+            dict(self._stats),
+        )

@@ -24,6 +24,7 @@ Numbers from a run with this stepper differ from a ``solve_ivp`` run within the 
 not bitwise.  Its error test is VODE's weighted RMS norm, so the driver keeps LSODA (weighted
 max norm) for stacked batches, where each member must be held to its own tolerance.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -86,15 +87,23 @@ class VodeStepper:
         Restarts made by :meth:`step` after a failure of a continued history.
     """
 
-    def __init__(self, fun, jac, n, *, rtol, atol, lband, uband, max_step=None, ctl=None, max_order=5,
-                 first_step=None):
+    def __init__(self, fun, jac, n, *, rtol, atol, lband, uband, max_step=None, ctl=None, max_order=5, first_step=None):
         self.ctl = ctl
         self.first_step = first_step
         self.n = int(n)
         self._fun, self._jac = fun, jac
-        self._ode = ode(fun, jac)      # sets VODE up; steps call its runner with (ctl,) as the extra arguments
-        self._ode.set_integrator("vode", method="bdf", rtol=rtol, atol=atol, lband=lband, uband=uband,
-                                 nsteps=10**9, order=max_order, max_step=0.0 if max_step is None else max_step)
+        self._ode = ode(fun, jac)  # sets VODE up; steps call its runner with (ctl,) as the extra arguments
+        self._ode.set_integrator(
+            "vode",
+            method="bdf",
+            rtol=rtol,
+            atol=atol,
+            lband=lband,
+            uband=uband,
+            nsteps=10**9,
+            order=max_order,
+            max_step=0.0 if max_step is None else max_step,
+        )
         self._it = self._ode._integrator
         self._done = {"nfev": 0, "njev": 0, "nlu": 0, "nsteps": 0}
         self.t = self.t_old = None
@@ -156,12 +165,28 @@ class VodeStepper:
         rwork[_RW_TCRIT] = t_bound
         args = (self.ctl,)
         # the runner of scipy's vode wrapper (what its run() calls), without the wrapper's warning
-        y, t, istate = it.runner(self._fun, self._jac, self.y, self.t, t_bound, rtol, atol, _ITASK_ONE_STEP_TCRIT,
-                                 istate, rwork, iwork, mf, args, args, it.state_doubles, it.state_ints)
+        y, t, istate = it.runner(
+            self._fun,
+            self._jac,
+            self.y,
+            self.t,
+            t_bound,
+            rtol,
+            atol,
+            _ITASK_ONE_STEP_TCRIT,
+            istate,
+            rwork,
+            iwork,
+            mf,
+            args,
+            args,
+            it.state_doubles,
+            it.state_ints,
+        )
         if istate < 0:
             raise VodeError(f"VODE failed near t = {self.t:.6g} s (istate {istate})")
-        it.call_args[3] = 2                 # continue (what run() does after a success)
-        if not (t > self.t and np.isfinite(y.sum())):      # one reduction: NaN or inf anywhere
+        it.call_args[3] = 2  # continue (what run() does after a success)
+        if not (t > self.t and np.isfinite(y.sum())):  # one reduction: NaN or inf anywhere
             raise VodeError(f"VODE made no finite progress at t = {self.t:.6g} s")
         self.t_old, self.t, self.y = self.t, float(t), y
         self._fresh = False
@@ -178,7 +203,7 @@ class VodeStepper:
         """
         it = self._it
         q = int(it.iwork[_IW_NQU])
-        yh = it.rwork[_RW_YH:_RW_YH + (q + 1) * self.n].reshape((self.n, q + 1), order="F")
+        yh = it.rwork[_RW_YH : _RW_YH + (q + 1) * self.n].reshape((self.n, q + 1), order="F")
         s = (np.atleast_1d(np.asarray(ts, float)) - self.t) / it.rwork[_RW_HU]
         return (s[:, None] ** np.arange(q + 1)) @ yh.T
 
@@ -274,7 +299,12 @@ class VodeStepper:
                 elif g_old[j] == 0:
                     t_root = self.t_old
                 else:
-                    t_root = brentq(lambda tt, e=ev: e(tt, self.dense(tt)[0]), self.t_old, self.t,
-                                    xtol=EVENT_XTOL_S, rtol=EVENT_XTOL_S)
+                    t_root = brentq(
+                        lambda tt, e=ev: e(tt, self.dense(tt)[0]),
+                        self.t_old,
+                        self.t,
+                        xtol=EVENT_XTOL_S,
+                        rtol=EVENT_XTOL_S,
+                    )
                 hits.append((t_root, j))
         return (min(hits) if hits else None), g_new

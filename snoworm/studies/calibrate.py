@@ -28,6 +28,7 @@ Uncertainty
     fitted parameter can reduce inflate ``s`` and hence every standard error; fit a slip
     parameter too, or read the errors as conservative.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -47,13 +48,23 @@ from ..terrain import TerrainParams
 from .field_data import FieldData, read_field_data
 from .groundtruth import compare_table2, format_table2, vehicle_model
 
-__all__ = ["FIT_NAMES", "BOUNDS", "CalibrationResult", "model_predictions", "calibrate", "run_calibration",
-           "format_report", "terrain_model_yaml"]
+__all__ = [
+    "FIT_NAMES",
+    "BOUNDS",
+    "CalibrationResult",
+    "model_predictions",
+    "calibrate",
+    "run_calibration",
+    "format_report",
+    "terrain_model_yaml",
+]
 
 #: Coefficients that can be fitted, with bounds kept physically meaningful during the search: every
 #: terrain-model field declaring ``search`` bounds (snoworm.config.sections.TerrainModelConfig), and X_t.
-BOUNDS = {**{f.name: f.metadata["search"] for f in dataclasses.fields(TerrainModelConfig) if f.metadata.get("search")},
-          "xt": next(f.metadata["search"] for f in dataclasses.fields(TerrainConfig) if f.name == "xt")}
+BOUNDS = {
+    **{f.name: f.metadata["search"] for f in dataclasses.fields(TerrainModelConfig) if f.metadata.get("search")},
+    "xt": next(f.metadata["search"] for f in dataclasses.fields(TerrainConfig) if f.name == "xt"),
+}
 #: Names accepted by ``--fit``; ``xt`` fits the X_t of every case.
 FIT_NAMES = tuple(BOUNDS)
 
@@ -65,8 +76,10 @@ def _check_fit(fit, n_cases):
     names = []
     for f in fit:
         if f not in FIT_NAMES:
-            raise ScenarioError(f"--fit {f!r}: unknown parameter.{suggest(f, FIT_NAMES)} "
-                                f"Fittable: {', '.join(FIT_NAMES)} ('xt' fits every case's X_t).")
+            raise ScenarioError(
+                f"--fit {f!r}: unknown parameter.{suggest(f, FIT_NAMES)} "
+                f"Fittable: {', '.join(FIT_NAMES)} ('xt' fits every case's X_t)."
+            )
         if f not in names:
             names.append(f)
     if not names:
@@ -74,9 +87,11 @@ def _check_fit(fit, n_cases):
     n_par = sum(n_cases if f == "xt" else 1 for f in names)
     n_res = 2 * n_cases
     if n_res <= n_par:
-        raise ScenarioError(f"--fit {' '.join(names)}: {n_par} parameter(s) to fit but only {n_res} residuals "
-                            f"({n_cases} case(s) x torque and slip). Least squares with standard errors needs more "
-                            "residuals than parameters: add cases or fit fewer parameters.")
+        raise ScenarioError(
+            f"--fit {' '.join(names)}: {n_par} parameter(s) to fit but only {n_res} residuals "
+            f"({n_cases} case(s) x torque and slip). Least squares with standard errors needs more "
+            "residuals than parameters: add cases or fit fewer parameters."
+        )
     return names
 
 
@@ -84,7 +99,7 @@ def _unpack(theta, names, tp: TerrainParams, xt0, n_cases):
     kw, xt, j = {}, np.array(xt0, float), 0
     for f in names:
         if f == "xt":
-            xt = np.array(theta[j:j + n_cases], float)
+            xt = np.array(theta[j : j + n_cases], float)
             j += n_cases
         else:
             kw[f] = float(theta[j])
@@ -204,8 +219,9 @@ def _uncertainty(J, s2):
     return se, corr
 
 
-def _result(data: FieldData, names, seg, tp: TerrainParams, x0, r0, sol, *, torque_scale_Nm,
-            slip_scale) -> CalibrationResult:
+def _result(
+    data: FieldData, names, seg, tp: TerrainParams, x0, r0, sol, *, torque_scale_Nm, slip_scale
+) -> CalibrationResult:
     """The calibration's result from the solver's solution ``sol`` (started at ``x0`` with residuals
     ``r0``): fitted values with standard errors and correlations, Table 2 before and after, costs,
     and the cases the fitted model leaves immobilised."""
@@ -218,17 +234,39 @@ def _result(data: FieldData, names, seg, tp: TerrainParams, x0, r0, sol, *, torq
     _, _, imm = model_predictions(data, seg, tp_fit, xt_fit)
     data_fit = replace(data, xt=np.asarray(xt_fit, float))
     return CalibrationResult(
-        names=tuple(_param_labels(names, data)), start=np.array(x0), value=np.array(sol.x), stderr=se,
-        correlation=corr, terrain_params=tp_fit, xt=np.asarray(xt_fit, float),
-        rows_before=compare_table2(data, seg, tp), rows_after=compare_table2(data_fit, seg, tp_fit),
-        n_residuals=n_res, dof=dof, sigma=math.sqrt(s2), cost_before=0.5 * float(r0 @ r0),
-        cost_after=float(sol.cost), torque_scale_Nm=float(torque_scale_Nm), slip_scale=float(slip_scale),
-        success=bool(sol.success), message=str(sol.message), nfev=int(sol.nfev),
-        immobilised_after=tuple(c for c, m in zip(data.case, imm) if m))
+        names=tuple(_param_labels(names, data)),
+        start=np.array(x0),
+        value=np.array(sol.x),
+        stderr=se,
+        correlation=corr,
+        terrain_params=tp_fit,
+        xt=np.asarray(xt_fit, float),
+        rows_before=compare_table2(data, seg, tp),
+        rows_after=compare_table2(data_fit, seg, tp_fit),
+        n_residuals=n_res,
+        dof=dof,
+        sigma=math.sqrt(s2),
+        cost_before=0.5 * float(r0 @ r0),
+        cost_after=float(sol.cost),
+        torque_scale_Nm=float(torque_scale_Nm),
+        slip_scale=float(slip_scale),
+        success=bool(sol.success),
+        message=str(sol.message),
+        nfev=int(sol.nfev),
+        immobilised_after=tuple(c for c, m in zip(data.case, imm) if m),
+    )
 
 
-def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: float = 1.0,
-              slip_scale: float = 0.01, progress=None) -> CalibrationResult:
+def calibrate(
+    data: FieldData,
+    fit,
+    seg,
+    tp: TerrainParams,
+    *,
+    torque_scale_Nm: float = 1.0,
+    slip_scale: float = 0.01,
+    progress=None,
+) -> CalibrationResult:
     """Fit terrain-model coefficients (and optionally every case's X_t) to steady field data.
 
     Parameters
@@ -254,8 +292,10 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
         Unknown ``fit`` name, or not more residuals than fitted parameters.
     """
     if not (0 < torque_scale_Nm < math.inf and 0 < slip_scale < math.inf):
-        raise ScenarioError(f"residual scales must be finite and greater than 0, got torque {torque_scale_Nm} N m "
-                            f"and slip {slip_scale}.")
+        raise ScenarioError(
+            f"residual scales must be finite and greater than 0, got torque {torque_scale_Nm} N m "
+            f"and slip {slip_scale}."
+        )
     n = len(data)
     names = _check_fit(fit, n)
     x0, lo, hi = _start(names, data, tp)
@@ -273,21 +313,33 @@ def calibrate(data: FieldData, fit, seg, tp: TerrainParams, *, torque_scale_Nm: 
         return np.concatenate([T / torque_scale_Nm, s / slip_scale]) - meas
 
     r0 = resid(x0)
-    sol = least_squares(resid, x0, bounds=(lo, hi), method="trf", jac="3-point", x_scale="jac",
-                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=budget)
-    if progress is not None:       # the fit has ended (usually well within its budget): all of its work is done
+    sol = least_squares(
+        resid,
+        x0,
+        bounds=(lo, hi),
+        method="trf",
+        jac="3-point",
+        x_scale="jac",
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+        max_nfev=budget,
+    )
+    if progress is not None:  # the fit has ended (usually well within its budget): all of its work is done
         progress(count[0], count[0])
     return _result(data, names, seg, tp, x0, r0, sol, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale)
 
 
 def format_report(res: CalibrationResult) -> str:
     """Plain-text report: fitted values with standard errors, residual tables before and after."""
-    lines = [f"least squares: {res.message} ({res.nfev} evaluations); {res.n_residuals} residuals, "
-             f"{len(res.names)} parameters, dof {res.dof}",
-             f"residual scales: torque {res.torque_scale_Nm:g} N m, slip {100 * res.slip_scale:g} percentage point(s); "
-             f"cost {res.cost_before:.4g} -> {res.cost_after:.4g}, s = {res.sigma:.4g}",
-             "",
-             f"{'parameter':>16} {'start':>10} {'fitted':>10} {'std err':>10}"]
+    lines = [
+        f"least squares: {res.message} ({res.nfev} evaluations); {res.n_residuals} residuals, "
+        f"{len(res.names)} parameters, dof {res.dof}",
+        f"residual scales: torque {res.torque_scale_Nm:g} N m, slip {100 * res.slip_scale:g} percentage point(s); "
+        f"cost {res.cost_before:.4g} -> {res.cost_after:.4g}, s = {res.sigma:.4g}",
+        "",
+        f"{'parameter':>16} {'start':>10} {'fitted':>10} {'std err':>10}",
+    ]
     for n, a, b, e in zip(res.names, res.start, res.value, res.stderr):
         lines.append(f"{n:>16} {a:10.4f} {b:10.4f} {e:10.4f}")
     if np.any(~np.isfinite(res.stderr)):
@@ -296,9 +348,11 @@ def format_report(res: CalibrationResult) -> str:
         lines.append(f"warning: the fitted model is immobilised on case(s) {', '.join(res.immobilised_after)}.")
     for n, v in zip(res.names, res.value):
         lo, hi = BOUNDS["xt" if n.startswith("xt[") else n]
-        if min(abs(v - lo), abs(v - hi)) <= 1e-3 * (hi - lo):   # least_squares stays strictly inside
-            lines.append(f"note: {n} = {v:.6g} sits at a bound of its search range [{lo:g}, {hi:g}] (its physical "
-                         "domain); the data push it beyond: check the data or the fitted set.")
+        if min(abs(v - lo), abs(v - hi)) <= 1e-3 * (hi - lo):  # least_squares stays strictly inside
+            lines.append(
+                f"note: {n} = {v:.6g} sits at a bound of its search range [{lo:g}, {hi:g}] (its physical "
+                "domain); the data push it beyond: check the data or the fitted set."
+            )
     lines += ["", "before:", format_table2(res.rows_before), "", "after:", format_table2(res.rows_after)]
     return "\n".join(lines)
 
@@ -311,10 +365,12 @@ def terrain_model_yaml(res: CalibrationResult, source: str = "") -> str:
     """
     tp = res.terrain_params
     model = {k: (getattr(tp, k) if k == "torque_balance" else float(getattr(tp, k))) for k in _MODEL_KEYS}
-    head = ["# Terrain-model coefficients written by `snoworm calibrate`.",
-            f"# Data: {source}" if source else "# Data: (in memory)",
-            "# Fitted: " + ", ".join(f"{n} = {v:.6g} +- {e:.2g}" for n, v, e in zip(res.names, res.value, res.stderr)),
-            "# Use in a scenario:  terrain: {model_file: <this file>, xt: ...}"]
+    head = [
+        "# Terrain-model coefficients written by `snoworm calibrate`.",
+        f"# Data: {source}" if source else "# Data: (in memory)",
+        "# Fitted: " + ", ".join(f"{n} = {v:.6g} +- {e:.2g}" for n, v, e in zip(res.names, res.value, res.stderr)),
+        "# Use in a scenario:  terrain: {model_file: <this file>, xt: ...}",
+    ]
     return "\n".join(head) + "\n" + yaml.safe_dump({"terrain_model": model}, sort_keys=False)
 
 
@@ -325,29 +381,52 @@ def _json_float(v):
 
 def calibration_json(res: CalibrationResult, source: str = "", parameter_set_name: str = "") -> str:
     """``calibration.json`` text: everything in :class:`CalibrationResult`, NaN written as null."""
+
     def rows(rs):
         return [{k: (_json_float(v) if isinstance(v, float) else v) for k, v in r.items()} for r in rs]
+
     doc = {
-        "data": source, "parameter_set": parameter_set_name,
-        "parameters": [{"name": n, "start": _json_float(a), "value": _json_float(b), "stderr": _json_float(e)}
-                       for n, a, b, e in zip(res.names, res.start, res.value, res.stderr)],
+        "data": source,
+        "parameter_set": parameter_set_name,
+        "parameters": [
+            {"name": n, "start": _json_float(a), "value": _json_float(b), "stderr": _json_float(e)}
+            for n, a, b, e in zip(res.names, res.start, res.value, res.stderr)
+        ],
         "correlation": [[_json_float(c) for c in row] for row in res.correlation],
         "xt": {str(c): _json_float(x) for c, x in zip([r["case"] for r in res.rows_after], res.xt)},
-        "terrain_model": {k: (getattr(res.terrain_params, k) if k == "torque_balance"
-                              else float(getattr(res.terrain_params, k))) for k in _MODEL_KEYS},
+        "terrain_model": {
+            k: (getattr(res.terrain_params, k) if k == "torque_balance" else float(getattr(res.terrain_params, k)))
+            for k in _MODEL_KEYS
+        },
         "residual_scales": {"torque_Nm": res.torque_scale_Nm, "slip": res.slip_scale},
-        "n_residuals": res.n_residuals, "dof": res.dof, "sigma": res.sigma,
-        "cost_before": res.cost_before, "cost_after": res.cost_after,
-        "success": res.success, "message": res.message, "nfev": res.nfev,
+        "n_residuals": res.n_residuals,
+        "dof": res.dof,
+        "sigma": res.sigma,
+        "cost_before": res.cost_before,
+        "cost_after": res.cost_after,
+        "success": res.success,
+        "message": res.message,
+        "nfev": res.nfev,
         "immobilised_after": list(res.immobilised_after),
-        "residuals_before": rows(res.rows_before), "residuals_after": rows(res.rows_after),
+        "residuals_before": rows(res.rows_before),
+        "residuals_after": rows(res.rows_after),
     }
     return json.dumps(doc, indent=2) + "\n"
 
 
-def run_calibration(field_path, fit, out_dir, *, parameter_set_name: str = "frostyboy", model_file=None,
-                    torque_scale_Nm: float = 1.0, slip_scale: float = 0.01, overwrite: bool = False,
-                    progress=None, command: str | None = None):
+def run_calibration(
+    field_path,
+    fit,
+    out_dir,
+    *,
+    parameter_set_name: str = "frostyboy",
+    model_file=None,
+    torque_scale_Nm: float = 1.0,
+    slip_scale: float = 0.01,
+    overwrite: bool = False,
+    progress=None,
+    command: str | None = None,
+):
     """Read, validate, fit, then write ``terrain_model.yaml`` and ``calibration.json`` to ``out_dir``.
 
     Nothing is written if the input is invalid (every check runs before the first write).
@@ -360,9 +439,11 @@ def run_calibration(field_path, fit, out_dir, *, parameter_set_name: str = "fros
     data = read_field_data(field_path)
     seg, tp = vehicle_model(parameter_set_name, model_file)
     _check_fit(fit, len(data))
-    check_output_folder(out_dir, overwrite)      # before the fit, not after
+    check_output_folder(out_dir, overwrite)  # before the fit, not after
     res = calibrate(data, fit, seg, tp, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, progress=progress)
     with output_folder(out_dir, overwrite, command) as out:
-        paths = [atomic_write_text(out / "terrain_model.yaml", terrain_model_yaml(res, data.source)),
-                 atomic_write_text(out / "calibration.json", calibration_json(res, data.source, parameter_set_name))]
+        paths = [
+            atomic_write_text(out / "terrain_model.yaml", terrain_model_yaml(res, data.source)),
+            atomic_write_text(out / "calibration.json", calibration_json(res, data.source, parameter_set_name)),
+        ]
     return res, format_report(res), relocate(paths, out, out_dir)

@@ -6,6 +6,7 @@
 The ground truth (:mod:`snoworm.studies.groundtruth`) and the calibration
 (:mod:`snoworm.studies.calibrate`) compare the model with it.
 """
+
 from __future__ import annotations
 
 import csv
@@ -98,9 +99,12 @@ def read_field_data(path=None) -> FieldData:
     missing = [c for c in FIELD_COLUMNS if c not in header]
     if missing:
         hints = "".join(f" For '{m}':{suggest(m, header)}" for m in missing if suggest(m, header))
-        _bad(path, f"missing column(s) {', '.join(repr(m) for m in missing)}. The header must name "
-             f"{', '.join(FIELD_COLUMNS)} (found {', '.join(repr(h) for h in header)}).{hints} "
-             "Slip is a fraction, torque per wheel in N m, drawbar in N (0 when nothing is towed).")
+        _bad(
+            path,
+            f"missing column(s) {', '.join(repr(m) for m in missing)}. The header must name "
+            f"{', '.join(FIELD_COLUMNS)} (found {', '.join(repr(h) for h in header)}).{hints} "
+            "Slip is a fraction, torque per wheel in N m, drawbar in N (0 when nothing is towed).",
+        )
     if len(rows) < 2:
         _bad(path, "has a header but no data rows. Add one row per steady-state case.")
     col = {c: header.index(c) for c in FIELD_COLUMNS}
@@ -112,9 +116,16 @@ def read_field_data(path=None) -> FieldData:
             values[c].append(case[c])
     dup = sorted({c for c in values["case"] if values["case"].count(c) > 1})
     if dup:
-        _bad(path, f"case label(s) {', '.join(repr(d) for d in dup)} appear more than once. Give each case a unique label.")
-    return FieldData(source=str(path), case=tuple(values["case"]), surface=tuple(values["surface"]),
-                     **{c: np.array(values[c], float) for c in _NUMERIC})
+        _bad(
+            path,
+            f"case label(s) {', '.join(repr(d) for d in dup)} appear more than once. Give each case a unique label.",
+        )
+    return FieldData(
+        source=str(path),
+        case=tuple(values["case"]),
+        surface=tuple(values["surface"]),
+        **{c: np.array(values[c], float) for c in _NUMERIC},
+    )
 
 
 def _read_rows(path):
@@ -127,16 +138,22 @@ def _read_rows(path):
         _bad(path, f"cannot be read as UTF-8 text ({exc}).")
     lines = [(n, ln) for n, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
-        _bad(path, "no header and no data rows. Expected a header line "
-             f"'{','.join(FIELD_COLUMNS)}' followed by one row per case.")
+        _bad(
+            path,
+            "no header and no data rows. Expected a header line "
+            f"'{','.join(FIELD_COLUMNS)}' followed by one row per case.",
+        )
     return [n for n, _ in lines], list(csv.reader(io.StringIO("\n".join(ln for _, ln in lines))))
 
 
 def _row_values(path, lineno, row, header, col) -> dict:
     """One data row as ``{column: value}``: text columns as given, numbers parsed and finite."""
     if len(row) != len(header):
-        _bad(path, f"line {lineno} has {len(row)} fields but the header has {len(header)}. "
-             "Quote text that contains commas, e.g. \"lake snow, sled\".")
+        _bad(
+            path,
+            f"line {lineno} has {len(row)} fields but the header has {len(header)}. "
+            'Quote text that contains commas, e.g. "lake snow, sled".',
+        )
     out = {}
     for c in FIELD_COLUMNS:
         raw = row[col[c]].strip()
@@ -145,8 +162,7 @@ def _row_values(path, lineno, row, header, col) -> dict:
                 v = float(raw)
             except ValueError:
                 extra = " Write 0 for no drawbar." if c == "drawbar_N" else ""
-                _bad(path, f"line {lineno}, column '{c}': expected a number ({FIELD_COLUMNS[c]}), "
-                     f"got {raw!r}.{extra}")
+                _bad(path, f"line {lineno}, column '{c}': expected a number ({FIELD_COLUMNS[c]}), got {raw!r}.{extra}")
             if not math.isfinite(v):
                 _bad(path, f"line {lineno}, column '{c}': must be a finite number, got {raw!r}.")
             out[c] = v
@@ -163,8 +179,12 @@ def _check_case(path, lineno, case: dict):
         hint = f" Did you give it in percent? As a fraction it would be {s / 100:g}." if abs(s) <= 100 else ""
         _bad(path, f"line {lineno} (case {lab}): slip {s:g} is outside [-1, 1]; slip is a fraction.{hint}")
     if not w > 0:
-        _bad(path, f"line {lineno} (case {lab}): wheel_speed_mps must be greater than 0 m/s "
-             f"(steady forward driving), got {w:g}.")
+        _bad(
+            path,
+            f"line {lineno} (case {lab}): wheel_speed_mps must be greater than 0 m/s "
+            f"(steady forward driving), got {w:g}.",
+        )
     if not 0 < x <= 1:
-        _bad(path, f"line {lineno} (case {lab}): xt must be in (0, 1], got {x:g}. "
-             "X_t = 1 is neve, lower is looser snow.")
+        _bad(
+            path, f"line {lineno} (case {lab}): xt must be in (0, 1], got {x:g}. X_t = 1 is neve, lower is looser snow."
+        )

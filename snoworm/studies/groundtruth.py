@@ -13,6 +13,7 @@ Three pieces, each a pure function of a parameter set plus a thin writer:
 
 The terrain laws themselves live only in :mod:`snoworm.terrain`; nothing here re-implements them.
 """
+
 from __future__ import annotations
 
 import math
@@ -32,9 +33,17 @@ from .field_data import FieldData, read_field_data
 
 __all__ = [
     "vehicle_model",
-    "compare_table2", "table2_csv", "format_table2", "TerrainCurves", "terrain_curves",
-    "terrain_curves_csv", "format_zero_crossings", "run_groundtruth", "run_terrain_curves",
+    "compare_table2",
+    "table2_csv",
+    "format_table2",
+    "TerrainCurves",
+    "terrain_curves",
+    "terrain_curves_csv",
+    "format_zero_crossings",
+    "run_groundtruth",
+    "run_terrain_curves",
 ]
+
 
 def vehicle_model(parameter_set_name: str = "frostyboy", model_file=None):
     """Segment and terrain-model parameters of a named set, optionally with a terrain-model file.
@@ -53,8 +62,10 @@ def vehicle_model(parameter_set_name: str = "frostyboy", model_file=None):
     (SegmentConfig, TerrainParams)
     """
     if parameter_set_name not in PARAMETER_SETS:
-        raise ScenarioError(f"parameter set {parameter_set_name!r} is unknown.{suggest(parameter_set_name, PARAMETER_SETS)} "
-                            f"Known sets: {', '.join(PARAMETER_SETS)}.")
+        raise ScenarioError(
+            f"parameter set {parameter_set_name!r} is unknown.{suggest(parameter_set_name, PARAMETER_SETS)} "
+            f"Known sets: {', '.join(PARAMETER_SETS)}."
+        )
     ps = parameter_set(parameter_set_name)
     seg = build(SegmentConfig, ps["segment"], "segment")
     model = dict(ps["terrain_model"])
@@ -65,6 +76,7 @@ def vehicle_model(parameter_set_name: str = "frostyboy", model_file=None):
 
 
 # ---------------------------------------------------------------------------------- Table 2
+
 
 def model_cases(data: FieldData, seg, tp: TerrainParams, xt=None):
     """Steady state of the model at every case's measured wheel speed and drawbar.
@@ -86,17 +98,36 @@ def model_cases(data: FieldData, seg, tp: TerrainParams, xt=None):
     out = []
     for k in range(len(data)):
         try:
-            out.append(steady.steady_state(float(xt[k]), seg, tp, drawbar_N=float(data.drawbar_N[k]),
-                                           wheel_speed_mps=float(data.wheel_speed_mps[k])))
+            out.append(
+                steady.steady_state(
+                    float(xt[k]),
+                    seg,
+                    tp,
+                    drawbar_N=float(data.drawbar_N[k]),
+                    wheel_speed_mps=float(data.wheel_speed_mps[k]),
+                )
+            )
         except steady.Immobilised:
             out.append(None)
     return out
 
 
 #: Columns of ``table2.csv``.
-TABLE2_COLUMNS = ("case", "xt", "drawbar_N", "wheel_speed_mps", "speed_measured_mps", "speed_model_mps",
-                  "speed_residual_mps", "slip_measured", "slip_model", "slip_residual",
-                  "torque_measured_Nm", "torque_model_Nm", "torque_residual_Nm")
+TABLE2_COLUMNS = (
+    "case",
+    "xt",
+    "drawbar_N",
+    "wheel_speed_mps",
+    "speed_measured_mps",
+    "speed_model_mps",
+    "speed_residual_mps",
+    "slip_measured",
+    "slip_model",
+    "slip_residual",
+    "torque_measured_Nm",
+    "torque_model_Nm",
+    "torque_residual_Nm",
+)
 
 
 def compare_table2(data: FieldData, seg, tp: TerrainParams) -> list:
@@ -113,14 +144,23 @@ def compare_table2(data: FieldData, seg, tp: TerrainParams) -> list:
     rows = []
     for k, st in enumerate(model_cases(data, seg, tp)):
         v, s, T = (st.ground_speed_mps, st.slip, st.torque_Nm) if st is not None else (math.nan,) * 3
-        rows.append({"case": data.case[k], "xt": float(data.xt[k]), "drawbar_N": float(data.drawbar_N[k]),
-                     "wheel_speed_mps": float(data.wheel_speed_mps[k]),
-                     "speed_measured_mps": float(data.speed_mps[k]), "speed_model_mps": v,
-                     "speed_residual_mps": v - float(data.speed_mps[k]),
-                     "slip_measured": float(data.slip[k]), "slip_model": s,
-                     "slip_residual": s - float(data.slip[k]),
-                     "torque_measured_Nm": float(data.torque_Nm[k]), "torque_model_Nm": T,
-                     "torque_residual_Nm": T - float(data.torque_Nm[k])})
+        rows.append(
+            {
+                "case": data.case[k],
+                "xt": float(data.xt[k]),
+                "drawbar_N": float(data.drawbar_N[k]),
+                "wheel_speed_mps": float(data.wheel_speed_mps[k]),
+                "speed_measured_mps": float(data.speed_mps[k]),
+                "speed_model_mps": v,
+                "speed_residual_mps": v - float(data.speed_mps[k]),
+                "slip_measured": float(data.slip[k]),
+                "slip_model": s,
+                "slip_residual": s - float(data.slip[k]),
+                "torque_measured_Nm": float(data.torque_Nm[k]),
+                "torque_model_Nm": T,
+                "torque_residual_Nm": T - float(data.torque_Nm[k]),
+            }
+        )
     return rows
 
 
@@ -131,24 +171,39 @@ def table2_csv(rows) -> str:
 
 def format_table2(rows) -> str:
     """Plain-text table of :func:`compare_table2` rows: speeds in m/s, slip in %, torque in N m."""
-    head = (f"{'case':>4} {'X_t':>5} {'drawbar':>7} {'R_w*w':>6} | {'V meas':>6} {'V model':>7} | "
-            f"{'slip meas':>9} {'slip model':>10} {'d slip':>6} | {'T meas':>6} {'T model':>7} {'d T':>5}")
-    units = (f"{'':>4} {'':>5} {'[N]':>7} {'[m/s]':>6} | {'[m/s]':>6} {'[m/s]':>7} | "
-             f"{'[%]':>9} {'[%]':>10} {'[pt]':>6} | {'[N m]':>6} {'[N m]':>7} {'[N m]':>5}")
+    head = (
+        f"{'case':>4} {'X_t':>5} {'drawbar':>7} {'R_w*w':>6} | {'V meas':>6} {'V model':>7} | "
+        f"{'slip meas':>9} {'slip model':>10} {'d slip':>6} | {'T meas':>6} {'T model':>7} {'d T':>5}"
+    )
+    units = (
+        f"{'':>4} {'':>5} {'[N]':>7} {'[m/s]':>6} | {'[m/s]':>6} {'[m/s]':>7} | "
+        f"{'[%]':>9} {'[%]':>10} {'[pt]':>6} | {'[N m]':>6} {'[N m]':>7} {'[N m]':>5}"
+    )
     lines = [head, units, "-" * len(head)]
     for r in rows:
-        lines.append(f"{r['case']:>4} {r['xt']:5.2f} {r['drawbar_N']:7.1f} {r['wheel_speed_mps']:6.2f} | "
-                     f"{r['speed_measured_mps']:6.2f} {r['speed_model_mps']:7.3f} | "
-                     f"{100 * r['slip_measured']:9.1f} {100 * r['slip_model']:10.2f} {100 * r['slip_residual']:+6.2f} | "
-                     f"{r['torque_measured_Nm']:6.1f} {r['torque_model_Nm']:7.2f} {r['torque_residual_Nm']:+5.2f}")
+        lines.append(
+            f"{r['case']:>4} {r['xt']:5.2f} {r['drawbar_N']:7.1f} {r['wheel_speed_mps']:6.2f} | "
+            f"{r['speed_measured_mps']:6.2f} {r['speed_model_mps']:7.3f} | "
+            f"{100 * r['slip_measured']:9.1f} {100 * r['slip_model']:10.2f} {100 * r['slip_residual']:+6.2f} | "
+            f"{r['torque_measured_Nm']:6.1f} {r['torque_model_Nm']:7.2f} {r['torque_residual_Nm']:+5.2f}"
+        )
     if any(math.isnan(r["slip_model"]) for r in rows):
         lines.append("nan: the model segment is immobilised (cannot pull the drawbar) on that case's X_t")
     return "\n".join(lines)
 
 
-def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostyboy", model_file=None,
-                    plot: bool = True, plot_format: str = "png", overwrite: bool = False, figure_size=None, *,
-                    command: str | None = None):
+def run_groundtruth(
+    out_dir,
+    data_path=None,
+    parameter_set_name: str = "frostyboy",
+    model_file=None,
+    plot: bool = True,
+    plot_format: str = "png",
+    overwrite: bool = False,
+    figure_size=None,
+    *,
+    command: str | None = None,
+):
     """Compare the model with field data and write ``table2.csv`` (and ``table2.png``, or the
     ``plot_format``: png, pdf, svg; at print ``figure_size``: column, page or WxH).
 
@@ -164,19 +219,25 @@ def run_groundtruth(out_dir, data_path=None, parameter_set_name: str = "frostybo
     data = read_field_data(data_path)
     seg, tp = vehicle_model(parameter_set_name, model_file)
     rows = compare_table2(data, seg, tp)
-    text = f"field data: {data.source}\nmodel: parameter set {parameter_set_name}" + \
-        (f" with terrain model {model_file}" if model_file else "") + \
-        f" (d = {tp.peak_exponent_d:g}, torque balance '{tp.torque_balance}')\n" + format_table2(rows)
+    text = (
+        f"field data: {data.source}\nmodel: parameter set {parameter_set_name}"
+        + (f" with terrain model {model_file}" if model_file else "")
+        + f" (d = {tp.peak_exponent_d:g}, torque balance '{tp.torque_balance}')\n"
+        + format_table2(rows)
+    )
     with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows)]
         if plot:
             from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-            paths.append(plotting.write_figure(out / "table2.png", plotting.plot_table2, rows, fmt=plot_format,
-                                               size=figure_size))
+
+            paths.append(
+                plotting.write_figure(out / "table2.png", plotting.plot_table2, rows, fmt=plot_format, size=figure_size)
+            )
     return rows, text, relocate(paths, out, out_dir)
 
 
 # ---------------------------------------------------------------------------------- Figure 3
+
 
 @dataclass(frozen=True)
 class TerrainCurves:
@@ -265,17 +326,31 @@ def format_zero_crossings(c: TerrainCurves) -> str:
     lines = [f"normal load per wheel {c.normal_load_N:.1f} N; resistance of forward motion (sgn = +1)"]
     for m, x in enumerate(c.xt):
         if math.isnan(c.zero_crossing_slip[m]):
-            lines.append(f"X_t = {x:g}: net force negative for every slip in [0, 1] "
-                         f"(max {c.net_N[m].max():.1f} N/wheel at slip {100 * c.slip[np.argmax(c.net_N[m])]:.1f} %)")
+            lines.append(
+                f"X_t = {x:g}: net force negative for every slip in [0, 1] "
+                f"(max {c.net_N[m].max():.1f} N/wheel at slip {100 * c.slip[np.argmax(c.net_N[m])]:.1f} %)"
+            )
         else:
-            lines.append(f"X_t = {x:g}: net force crosses zero at slip {100 * c.zero_crossing_slip[m]:.2f} % "
-                         f"(max {c.net_N[m].max():.1f} N/wheel)")
+            lines.append(
+                f"X_t = {x:g}: net force crosses zero at slip {100 * c.zero_crossing_slip[m]:.2f} % "
+                f"(max {c.net_N[m].max():.1f} N/wheel)"
+            )
     return "\n".join(lines)
 
 
-def run_terrain_curves(xts, out_dir, *, parameter_set_name: str = "frostyboy", model_file=None, plot: bool = True,
-                       n_points: int = 1001, plot_format: str = "png", overwrite: bool = False,
-                       figure_size=None, command: str | None = None):
+def run_terrain_curves(
+    xts,
+    out_dir,
+    *,
+    parameter_set_name: str = "frostyboy",
+    model_file=None,
+    plot: bool = True,
+    n_points: int = 1001,
+    plot_format: str = "png",
+    overwrite: bool = False,
+    figure_size=None,
+    command: str | None = None,
+):
     """Compute Figure 3's curves and write ``terrain_curves.csv`` (and ``terrain_curves.png``, or
     the ``plot_format``: png, pdf, svg; at print ``figure_size``: column, page or WxH); ``command``:
     the command line the folder's manifest records (default: this process's).
@@ -290,6 +365,10 @@ def run_terrain_curves(xts, out_dir, *, parameter_set_name: str = "frostyboy", m
         paths = [write_csv(out / "terrain_curves.csv", CURVE_COLUMNS, _curve_rows(c))]
         if plot:
             from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-            paths.append(plotting.write_figure(out / "terrain_curves.png", plotting.plot_terrain_curves, c,
-                                               fmt=plot_format, size=figure_size))
+
+            paths.append(
+                plotting.write_figure(
+                    out / "terrain_curves.png", plotting.plot_terrain_curves, c, fmt=plot_format, size=figure_size
+                )
+            )
     return c, format_zero_crossings(c), relocate(paths, out, out_dir)

@@ -8,6 +8,7 @@ a gait that fails on a grade is taken to fail on every steeper one (the mobility
 docstring says why and where it is checked); the cells decided that way say so in
 ``inching_note``.  Several gaits are mapped one after the other (:func:`inch_gaits`).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -23,8 +24,16 @@ from ..modes import InchwormMode
 from ..results.energy import energy_metrics
 from ..simulation.driver import SolverError, simulate
 
-__all__ = ["InchingRuns", "INCH_KEYS", "inching_mode_raw", "inching_scenario", "inch_cells", "inch_gaits",
-           "fill_inching", "gait_label"]
+__all__ = [
+    "InchingRuns",
+    "INCH_KEYS",
+    "inching_mode_raw",
+    "inching_scenario",
+    "inch_cells",
+    "inch_gaits",
+    "fill_inching",
+    "gait_label",
+]
 
 
 @dataclass(frozen=True)
@@ -59,9 +68,11 @@ def inching_mode_raw(sc) -> dict:
     """The ``mode:`` mapping of an inchworm run with the gait of the scenario's mode (ScenarioError if it does not inch)."""
     raw = sc.mode.inching_settings()
     if raw is None:
-        raise ScenarioError(f"mode.type: the mobility map takes the inching gait from the scenario's mode, and mode "
-                            f"{sc.mode.type!r} does not inch (a 'supervisor' or 'inchworm' mode does). "
-                            "Use --no-inching for rolling only.")
+        raise ScenarioError(
+            f"mode.type: the mobility map takes the inching gait from the scenario's mode, and mode "
+            f"{sc.mode.type!r} does not inch (a 'supervisor' or 'inchworm' mode does). "
+            "Use --no-inching for rolling only."
+        )
     raw = dump(raw)
     raw.update({"type": InchwormMode.name, "start_time_s": 0.0})
     return raw
@@ -88,15 +99,22 @@ def _inch_run(args):
     try:
         res = simulate(scenario_from_dict(raw))
     except SolverError as exc:
-        return {"inching": False, "inching_speed_mps": 0.0, "inching_energy_per_metre_J_per_m": None,
-                "inching_note": f"solver failure: {exc}"[:200]}
+        return {
+            "inching": False,
+            "inching_speed_mps": 0.0,
+            "inching_energy_per_metre_J_per_m": None,
+            "inching_note": f"solver failure: {exc}"[:200],
+        }
     e = energy_metrics(res)
     dur = float(res.t[-1] - res.t[0])
     speed = e["distance_m"] / dur
     ok = speed >= min_speed
-    return {"inching": bool(ok), "inching_speed_mps": speed,
-            "inching_energy_per_metre_J_per_m": e["energy_per_metre_J_per_m"] if ok else None,
-            "inching_note": ""}
+    return {
+        "inching": bool(ok),
+        "inching_speed_mps": speed,
+        "inching_energy_per_metre_J_per_m": e["energy_per_metre_J_per_m"] if ok else None,
+        "inching_note": "",
+    }
 
 
 def _indexed_inch_run(item):
@@ -127,8 +145,10 @@ def _inch_all(tasks, pool, cost=None, report=None):
     return outs
 
 
-_INFERRED = {True: "not simulated: climbs a steeper grade (bisection over the grades)",
-             False: "not simulated: fails on a gentler grade (bisection over the grades)"}
+_INFERRED = {
+    True: "not simulated: climbs a steeper grade (bisection over the grades)",
+    False: "not simulated: fails on a gentler grade (bisection over the grades)",
+}
 
 
 def inch_cells(runs: InchingRuns, rows, progress=None, gait=None):
@@ -141,7 +161,7 @@ def inch_cells(runs: InchingRuns, rows, progress=None, gait=None):
     for r in todo:
         chains.setdefault((r["xt"], r["tow_N"]), []).append(r)
     chains = [sorted(c, key=lambda r: r["grade_deg"]) for c in chains.values()]
-    bounds = [[0, len(c)] for c in chains]         # cells below lo climb, cells from hi on fail
+    bounds = [[0, len(c)] for c in chains]  # cells below lo climb, cells from hi on fail
     every = every_cell or len(grades) == 1
     total = len(todo) if every else sum(int(np.ceil(np.log2(len(c) + 1))) for c in chains)
     done = [0]
@@ -150,6 +170,7 @@ def inch_cells(runs: InchingRuns, rows, progress=None, gait=None):
         done[0] += 1
         if progress is not None:
             progress(done[0], max(total, done[0]))
+
     while True:
         if every:
             picks = [(c, b, j) for c, b in zip(chains, bounds) for j in range(b[0], b[1])]
@@ -157,8 +178,13 @@ def inch_cells(runs: InchingRuns, rows, progress=None, gait=None):
             picks = [(c, b, (b[0] + b[1]) // 2) for c, b in zip(chains, bounds) if b[0] < b[1]]
         if not picks:
             break
-        tasks = [(inching_scenario(runs.sc, c[j]["xt"], c[j]["tow_N"], runs.duration_s, c[j]["grade_deg"], gait),
-                  runs.min_speed_mps) for c, _, j in picks]
+        tasks = [
+            (
+                inching_scenario(runs.sc, c[j]["xt"], c[j]["tow_N"], runs.duration_s, c[j]["grade_deg"], gait),
+                runs.min_speed_mps,
+            )
+            for c, _, j in picks
+        ]
         for (c, b, j), o in zip(picks, _inch_all(tasks, runs.pool, [c[j]["xt"] for c, _, j in picks], report)):
             c[j].update(o)
             if every:
@@ -170,8 +196,12 @@ def inch_cells(runs: InchingRuns, rows, progress=None, gait=None):
     for c, (lo, _) in zip(chains, bounds):
         for j, r in enumerate(c):
             if "inching" not in r:
-                r.update(inching=j < lo, inching_speed_mps=None, inching_energy_per_metre_J_per_m=None,
-                         inching_note=_INFERRED[j < lo])
+                r.update(
+                    inching=j < lo,
+                    inching_speed_mps=None,
+                    inching_energy_per_metre_J_per_m=None,
+                    inching_note=_INFERRED[j < lo],
+                )
 
 
 INCH_KEYS = ("inching", "inching_speed_mps", "inching_energy_per_metre_J_per_m", "inching_note")
@@ -196,15 +226,20 @@ def inch_gaits(runs: InchingRuns, rows, gaits, progress=None):
         sub = [{k: r[k] for k in ("xt", "tow_N", "grade_deg", "rolling")} for r in rows]
         prog = None if progress is None else (lambda d, t, i=i: progress(base[0] + d, base[0] + t * (len(gaits) - i)))
         inch_cells(runs, sub, prog, g)
-        base[0] += sum(1 for c in sub if c.get("inching_speed_mps") is not None or c.get("inching_note", "")[:6] == "solver")
+        base[0] += sum(
+            1 for c in sub if c.get("inching_speed_mps") is not None or c.get("inching_note", "")[:6] == "solver"
+        )
         per[gait_label(g)] = sub
     for j, r in enumerate(rows):
         cells = {lab: {k: sub[j][k] for k in INCH_KEYS} for lab, sub in per.items() if "inching" in sub[j]}
         if not cells:
             continue
         moved = [lab for lab, c in cells.items() if c["inching"]]
-        best = (min(moved, key=lambda lab, c=cells: c[lab]["inching_energy_per_metre_J_per_m"] or math.inf)
-                if moved else next(iter(cells)))
+        best = (
+            min(moved, key=lambda lab, c=cells: c[lab]["inching_energy_per_metre_J_per_m"] or math.inf)
+            if moved
+            else next(iter(cells))
+        )
         r.update(cells[best], inching_gait=best if moved else "", inching_by_gait=cells)
 
 
@@ -213,8 +248,9 @@ def fill_inching(runs: InchingRuns, rows, gaits, *, jobs=1, progress=None):
     not simulated gets None.  Every gait is checked first, here (a one-line error), not in a worker."""
     first = rows[0]
     for g in gaits:
-        scenario_from_dict(inching_scenario(runs.sc, first["xt"], first["tow_N"], runs.duration_s,
-                                            first["grade_deg"], g))
+        scenario_from_dict(
+            inching_scenario(runs.sc, first["xt"], first["tow_N"], runs.duration_s, first["grade_deg"], g)
+        )
     if jobs > 1:
         with ProcessExecutor(jobs) as pool:
             inch_gaits(dataclasses.replace(runs, pool=pool), rows, gaits, progress)

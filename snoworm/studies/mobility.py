@@ -41,6 +41,7 @@ Runtime: rolling cells are ~10 ms; each inching cell costs about 0.1 s of wall t
 simulated second (0.25-0.9 s for an 8 s run of six segments, longer at higher X_t), run in
 ``jobs`` worker processes, highest X_t first so that the longest runs do not finish last.
 """
+
 from __future__ import annotations
 
 import json
@@ -58,8 +59,17 @@ from .gradeability import grade_text, gradeability
 from .inching import InchingRuns, fill_inching, gait_label
 from .sweep.spec import RANGE, parse_spec
 
-__all__ = ["parse_grid", "parse_list", "parse_gait", "rolling_cell", "mobility_map", "map_csv", "rolling_speed_of",
-           "gradeability", "REGIONS"]
+__all__ = [
+    "parse_grid",
+    "parse_list",
+    "parse_gait",
+    "rolling_cell",
+    "mobility_map",
+    "map_csv",
+    "rolling_speed_of",
+    "gradeability",
+    "REGIONS",
+]
 
 #: Region labels of the map, in plotting order.
 REGIONS = ("immobile", "inching only", "rolling")
@@ -92,10 +102,16 @@ def parse_gait(text: str):
         phases = json.loads(t)
     except ValueError:
         phases = None
-    if not (isinstance(phases, list) and phases and all(isinstance(p, list) and p for p in phases)
-            and all(isinstance(k, int) and not isinstance(k, bool) for p in phases for k in p)):
-        raise ScenarioError(f"--gait {quote(text, 60)}: expected a gait name or a list of phases, each a list of "
-                            "segment indices, e.g. [[0],[1],[2]].")
+    if not (
+        isinstance(phases, list)
+        and phases
+        and all(isinstance(p, list) and p for p in phases)
+        and all(isinstance(k, int) and not isinstance(k, bool) for p in phases for k in p)
+    ):
+        raise ScenarioError(
+            f"--gait {quote(text, 60)}: expected a gait name or a list of phases, each a list of "
+            "segment indices, e.g. [[0],[1],[2]]."
+        )
     return phases
 
 
@@ -111,9 +127,11 @@ def rolling_speed_of(sc) -> float:
     """The rolling wheel-speed set-point of a scenario's mode (:meth:`ModeConfig.rolling_speed`) [m/s]."""
     v = sc.mode.rolling_speed()
     if v is None:
-        raise ScenarioError(f"mode.type: the mobility map takes the rolling wheel speed from the scenario's mode, "
-                            f"and mode {sc.mode.type!r} does not roll at one speed (a 'supervisor' or 'uniform' "
-                            "mode does). Pass --rolling-speed.")
+        raise ScenarioError(
+            f"mode.type: the mobility map takes the rolling wheel speed from the scenario's mode, "
+            f"and mode {sc.mode.type!r} does not roll at one speed (a 'supervisor' or 'uniform' "
+            "mode does). Pass --rolling-speed."
+        )
     return float(v)
 
 
@@ -129,8 +147,13 @@ def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float, grade_deg:
     n = sc.vehicle.segments
     share = tow_N / n
     dmax = steady.max_drawbar_N(xt, seg, tp, wheel_speed_mps, grade_deg=grade_deg)
-    out = {"rolling": False, "rolling_speed_mps": 0.0, "rolling_slip": None,
-           "rolling_energy_per_metre_J_per_m": None, "rolling_max_drawbar_N": dmax}
+    out = {
+        "rolling": False,
+        "rolling_speed_mps": 0.0,
+        "rolling_slip": None,
+        "rolling_energy_per_metre_J_per_m": None,
+        "rolling_max_drawbar_N": dmax,
+    }
     if share >= dmax:
         return out
     try:
@@ -141,8 +164,12 @@ def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float, grade_deg:
         return out
     n_w, _, R = steady.segment_geometry(seg)
     p_el = n * n_w * max(ss.torque_Nm * wheel_speed_mps / R, 0.0) / seg.drivetrain_efficiency
-    out.update(rolling=True, rolling_speed_mps=ss.ground_speed_mps, rolling_slip=ss.slip,
-               rolling_energy_per_metre_J_per_m=p_el / ss.ground_speed_mps)
+    out.update(
+        rolling=True,
+        rolling_speed_mps=ss.ground_speed_mps,
+        rolling_slip=ss.slip,
+        rolling_energy_per_metre_J_per_m=p_el / ss.ground_speed_mps,
+    )
     return out
 
 
@@ -152,22 +179,29 @@ def _classify(rows, inching):
         inch_ok = bool(r.get("inching", False))
         r["region"] = "rolling" if r["rolling"] else ("inching only" if inch_ok else "immobile")
         er, ei = r["rolling_energy_per_metre_J_per_m"], r.get("inching_energy_per_metre_J_per_m")
-        r["inching_cheaper"] = (None if inching and r.get("inching") is None
-                                else bool(er is not None and ei is not None and ei < er))
+        r["inching_cheaper"] = (
+            None if inching and r.get("inching") is None else bool(er is not None and ei is not None and ei < er)
+        )
 
 
 def _checked_grid(xts, tows, grades) -> dict:
     """``xts``, ``tows`` and ``grades`` as lists of floats, each value checked against the domain of
     the scenario field it stands for (``--xt``, ``--tow``, ``--grade``)."""
-    return {"xts": [check_field(TerrainConfig, "xt", x, "--xt") for x in xts],
-            "tows": [check_field(TowConfig, "force_N", f, "--tow") for f in tows],
-            "grades": [check_field(TerrainConfig, "grade_deg", g, "--grade") for g in grades]}
+    return {
+        "xts": [check_field(TerrainConfig, "xt", x, "--xt") for x in xts],
+        "tows": [check_field(TowConfig, "force_N", f, "--tow") for f in tows],
+        "grades": [check_field(TerrainConfig, "grade_deg", g, "--grade") for g in grades],
+    }
 
 
 def _rolling_rows(sc, grid, wheel_speed_mps) -> list:
     """One row per cell of the grid (tows, then grades, then X_t) with its steady rolling columns."""
-    return [{"xt": x, "tow_N": f, "grade_deg": g, **rolling_cell(sc, x, f, wheel_speed_mps, g)}
-            for f in grid["tows"] for g in grid["grades"] for x in grid["xts"]]
+    return [
+        {"xt": x, "tow_N": f, "grade_deg": g, **rolling_cell(sc, x, f, wheel_speed_mps, g)}
+        for f in grid["tows"]
+        for g in grid["grades"]
+        for x in grid["xts"]
+    ]
 
 
 def _steady_limits(sc, xts, tows, wheel_speed_mps) -> dict:
@@ -178,17 +212,30 @@ def _steady_limits(sc, xts, tows, wheel_speed_mps) -> dict:
     limits, max_grade = {}, {}
     for f in tows:
         try:
-            limits[f] = steady.immobilisation_limit_xt(seg, tp, drawbar_N=f / sc.vehicle.segments,
-                                                       wheel_speed_mps=wheel_speed_mps)
+            limits[f] = steady.immobilisation_limit_xt(
+                seg, tp, drawbar_N=f / sc.vehicle.segments, wheel_speed_mps=wheel_speed_mps
+            )
         except ValueError:
             limits[f] = None
         max_grade[f] = {x: steady.max_grade_deg(x, seg, tp, wheel_speed_mps, f / sc.vehicle.segments) for x in xts}
     return {"rolling_limit_xt": limits, "rolling_max_grade_deg": max_grade}
 
 
-def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, grades=(0.0,), inching: bool = True,
-                 inch_duration_s: float = 8.0, inch_min_speed_mps: float = 0.02, jobs: int = 1,
-                 every_cell: bool = False, progress=None, gaits=None) -> dict:
+def mobility_map(
+    sc,
+    xts,
+    tows,
+    *,
+    wheel_speed_mps: float,
+    grades=(0.0,),
+    inching: bool = True,
+    inch_duration_s: float = 8.0,
+    inch_min_speed_mps: float = 0.02,
+    jobs: int = 1,
+    every_cell: bool = False,
+    progress=None,
+    gaits=None,
+) -> dict:
     """Mobility map of a scenario's vehicle over ``xts`` x ``grades`` x ``tows``.
 
     Parameters
@@ -236,7 +283,7 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, grades=(0.0,), inchin
         check_field(SimulationConfig, "duration_s", inch_duration_s, "--inch-duration")
     rows = _rolling_rows(sc, grid, v)
     labels = [None] if not gaits else list(gaits)
-    if inching:             # the inching runs (snoworm.studies.inching)
+    if inching:  # the inching runs (snoworm.studies.inching)
         runs = InchingRuns(sc, grid["grades"], every_cell, inch_duration_s, inch_min_speed_mps)
         fill_inching(runs, rows, labels, jobs=jobs, progress=progress)
     _classify(rows, inching)
@@ -250,9 +297,22 @@ def mobility_map(sc, xts, tows, *, wheel_speed_mps: float, grades=(0.0,), inchin
 
 
 #: Columns of ``mobility_map.csv``.
-MAP_COLUMNS = ("xt", "tow_N", "grade_deg", "region", "rolling", "rolling_speed_mps", "rolling_slip",
-               "rolling_energy_per_metre_J_per_m", "rolling_max_drawbar_N", "inching", "inching_speed_mps",
-               "inching_energy_per_metre_J_per_m", "inching_cheaper", "inching_note")
+MAP_COLUMNS = (
+    "xt",
+    "tow_N",
+    "grade_deg",
+    "region",
+    "rolling",
+    "rolling_speed_mps",
+    "rolling_slip",
+    "rolling_energy_per_metre_J_per_m",
+    "rolling_max_drawbar_N",
+    "inching",
+    "inching_speed_mps",
+    "inching_energy_per_metre_J_per_m",
+    "inching_cheaper",
+    "inching_note",
+)
 
 
 #: Cells of ``mobility_map.csv``: 6 significant digits, booleans 1/0, commas in notes as ``;``.
@@ -264,9 +324,27 @@ def map_csv(result: dict) -> str:
     return csv_text(MAP_COLUMNS, result["rows"], MAP_FORMAT)
 
 
-def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, rolling_speed_mps=None,
-                     inching=True, inch_duration_s=8.0, jobs=1, every_cell=False, plot=True, plot_format="png", overwrite=False,
-                     progress=None, grade_spec="0", gaits=None, figure_size=None, command=None):
+def run_mobility_map(
+    scenario_path,
+    xt_spec,
+    tow_spec,
+    out_dir,
+    sets=(),
+    *,
+    rolling_speed_mps=None,
+    inching=True,
+    inch_duration_s=8.0,
+    jobs=1,
+    every_cell=False,
+    plot=True,
+    plot_format="png",
+    overwrite=False,
+    progress=None,
+    grade_spec="0",
+    gaits=None,
+    figure_size=None,
+    command=None,
+):
     """Load a scenario, compute its map, write ``mobility_map.csv`` (and the plot, a ``plot_format`` file:
     png, pdf or svg, at print ``figure_size``: column, page or WxH; with several grades also
     ``gradeability``); return (map, text, paths).
@@ -280,19 +358,36 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
     xts, tows = parse_grid(xt_spec, "--xt"), parse_list(tow_spec, "--tow")
     grades = parse_grid(grade_spec, "--grade")
     check_output_folder(out_dir, overwrite)
-    res = mobility_map(sc, xts, tows, wheel_speed_mps=v, grades=grades, inching=inching,
-                       inch_duration_s=inch_duration_s, jobs=jobs, every_cell=every_cell, progress=progress,
-                       gaits=[parse_gait(g) for g in gaits] if gaits else None)
+    res = mobility_map(
+        sc,
+        xts,
+        tows,
+        wheel_speed_mps=v,
+        grades=grades,
+        inching=inching,
+        inch_duration_s=inch_duration_s,
+        jobs=jobs,
+        every_cell=every_cell,
+        progress=progress,
+        gaits=[parse_gait(g) for g in gaits] if gaits else None,
+    )
     columns = MAP_COLUMNS + (("inching_gait",) if res["gait_labels"] else ())
     with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "mobility_map.csv", columns, res["rows"], MAP_FORMAT)]
         if plot:
             from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
-            paths.append(plotting.write_figure(out / "mobility_map.png", plotting.plot_mobility_map, res, fmt=plot_format,
-                                               size=figure_size))
+
+            paths.append(
+                plotting.write_figure(
+                    out / "mobility_map.png", plotting.plot_mobility_map, res, fmt=plot_format, size=figure_size
+                )
+            )
             if len(res["grades"]) > 1:
-                paths.append(plotting.write_figure(out / "gradeability.png", plotting.plot_gradeability, res,
-                                                   fmt=plot_format, size=figure_size))
+                paths.append(
+                    plotting.write_figure(
+                        out / "gradeability.png", plotting.plot_gradeability, res, fmt=plot_format, size=figure_size
+                    )
+                )
     paths = relocate(paths, out, out_dir)
     text = grade_text(sc.name, res, inching, every_cell) if len(res["grades"]) > 1 else _map_text(sc, res)
     return res, text, paths
@@ -300,20 +395,28 @@ def run_mobility_map(scenario_path, xt_spec, tow_spec, out_dir, sets=(), *, roll
 
 def _map_text(sc, res) -> str:
     """The report of a map on one grade: per tow, where the chain rolls, inches, fails."""
-    lines = [f"{sc.name}: mobility map, {len(res['xts'])} X_t x {len(res['tows'])} tow values, "
-             f"{res['wall_time_s']:.1f} s"]
+    lines = [
+        f"{sc.name}: mobility map, {len(res['xts'])} X_t x {len(res['tows'])} tow values, {res['wall_time_s']:.1f} s"
+    ]
     for f in res["tows"]:
         lim = res["rolling_limit_xt"][f]
         roll = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r["rolling"]]
         inch = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r["region"] == "inching only"]
         cheap = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r["inching_cheaper"]]
-        lines.append(f"tow {f:g} N: steady rolling limit X_t = {lim:.3f}" if lim is not None
-                     else f"tow {f:g} N: no rolling for X_t <= 1")
+        lines.append(
+            f"tow {f:g} N: steady rolling limit X_t = {lim:.3f}"
+            if lim is not None
+            else f"tow {f:g} N: no rolling for X_t <= 1"
+        )
         lines.append(f"  rolling from X_t = {min(roll):g}" if roll else "  rolling nowhere on the grid")
-        lines.append(f"  inching only at X_t = {', '.join(f'{x:g}' for x in inch)}" if inch else "  no inching-only cells")
+        lines.append(
+            f"  inching only at X_t = {', '.join(f'{x:g}' for x in inch)}" if inch else "  no inching-only cells"
+        )
         failed = [r["xt"] for r in res["rows"] if r["tow_N"] == f and r.get("inching_note", "").startswith("solver")]
         if failed:
-            lines.append(f"  inching run failed (solver) at X_t = {', '.join(f'{x:g}' for x in failed)}; see inching_note")
+            lines.append(
+                f"  inching run failed (solver) at X_t = {', '.join(f'{x:g}' for x in failed)}; see inching_note"
+            )
         if cheap:
             lines.append(f"  inching cheaper per metre than rolling at X_t = {', '.join(f'{x:g}' for x in cheap)}")
     if res["inching"] and not res["every_cell"] and any(r["rolling"] for r in res["rows"]):

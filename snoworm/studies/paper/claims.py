@@ -5,6 +5,7 @@ alternative reading) and :class:`Section` (one figure or table of the paper); :f
 the constructor the check functions use (it makes the computed values JSON-friendly); and
 :class:`Context`, which runs the shipped scenarios with the report's overrides and caches the runs.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -18,8 +19,19 @@ from ...config.scenario import load_scenario
 from ...simulation.driver import simulate
 from ..groundtruth import vehicle_model
 
-__all__ = ["Claim", "Variant", "Section", "Context", "SCENARIO_DIR", "QUICK_INCHWORM_DURATION_S",
-           "STEADY_WINDOW_S", "make_claim", "find_claim", "start_time_s", "steady_mean"]
+__all__ = [
+    "Claim",
+    "Variant",
+    "Section",
+    "Context",
+    "SCENARIO_DIR",
+    "QUICK_INCHWORM_DURATION_S",
+    "STEADY_WINDOW_S",
+    "make_claim",
+    "find_claim",
+    "start_time_s",
+    "steady_mean",
+]
 
 #: The shipped scenarios (package data, snoworm/scenarios).
 SCENARIO_DIR = Path(__file__).resolve().parents[2] / "scenarios"
@@ -31,6 +43,7 @@ STEADY_WINDOW_S = 1.0
 
 
 # ------------------------------------------------------------------------------- data types
+
 
 @dataclass(frozen=True)
 class Claim:
@@ -123,6 +136,7 @@ def find_claim(sections, claim_id) -> Claim:
 
 # ------------------------------------------------------------------------------- context
 
+
 class Context:
     """What the item functions share: mode, overrides, output directory, a cache of runs.
 
@@ -144,8 +158,9 @@ class Context:
         Print size of the figures: ``"column"``, ``"page"`` (default) or ``"WxH"`` inches.
     """
 
-    def __init__(self, quick=False, model=None, scenario_overrides=None, out_dir=None, plot_format="png",
-                 figure_size=None):
+    def __init__(
+        self, quick=False, model=None, scenario_overrides=None, out_dir=None, plot_format="png", figure_size=None
+    ):
         self.quick = bool(quick)
         self.model = dict(model or {})
         self.scenario_overrides = {k: list(v) for k, v in (scenario_overrides or {}).items()}
@@ -158,8 +173,9 @@ class Context:
         """A context with extra terrain-model overrides (alternative readings), sharing nothing."""
         m = dict(self.model)
         m.update(model or {})
-        return Context(self.quick, m, self.scenario_overrides, self.out_dir if plot else None, self.plot_format,
-                       self.figure_size)
+        return Context(
+            self.quick, m, self.scenario_overrides, self.out_dir if plot else None, self.plot_format, self.figure_size
+        )
 
     def overrides(self, name, extra=()) -> list:
         ov = [f"terrain.model.{k}={v}" for k, v in self.model.items()]

@@ -1,4 +1,5 @@
 """Figure 5: inchworm movement of a six-segment SnoWorm (paper section 5.1)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -6,9 +7,22 @@ import numpy as np
 from ... import plotting
 from .claims import QUICK_INCHWORM_DURATION_S, Context, Section, make_claim, start_time_s, steady_mean
 
-__all__ = ["FIG5_PAIRS", "FIG5_PAIR_RMS_MAX", "FIG5_NONPAIR_RMS_MIN", "FIG5_MOVE_MIN_M", "FIG5_PEAK_EARLY_FRACTION",
-           "FIG5_LATE_FRACTION_MAX", "FIG5_LATE_EVERY_MAX", "SLIDING_FRACTION", "FIG5_XT_HIGH", "pair_overlap",
-           "backward_sliding_timing", "check_fig5", "fig5_runs", "item_fig5"]
+__all__ = [
+    "FIG5_PAIRS",
+    "FIG5_PAIR_RMS_MAX",
+    "FIG5_NONPAIR_RMS_MIN",
+    "FIG5_MOVE_MIN_M",
+    "FIG5_PEAK_EARLY_FRACTION",
+    "FIG5_LATE_FRACTION_MAX",
+    "FIG5_LATE_EVERY_MAX",
+    "SLIDING_FRACTION",
+    "FIG5_XT_HIGH",
+    "pair_overlap",
+    "backward_sliding_timing",
+    "check_fig5",
+    "fig5_runs",
+    "item_fig5",
+]
 
 
 #: Segments that move together in the six-segment gait (paper section 5.1).
@@ -42,6 +56,7 @@ def pair_overlap(res, pairs=FIG5_PAIRS):
 
     def rms(a, b):
         return float(np.sqrt(np.mean((v[:, a] - v[:, b]) ** 2)) / peak)
+
     want = {tuple(sorted(p)) for p in pairs}
     out = {"pairs": {}, "others": {}, "peak_speed_mps": peak}
     for a in range(n):
@@ -84,7 +99,7 @@ def backward_sliding_timing(res):
         t0, t1 = ph["t_start_s"], ph["t_end_s"]
         sel = (t >= t0) & (t <= t1)
         held = [k for k in range(n) if k not in ph["moving"]]
-        if sel.sum() < 3 or not held or t1 >= t[-1] - 1e-9:   # too short, or cut off by the end of the run
+        if sel.sum() < 3 or not held or t1 >= t[-1] - 1e-9:  # too short, or cut off by the end of the run
             continue
         phases.append((t0, t1, v[sel][:, held].min(1), t[sel]))
     run_peak = max((-p[2].min() for p in phases), default=0.0)
@@ -122,39 +137,55 @@ def _movement_claims(inch, roll) -> list:
     m_lo = inch.mode_summary
     timing = backward_sliding_timing(inch)
     return [
-        make_claim("fig5.inchworm_advances", "Fig 5",
-               f"inchworm movement gives forward motion on X_t = {xt_lo:g}, 'through terrain that would "
-               "immobilize a single-segment vehicle' (abstract, section 5.1)",
-               {"advance_per_segment_m": adv, "gait_cycles": m_lo.get("gait_cycles"),
-                "simulated_s": float(inch.t[-1])},
-               f"every segment advances more than {FIG5_MOVE_MIN_M:g} m", bool(np.all(adv > FIG5_MOVE_MIN_M))),
-        make_claim("fig5.rolling_immobilised", "Fig 5",
-               f"the same vehicle rolling (all wheels driven, rigid joints) on X_t = {float(roll.scenario.terrain.xt):g} "
-               "is immobilised (section 3: no slip overcomes the resistance below X_t ~ 0.59)",
-               {"advance_per_segment_m": adv_roll, "final_slip": steady_mean(roll, "segments", "slip")},
-               f"no segment advances more than {FIG5_MOVE_MIN_M:g} m", bool(np.all(adv_roll <= FIG5_MOVE_MIN_M))),
-        make_claim("fig5.pairs_overlap", "Fig 5",
-               "'Segments 0 & 3, 1 & 4, and 2 & 5 each have the same location within this movement pattern, "
-               "their speeds therefore overlap' (section 5.1)",
-               {"rms_difference_over_peak_pairs": ov["pairs"],
+        make_claim(
+            "fig5.inchworm_advances",
+            "Fig 5",
+            f"inchworm movement gives forward motion on X_t = {xt_lo:g}, 'through terrain that would "
+            "immobilize a single-segment vehicle' (abstract, section 5.1)",
+            {"advance_per_segment_m": adv, "gait_cycles": m_lo.get("gait_cycles"), "simulated_s": float(inch.t[-1])},
+            f"every segment advances more than {FIG5_MOVE_MIN_M:g} m",
+            bool(np.all(adv > FIG5_MOVE_MIN_M)),
+        ),
+        make_claim(
+            "fig5.rolling_immobilised",
+            "Fig 5",
+            f"the same vehicle rolling (all wheels driven, rigid joints) on X_t = {float(roll.scenario.terrain.xt):g} "
+            "is immobilised (section 3: no slip overcomes the resistance below X_t ~ 0.59)",
+            {"advance_per_segment_m": adv_roll, "final_slip": steady_mean(roll, "segments", "slip")},
+            f"no segment advances more than {FIG5_MOVE_MIN_M:g} m",
+            bool(np.all(adv_roll <= FIG5_MOVE_MIN_M)),
+        ),
+        make_claim(
+            "fig5.pairs_overlap",
+            "Fig 5",
+            "'Segments 0 & 3, 1 & 4, and 2 & 5 each have the same location within this movement pattern, "
+            "their speeds therefore overlap' (section 5.1)",
+            {
+                "rms_difference_over_peak_pairs": ov["pairs"],
                 "rms_difference_over_peak_other_max": max(ov["others"].values()),
                 "rms_difference_over_peak_other_min": min(ov["others"].values()),
-                "peak_speed_mps": ov["peak_speed_mps"]},
-               f"RMS difference of each pair's speed traces (no time shift, from the gait start) <= "
-               f"{FIG5_PAIR_RMS_MAX:g} x peak speed, and >= {FIG5_NONPAIR_RMS_MIN:g} x peak speed for every "
-               "two segments of different pairs",
-               max(ov["pairs"].values()) <= FIG5_PAIR_RMS_MAX and min(ov["others"].values()) >= FIG5_NONPAIR_RMS_MIN),
-        make_claim("fig5.backward_peak_early", "Fig 5",
-               "'negative speeds peak shortly after motion starts, then drop off as the prismatic force is "
-               "decreased' (section 5.1)",
-               {"peak_time_fraction_of_phase": timing[0], "late_over_peak_backward_speed": timing[1]},
-               f"in every gait phase with backward sliding, the held segments' most negative speed falls within "
-               f"the first {FIG5_PEAK_EARLY_FRACTION:g} of the phase and in its second half their backward speed "
-               f"stays below {FIG5_LATE_EVERY_MAX:g} x that peak, and below {FIG5_LATE_FRACTION_MAX:g} x in "
-               "the median phase (the joint force itself is not checked)",
-               bool(timing[0]) and max(timing[0]) <= FIG5_PEAK_EARLY_FRACTION
-               and max(timing[1]) < FIG5_LATE_EVERY_MAX
-               and float(np.median(timing[1])) < FIG5_LATE_FRACTION_MAX),
+                "peak_speed_mps": ov["peak_speed_mps"],
+            },
+            f"RMS difference of each pair's speed traces (no time shift, from the gait start) <= "
+            f"{FIG5_PAIR_RMS_MAX:g} x peak speed, and >= {FIG5_NONPAIR_RMS_MIN:g} x peak speed for every "
+            "two segments of different pairs",
+            max(ov["pairs"].values()) <= FIG5_PAIR_RMS_MAX and min(ov["others"].values()) >= FIG5_NONPAIR_RMS_MIN,
+        ),
+        make_claim(
+            "fig5.backward_peak_early",
+            "Fig 5",
+            "'negative speeds peak shortly after motion starts, then drop off as the prismatic force is "
+            "decreased' (section 5.1)",
+            {"peak_time_fraction_of_phase": timing[0], "late_over_peak_backward_speed": timing[1]},
+            f"in every gait phase with backward sliding, the held segments' most negative speed falls within "
+            f"the first {FIG5_PEAK_EARLY_FRACTION:g} of the phase and in its second half their backward speed "
+            f"stays below {FIG5_LATE_EVERY_MAX:g} x that peak, and below {FIG5_LATE_FRACTION_MAX:g} x in "
+            "the median phase (the joint force itself is not checked)",
+            bool(timing[0])
+            and max(timing[0]) <= FIG5_PEAK_EARLY_FRACTION
+            and max(timing[1]) < FIG5_LATE_EVERY_MAX
+            and float(np.median(timing[1])) < FIG5_LATE_FRACTION_MAX,
+        ),
     ]
 
 
@@ -164,24 +195,37 @@ def _higher_xt_claims(inch, inch_hi) -> list:
     m_lo, m_hi = inch.mode_summary, inch_hi.mode_summary
     v_lo, v_hi = _mean_speed(inch), _mean_speed(inch_hi)
     return [
-        make_claim("fig5.higher_xt_faster", "Fig 5",
-               "'Simulations with higher terrain coefficients had similar results, but with ... higher forward "
-               "speeds' (section 5.1)",
-               {f"mean_speed_xt{xt_lo:g}_mps": v_lo, f"mean_speed_xt{xt_hi:g}_mps": v_hi},
-               f"mean forward speed (mean advance / time since the gait start) at X_t = {xt_hi:g} > at {xt_lo:g}",
-               v_hi > v_lo),
-        make_claim("fig5.higher_xt_less_sliding", "Fig 5",
-               "higher terrain coefficients give 'less backwards sliding of stationary segments' (section 5.1)",
-               {f"peak_backward_speed_held_xt{xt_lo:g}_mps": m_lo["peak_backward_speed_held_mps"],
-                f"peak_backward_speed_held_xt{xt_hi:g}_mps": m_hi["peak_backward_speed_held_mps"]},
-               f"peak backward speed of held segments at X_t = {xt_hi:g} < at {xt_lo:g}",
-               m_hi["peak_backward_speed_held_mps"] < m_lo["peak_backward_speed_held_mps"]),
-        make_claim("fig5.higher_xt_lower_joint_force", "Fig 5",
-               "higher terrain coefficients need 'lower forces required for the prismatic joints' (section 5.1)",
-               {f"peak_joint_force_xt{xt_lo:g}_N": m_lo["peak_joint_force_N"],
-                f"peak_joint_force_xt{xt_hi:g}_N": m_hi["peak_joint_force_N"]},
-               f"peak |joint force| at X_t = {xt_hi:g} < at {xt_lo:g}",
-               m_hi["peak_joint_force_N"] < m_lo["peak_joint_force_N"]),
+        make_claim(
+            "fig5.higher_xt_faster",
+            "Fig 5",
+            "'Simulations with higher terrain coefficients had similar results, but with ... higher forward "
+            "speeds' (section 5.1)",
+            {f"mean_speed_xt{xt_lo:g}_mps": v_lo, f"mean_speed_xt{xt_hi:g}_mps": v_hi},
+            f"mean forward speed (mean advance / time since the gait start) at X_t = {xt_hi:g} > at {xt_lo:g}",
+            v_hi > v_lo,
+        ),
+        make_claim(
+            "fig5.higher_xt_less_sliding",
+            "Fig 5",
+            "higher terrain coefficients give 'less backwards sliding of stationary segments' (section 5.1)",
+            {
+                f"peak_backward_speed_held_xt{xt_lo:g}_mps": m_lo["peak_backward_speed_held_mps"],
+                f"peak_backward_speed_held_xt{xt_hi:g}_mps": m_hi["peak_backward_speed_held_mps"],
+            },
+            f"peak backward speed of held segments at X_t = {xt_hi:g} < at {xt_lo:g}",
+            m_hi["peak_backward_speed_held_mps"] < m_lo["peak_backward_speed_held_mps"],
+        ),
+        make_claim(
+            "fig5.higher_xt_lower_joint_force",
+            "Fig 5",
+            "higher terrain coefficients need 'lower forces required for the prismatic joints' (section 5.1)",
+            {
+                f"peak_joint_force_xt{xt_lo:g}_N": m_lo["peak_joint_force_N"],
+                f"peak_joint_force_xt{xt_hi:g}_N": m_hi["peak_joint_force_N"],
+            },
+            f"peak |joint force| at X_t = {xt_hi:g} < at {xt_lo:g}",
+            m_hi["peak_joint_force_N"] < m_lo["peak_joint_force_N"],
+        ),
     ]
 
 
@@ -202,29 +246,41 @@ def fig5_runs(ctx: Context) -> list:
 def item_fig5(ctx: Context) -> Section:
     """Figure 5: six-segment inchworm on X_t = 0.25, against rolling and against X_t = 0.5."""
     inch, hi, roll = (ctx.run(name, extra) for name, extra in fig5_runs(ctx))
-    s = Section("fig5", "Figure 5 - inchworm movement of a six-segment SnoWorm", (
-        "Section 5.1: a six-segment SnoWorm inches on X_t = 0.25 with two segments held for each one that "
-        "moves; 'a simple force controller is used on the prismatic joint to limit backwards sliding of the "
-        "stationary segments'. 'Simulations with higher terrain coefficients had similar results, but with "
-        "less backwards sliding of stationary segments, higher forward speeds, and lower forces required for "
-        "the prismatic joints.' 'Segments 0 & 3, 1 & 4, and 2 & 5 ... their speeds therefore overlap.'"),
+    s = Section(
+        "fig5",
+        "Figure 5 - inchworm movement of a six-segment SnoWorm",
+        (
+            "Section 5.1: a six-segment SnoWorm inches on X_t = 0.25 with two segments held for each one that "
+            "moves; 'a simple force controller is used on the prismatic joint to limit backwards sliding of the "
+            "stationary segments'. 'Simulations with higher terrain coefficients had similar results, but with "
+            "less backwards sliding of stationary segments, higher forward speeds, and lower forces required for "
+            "the prismatic joints.' 'Segments 0 & 3, 1 & 4, and 2 & 5 ... their speeds therefore overlap.'"
+        ),
         scenarios=["inchworm6", "rolling6_xt025", f"inchworm6 --set terrain.xt={FIG5_XT_HIGH:g}"]
         + ([f"(quick: all three with --set simulation.duration_s={QUICK_INCHWORM_DURATION_S:g})"] if ctx.quick else []),
-        claims=check_fig5(inch, roll, hi))
+        claims=check_fig5(inch, roll, hi),
+    )
     ov = pair_overlap(inch)
     rows = ["| segments | RMS speed difference / peak speed | kind |", "|---|---|---|"]
     rows += [f"| {k} | {v:.3f} | moves together (paper) |" for k, v in ov["pairs"].items()]
     rows += [f"| {k} | {v:.3f} | different groups |" for k, v in ov["others"].items()]
     s.tables.append("\n".join(rows))
-    s.notes.append("Overlap measure: RMS of v_a(t) - v_b(t) from the gait start, without any time shift, divided "
-                   "by the peak ground speed of the run. The thresholds (pairs <= 0.3, others >= 0.5) were chosen "
-                   "by this report, not given by the paper. Within a pair the two segments start and stop "
-                   "together, but they are moved by different joints (e.g. segment 0 pushed by joint 0 extending, "
-                   "segment 3 pulled by joint 2 contracting), so their speed ramps differ and the pairs 0 & 3 "
-                   "and 2 & 5 overlap less closely than 1 & 4. The timing thresholds of fig5.backward_peak_early "
-                   "(first quarter of the phase; in its second half below 0.95 of the peak in every phase and 0.6 in the median phase, counting phases whose sliding reaches a quarter of the run's peak) are also this report's.")
+    s.notes.append(
+        "Overlap measure: RMS of v_a(t) - v_b(t) from the gait start, without any time shift, divided "
+        "by the peak ground speed of the run. The thresholds (pairs <= 0.3, others >= 0.5) were chosen "
+        "by this report, not given by the paper. Within a pair the two segments start and stop "
+        "together, but they are moved by different joints (e.g. segment 0 pushed by joint 0 extending, "
+        "segment 3 pulled by joint 2 contracting), so their speed ramps differ and the pairs 0 & 3 "
+        "and 2 & 5 overlap less closely than 1 & 4. The timing thresholds of fig5.backward_peak_early "
+        "(first quarter of the phase; in its second half below 0.95 of the peak in every phase and 0.6 in the median phase, counting phases whose sliding reaches a quarter of the run's peak) are also this report's."
+    )
     if ctx.out_dir is not None:
-        s.figures.append(plotting.write_figure(ctx.figure("fig5_speeds.png"), plotting.plot_groups, inch, FIG5_PAIRS, size=ctx.figure_size))
-        s.figures.append(plotting.write_figure(ctx.figure("fig5_positions.png"), plotting.plot_positions, inch, size=ctx.figure_size))
+        s.figures.append(
+            plotting.write_figure(
+                ctx.figure("fig5_speeds.png"), plotting.plot_groups, inch, FIG5_PAIRS, size=ctx.figure_size
+            )
+        )
+        s.figures.append(
+            plotting.write_figure(ctx.figure("fig5_positions.png"), plotting.plot_positions, inch, size=ctx.figure_size)
+        )
     return s
-

@@ -7,6 +7,7 @@ itself then runs in the main process on their results.  Every item computes exac
 serially, so the claims and the report are the same (the items share no state but the cache of
 runs, which only saves time).
 """
+
 from __future__ import annotations
 
 import json
@@ -32,8 +33,17 @@ __all__ = ["ITEMS", "PREFETCH", "PaperReport", "default_jobs", "evaluate", "run_
 
 
 #: The report's items in order: key -> item function.
-ITEMS = {"fig3": item_fig3, "table2": item_table2, "fig5": item_fig5, "fig6": item_fig6, "fig7": item_fig7,
-         "fig8": item_fig8, "fig9": item_fig9, "fig11": item_fig11, "readings": item_readings}
+ITEMS = {
+    "fig3": item_fig3,
+    "table2": item_table2,
+    "fig5": item_fig5,
+    "fig6": item_fig6,
+    "fig7": item_fig7,
+    "fig8": item_fig8,
+    "fig9": item_fig9,
+    "fig11": item_fig11,
+    "readings": item_readings,
+}
 
 #: Items whose simulations run as separate pool tasks before the item (``jobs > 1``): key -> a
 #: function of the Context giving ``[(scenario name, extra overrides), ...]``, longest first.
@@ -41,8 +51,17 @@ PREFETCH = {"fig5": fig5_runs}
 
 #: Wall time of each item in the serial full report [s] (measured, 2-core machine): the pool
 #: starts the longest tasks first.  Only the order depends on it, never a result.
-_COST_HINT_S = {"fig3": 0.4, "table2": 0.6, "fig5": 0.5, "fig6": 0.6, "fig7": 0.6, "fig8": 0.9, "fig9": 1.3,
-                "fig11": 0.9, "readings": 1.0}
+_COST_HINT_S = {
+    "fig3": 0.4,
+    "table2": 0.6,
+    "fig5": 0.5,
+    "fig6": 0.6,
+    "fig7": 0.6,
+    "fig8": 0.9,
+    "fig9": 1.3,
+    "fig11": 0.9,
+    "readings": 1.0,
+}
 
 #: Most worker processes ``snoworm paper`` starts by default (there are about a dozen tasks).
 MAX_DEFAULT_JOBS = 8
@@ -77,9 +96,21 @@ class PaperReport:
 
 def _error_section(key, exc):
     fn = ITEMS[key]
-    return Section(key, (fn.__doc__ or key).splitlines()[0], "", claims=[make_claim(
-        f"{key}.ran", key, "the item's simulations ran", {"error": f"{type(exc).__name__}: {exc}"},
-        "no solver or input error", False)])
+    return Section(
+        key,
+        (fn.__doc__ or key).splitlines()[0],
+        "",
+        claims=[
+            make_claim(
+                f"{key}.ran",
+                key,
+                "the item's simulations ran",
+                {"error": f"{type(exc).__name__}: {exc}"},
+                "no solver or input error",
+                False,
+            )
+        ],
+    )
 
 
 def _run_item(ctx, key) -> Section:
@@ -112,8 +143,10 @@ def _evaluate_pooled(ctx, keys, jobs, done):
     """The items' sections by key, computed on ``jobs`` worker processes; ``done(key, sec)`` per item."""
     runs = {k: [(name, list(extra)) for name, extra in PREFETCH[k](ctx)] for k in keys if k in PREFETCH}
     tasks = [("run", r, ctx.args()) for k in runs for r in runs[k]]
-    tasks += [("item", k, ctx.args()) for k in sorted((k for k in keys if k not in runs),
-                                                      key=lambda k: -_COST_HINT_S.get(k, 1.0))]
+    tasks += [
+        ("item", k, ctx.args())
+        for k in sorted((k for k in keys if k not in runs), key=lambda k: -_COST_HINT_S.get(k, 1.0))
+    ]
     waiting = {k: len(v) for k, v in runs.items()}
     spent = dict.fromkeys(runs, 0.0)
     out = {}
@@ -125,7 +158,7 @@ def _evaluate_pooled(ctx, keys, jobs, done):
                 continue
             if value is not None:
                 ctx.put(*what, value)
-            for k in runs:                  # an item whose runs are all in runs here, on the cache
+            for k in runs:  # an item whose runs are all in runs here, on the cache
                 if what in runs[k] and waiting[k] > 0:
                     waiting[k] -= 1
                     spent[k] += dt
@@ -136,8 +169,18 @@ def _evaluate_pooled(ctx, keys, jobs, done):
     return out
 
 
-def evaluate(items=None, quick=False, *, model=None, scenario_overrides=None, out_dir=None, progress=None,
-             jobs=1, plot_format="png", figure_size=None) -> list:
+def evaluate(
+    items=None,
+    quick=False,
+    *,
+    model=None,
+    scenario_overrides=None,
+    out_dir=None,
+    progress=None,
+    jobs=1,
+    plot_format="png",
+    figure_size=None,
+) -> list:
     """Run report items and return their :class:`Section` objects.
 
     Parameters
@@ -170,8 +213,11 @@ def evaluate(items=None, quick=False, *, model=None, scenario_overrides=None, ou
         finished.append(key)
         if progress is not None:
             bad = [c.id for c in sec.claims if not c.holds]
-            progress(f"[{len(finished)}/{len(keys)}] {sec.title}: {len(sec.claims) - len(bad)}/{len(sec.claims)} "
-                     "claims hold" + (f" (failed: {', '.join(bad)})" if bad else "") + f" [{sec.wall_time_s:.1f} s]")
+            progress(
+                f"[{len(finished)}/{len(keys)}] {sec.title}: {len(sec.claims) - len(bad)}/{len(sec.claims)} "
+                "claims hold" + (f" (failed: {', '.join(bad)})" if bad else "") + f" [{sec.wall_time_s:.1f} s]"
+            )
+
     if int(jobs) > 1 and len(keys) > 1:
         by_key = _evaluate_pooled(ctx, keys, int(jobs), done)
         return [by_key[k] for k in keys]
@@ -182,8 +228,17 @@ def evaluate(items=None, quick=False, *, model=None, scenario_overrides=None, ou
     return out
 
 
-def run_paper(out_dir, quick=False, progress=None, overwrite=False, jobs=1, plot_format="png",
-              figure_size=None, *, command: str | None = None) -> PaperReport:
+def run_paper(
+    out_dir,
+    quick=False,
+    progress=None,
+    overwrite=False,
+    jobs=1,
+    plot_format="png",
+    figure_size=None,
+    *,
+    command: str | None = None,
+) -> PaperReport:
     """Run every item, write the figures, ``report.md``, ``report.html`` and ``claims.json`` into ``out_dir``.
 
     ``jobs`` worker processes run the items (:func:`evaluate`; 1: serial, in this process).
@@ -208,19 +263,34 @@ def run_paper(out_dir, quick=False, progress=None, overwrite=False, jobs=1, plot
 
 def _run_into(out: Path, quick, progress, jobs, plot_format, figure_size=None) -> PaperReport:
     t0 = time.perf_counter()
-    sections = evaluate(None, quick, out_dir=out, progress=progress, jobs=jobs, plot_format=plot_format,
-                        figure_size=figure_size)
+    sections = evaluate(
+        None, quick, out_dir=out, progress=progress, jobs=jobs, plot_format=plot_format, figure_size=figure_size
+    )
     rep = PaperReport(sections, bool(quick), time.perf_counter() - t0)
     figs = [p for s in sections for p in s.figures]
     rep.paths = figs + [
         atomic_write_text(out / "report.md", render_markdown(rep)),
         atomic_write_text(out / "report.html", render_html(rep)),
-        atomic_write_text(out / "claims.json", json.dumps(
-            {"snoworm_version": __version__, "quick": rep.quick, "all_hold": rep.all_hold,
-             "claims": [c.to_dict() for c in rep.claims],
-             "variants": {s.key: [{"label": v.label, "overrides": v.overrides,
-                                   "claims": [c.to_dict() for c in v.claims]} for v in s.variants]
-                          for s in sections if s.variants}}, indent=2) + "\n"),
+        atomic_write_text(
+            out / "claims.json",
+            json.dumps(
+                {
+                    "snoworm_version": __version__,
+                    "quick": rep.quick,
+                    "all_hold": rep.all_hold,
+                    "claims": [c.to_dict() for c in rep.claims],
+                    "variants": {
+                        s.key: [
+                            {"label": v.label, "overrides": v.overrides, "claims": [c.to_dict() for c in v.claims]}
+                            for v in s.variants
+                        ]
+                        for s in sections
+                        if s.variants
+                    },
+                },
+                indent=2,
+            )
+            + "\n",
+        ),
     ]
     return rep
-

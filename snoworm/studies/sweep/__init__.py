@@ -53,27 +53,51 @@ Extending
 An executor is any object with ``map_unordered(fn, tasks)`` yielding ``fn(task)`` results in any
 order (and ``close()``); pass it to :func:`run_sweep` as ``executor=``.
 """
+
 from ...infra.pool import ProcessExecutor
 from .cases import SweepCase, build_cases
 from .executors import BatchExecutor, DaskExecutor, SerialExecutor, SweepExecutionError, run_chunk
 from .metrics import (
-                      IMMOBILISED_SIGN_FACTOR,
-                      IMMOBILISED_SPEED_MPS,
-                      LATE_FRACTION,
-                      METRIC_COLUMNS,
-                      SLIP_FRACTION,
-                      STATUSES,
-                      SweepTask,
-                      case_metrics,
-                      run_case,
+    IMMOBILISED_SIGN_FACTOR,
+    IMMOBILISED_SPEED_MPS,
+    LATE_FRACTION,
+    METRIC_COLUMNS,
+    SLIP_FRACTION,
+    STATUSES,
+    SweepTask,
+    case_metrics,
+    run_case,
 )
 from .run import run_sweep
 from .series import SERIES_FORMATS, combine_series, load_series
 from .spec import Axis, parse_spec, parse_sweep_option
 from .summary import SweepTable, load_sweep
 
-__all__ = ["Axis", "SweepCase", "SweepTask", "SweepTable", "SweepExecutionError", "parse_spec", "parse_sweep_option",
-           "build_cases",
-           "case_metrics", "run_case", "run_sweep", "SerialExecutor", "ProcessExecutor", "DaskExecutor",
-           "BatchExecutor", "run_chunk", "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR", "LATE_FRACTION",
-           "SLIP_FRACTION", "METRIC_COLUMNS", "STATUSES", "load_sweep", "load_series", "combine_series", "SERIES_FORMATS"]
+__all__ = [
+    "Axis",
+    "SweepCase",
+    "SweepTask",
+    "SweepTable",
+    "SweepExecutionError",
+    "parse_spec",
+    "parse_sweep_option",
+    "build_cases",
+    "case_metrics",
+    "run_case",
+    "run_sweep",
+    "SerialExecutor",
+    "ProcessExecutor",
+    "DaskExecutor",
+    "BatchExecutor",
+    "run_chunk",
+    "IMMOBILISED_SPEED_MPS",
+    "IMMOBILISED_SIGN_FACTOR",
+    "LATE_FRACTION",
+    "SLIP_FRACTION",
+    "METRIC_COLUMNS",
+    "STATUSES",
+    "load_sweep",
+    "load_series",
+    "combine_series",
+    "SERIES_FORMATS",
+]

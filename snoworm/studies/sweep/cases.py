@@ -1,4 +1,5 @@
 """Sweep cases: the grid (or zip) of an axis list, each case with a stable id and key."""
+
 from __future__ import annotations
 
 import hashlib
@@ -35,14 +36,18 @@ def build_cases(axes, zip_: bool = False) -> list:
     """
     n_cases = len(axes[0].values) if zip_ and axes else math.prod(len(a.values) for a in axes)
     if n_cases > MAX_CASES:
-        raise ScenarioError(f"--set: the sweep has {n_cases} cases, over the {MAX_CASES} allowed in one sweep; "
-                            "use fewer values or split the study into several sweeps.")
+        raise ScenarioError(
+            f"--set: the sweep has {n_cases} cases, over the {MAX_CASES} allowed in one sweep; "
+            "use fewer values or split the study into several sweeps."
+        )
     if zip_:
         lens = {a.key: len(a.values) for a in axes}
         if len(set(lens.values())) > 1:
             detail = ", ".join(f"{k} has {n}" for k, n in lens.items())
-            raise ScenarioError(f"--zip pairs the values of every --set element by element, so each needs the "
-                                f"same number of values; {detail}. Make the lengths equal or drop --zip for a grid.")
+            raise ScenarioError(
+                f"--zip pairs the values of every --set element by element, so each needs the "
+                f"same number of values; {detail}. Make the lengths equal or drop --zip for a grid."
+            )
         combos = list(zip(*(a.values for a in axes)))
     else:
         combos = list(itertools.product(*(a.values for a in axes)))

@@ -7,6 +7,7 @@ in any order, and ``close()``.  :class:`SerialExecutor` runs them in this proces
 (:func:`snoworm.simulation.driver.batch_key`) into one solve (:func:`snoworm.simulation.driver.simulate_batch`),
 running every other case one by one through the sweep's per-case function.
 """
+
 from __future__ import annotations
 
 import functools
@@ -20,8 +21,7 @@ from ...simulation.driver import batch_key, simulate_batch
 from .metrics import case_metrics
 from .series import save_series
 
-__all__ = ["SweepExecutionError", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "BatchExecutor",
-           "run_chunk"]
+__all__ = ["SweepExecutionError", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "BatchExecutor", "run_chunk"]
 
 
 class SweepExecutionError(RuntimeError):
@@ -58,9 +58,11 @@ def _connect(client_class, address):
     text = str(address)
     scheme = text.split("://", 1)[0] if "://" in text else "tcp"
     if scheme != "tcp":
-        raise ScenarioError(f"--scheduler: {quote(text)} uses {scheme}://; snoworm connects to tcp://host:port "
-                            "addresses only (for another protocol make a distributed.Client yourself and pass it: "
-                            "run_sweep(..., scheduler=client)).")
+        raise ScenarioError(
+            f"--scheduler: {quote(text)} uses {scheme}://; snoworm connects to tcp://host:port "
+            "addresses only (for another protocol make a distributed.Client yourself and pass it: "
+            "run_sweep(..., scheduler=client))."
+        )
     box = {}
 
     def connect():
@@ -68,15 +70,21 @@ def _connect(client_class, address):
             box["client"] = client_class(text, timeout=f"{CONNECT_TIMEOUT_S}s")
         except BaseException as exc:  # noqa: BLE001 - handed to the caller as bad input
             box["error"] = exc
+
     th = threading.Thread(target=connect, name="snoworm-dask-connect", daemon=True)
     th.start()
     th.join(HANDSHAKE_TIMEOUT_S)
     if "client" in box:
         return box["client"]
-    why = (f"no Dask scheduler answered within {HANDSHAKE_TIMEOUT_S} s (something else may be listening there)"
-           if th.is_alive() else f"{type(box['error']).__name__}: {quote(str(box['error']))}")
-    raise ScenarioError(f"--scheduler {quote(text)}: cannot connect to the Dask scheduler ({why}). "
-                        "Check the address (tcp://host:port) and that the scheduler is running.")
+    why = (
+        f"no Dask scheduler answered within {HANDSHAKE_TIMEOUT_S} s (something else may be listening there)"
+        if th.is_alive()
+        else f"{type(box['error']).__name__}: {quote(str(box['error']))}"
+    )
+    raise ScenarioError(
+        f"--scheduler {quote(text)}: cannot connect to the Dask scheduler ({why}). "
+        "Check the address (tcp://host:port) and that the scheduler is running."
+    )
 
 
 class DaskExecutor:
@@ -91,14 +99,17 @@ class DaskExecutor:
         try:
             from distributed import Client  # optional dependency (snoworm[dask]): imported only when used
         except ImportError:
-            raise ScenarioError(f"--scheduler {address}: Dask is not installed. Install it with "
-                                "pip install 'snoworm[dask]' (or pip install 'dask[distributed]').") from None
+            raise ScenarioError(
+                f"--scheduler {address}: Dask is not installed. Install it with "
+                "pip install 'snoworm[dask]' (or pip install 'dask[distributed]')."
+            ) from None
         self.address = address
         self.client = address if hasattr(address, "submit") else _connect(Client, address)
         self._own = not hasattr(address, "submit")
 
     def map_unordered(self, fn, tasks):
         from distributed import as_completed  # optional dependency, see __init__
+
         n_workers = max(len(self.client.scheduler_info().get("workers", {})), 1)
         window = 4 * n_workers
         it = iter(tasks)
@@ -148,7 +159,7 @@ def run_chunk(tasks, fn, metrics, max_group=None) -> list:
         try:
             sc = task.validated()
             key = batch_key(sc)
-            task = task.with_scenario(sc)            # validated once: fn (run_case) reuses it
+            task = task.with_scenario(sc)  # validated once: fn (run_case) reuses it
         except (ScenarioError, ValueError):
             key = None
         if key is None:
@@ -158,7 +169,7 @@ def run_chunk(tasks, fn, metrics, max_group=None) -> list:
     for members in groups.values():
         size = max_group or len(members)
         for j in range(0, len(members), size):
-            part = members[j:j + size]
+            part = members[j : j + size]
             if len(part) == 1:
                 results.append(fn(part[0][0]))
             else:

@@ -1,6 +1,7 @@
 """Figures of a sweep's table: metrics against the swept value (one varying key, or a zip) or a
 heat map of one metric (two keys on a grid).  Used by :meth:`SweepTable.plot` and by
 :func:`~snoworm.studies.sweep.run.run_sweep` for ``sweep.<fmt>`` / ``heatmap.<fmt>``."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -39,8 +40,10 @@ def _layout(table):
     if grid:
         return "heatmap", tuple(varying)
     if len(varying) > 2 and int(np.prod(counts)) == len(table.rows):
-        raise ValueError(f"a sweep over {len(varying)} keys on a grid has no standard figure; "
-                         "pick two keys with table.to_pandas() and plotting.plot_sweep_heatmap")
+        raise ValueError(
+            f"a sweep over {len(varying)} keys on a grid has no standard figure; "
+            "pick two keys with table.to_pandas() and plotting.plot_sweep_heatmap"
+        )
     return "line", varying[0]
 
 
@@ -50,14 +53,23 @@ def plot_table(table, metric=None, *, size=None, ax=None, fig=None):
     dotted), or a heat map of ``metric`` (default ``mean_speed_mps``) over a two-key grid.
     ``size``, ``ax``, ``fig``: as for every plotting function.  Returns the Figure."""
     from ... import plotting  # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
+
     kind, keys = _layout(table)
     ok = [r["status"] == "ok" for r in table.rows]
     if kind == "line":
         x, labels = _positions(table.column(keys))
         names = [metric] if isinstance(metric, str) else list(metric or SWEEP_METRICS)
-        return plotting.plot_sweep(x, {m: table.column(m) for m in names}, keys,
-                                   immobilised=table.column("immobilised"), ok=ok, tick_labels=labels,
-                                   size=size, ax=ax, fig=fig)
+        return plotting.plot_sweep(
+            x,
+            {m: table.column(m) for m in names},
+            keys,
+            immobilised=table.column("immobilised"),
+            ok=ok,
+            tick_labels=labels,
+            size=size,
+            ax=ax,
+            fig=fig,
+        )
     metric = metric or "mean_speed_mps"
     kx, ky = keys
     xs, ys = _distinct(table.column(kx)), _distinct(table.column(ky))
@@ -73,9 +85,19 @@ def plot_table(table, metric=None, *, size=None, ax=None, fig=None):
             imm[j, k] = bool(r["immobilised"])
         else:
             fail[j, k] = True
-    return plotting.plot_sweep_heatmap([format_cell(v, FULL) for v in xs], [format_cell(v, FULL) for v in ys], grid,
-                                       kx, ky, plotting.quantity_label(metric), immobilised=imm, failed=fail,
-                                       size=size, ax=ax, fig=fig)
+    return plotting.plot_sweep_heatmap(
+        [format_cell(v, FULL) for v in xs],
+        [format_cell(v, FULL) for v in ys],
+        grid,
+        kx,
+        ky,
+        plotting.quantity_label(metric),
+        immobilised=imm,
+        failed=fail,
+        size=size,
+        ax=ax,
+        fig=fig,
+    )
 
 
 def write_plot(table, out, plot_format="png", size=None):
@@ -83,10 +105,12 @@ def write_plot(table, out, plot_format="png", size=None):
     ``heatmap.<fmt>`` (grid of two keys) in ``out``; nothing for a grid of more keys.
     Returns the path or None."""
     from ... import plotting  # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
+
     try:
         kind, _ = _layout(table)
     except ValueError:
         return None
     name = "sweep" if kind == "line" else "heatmap"
-    return plotting.write_figure(out / f"{name}.{plot_format}", lambda size=None: plot_table(table, size=size),
-                                 fmt=plot_format, size=size)
+    return plotting.write_figure(
+        out / f"{name}.{plot_format}", lambda size=None: plot_table(table, size=size), fmt=plot_format, size=size
+    )

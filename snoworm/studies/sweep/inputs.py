@@ -6,6 +6,7 @@ value) refers to -- a controller file or a ``package.module`` controller's sourc
 file, a terrain-model file, any other ``.py``/``.yaml``/``.yml``/``.json``/``.csv`` file named by a
 value.  A change to any of them refuses the resume, naming the file (``--restart`` starts afresh).
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -40,7 +41,7 @@ def _candidates(text: str, base: Path):
     target, sep, name = text.rpartition(":")
     if sep and name.isidentifier() and target:
         if "/" not in target and not target.endswith(".py"):
-            yield from code_files(text)            # package.module:Name (found statically)
+            yield from code_files(text)  # package.module:Name (found statically)
             return
         text = target
     if "/" in text or text.endswith(FILE_SUFFIXES):

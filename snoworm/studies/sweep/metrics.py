@@ -8,6 +8,7 @@ resistance (``tanh(V / sign_eps_mps)``) lets a stuck vehicle creep: with the def
 ``tanh(V / sign_eps_mps) > tanh(5) = 0.9999``: the terrain resistance is saturated, so the motion
 is the regularisation's creep, not rolling.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -25,8 +26,19 @@ from ...modes.controller import ControllerError
 from ...simulation.driver import SolverError, simulate
 from .series import save_series
 
-__all__ = ["SweepTask", "case_metrics", "run_case", "one_line", "IMMOBILISED_SPEED_MPS", "IMMOBILISED_SIGN_FACTOR",
-           "LATE_FRACTION", "SLIP_FRACTION", "METRIC_COLUMNS", "STATUSES", "MAX_ERROR_CHARS"]
+__all__ = [
+    "SweepTask",
+    "case_metrics",
+    "run_case",
+    "one_line",
+    "IMMOBILISED_SPEED_MPS",
+    "IMMOBILISED_SIGN_FACTOR",
+    "LATE_FRACTION",
+    "SLIP_FRACTION",
+    "METRIC_COLUMNS",
+    "STATUSES",
+    "MAX_ERROR_CHARS",
+]
 
 #: Absolute floor of the immobilised speed threshold [m/s].
 IMMOBILISED_SPEED_MPS = 0.05
@@ -115,7 +127,7 @@ def case_metrics(result) -> dict:
 def one_line(text: str) -> str:
     """``text`` on one line (line breaks become `` | ``), cut to :data:`MAX_ERROR_CHARS`."""
     text = " | ".join(s.strip() for s in str(text).splitlines() if s.strip())
-    return text if len(text) <= MAX_ERROR_CHARS else text[:MAX_ERROR_CHARS - 3] + "..."
+    return text if len(text) <= MAX_ERROR_CHARS else text[: MAX_ERROR_CHARS - 3] + "..."
 
 
 @dataclass(frozen=True)

@@ -6,6 +6,7 @@ sweep); :class:`SweepPlan` holds the result, with the resume key of ``sweep.json
 (:func:`_definition`: the scenario, the axes, the version and the contents of the files they name).
 :mod:`.run` executes the plan.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -42,13 +43,18 @@ def _base(scenario):
 def _definition(raw, axes, zip_, base_dir=None):
     """The resume key: the scenario mapping, the axes, the snoworm version and the contents of
     every file they name (:mod:`snoworm.studies.sweep.inputs`)."""
-    return json.loads(json.dumps({
-        "scenario_sha256": hashlib.sha256(canonical_json(raw).encode()).hexdigest(),
-        "axes": [{"key": a.key, "values": list(a.values)} for a in axes],
-        "zip": bool(zip_),
-        "snoworm_version": __version__,
-        "inputs": input_hashes(raw, axes, base_dir),
-    }, default=str))
+    return json.loads(
+        json.dumps(
+            {
+                "scenario_sha256": hashlib.sha256(canonical_json(raw).encode()).hexdigest(),
+                "axes": [{"key": a.key, "values": list(a.values)} for a in axes],
+                "zip": bool(zip_),
+                "snoworm_version": __version__,
+                "inputs": input_hashes(raw, axes, base_dir),
+            },
+            default=str,
+        )
+    )
 
 
 @dataclass
@@ -60,7 +66,7 @@ class SweepPlan:
     source: str
     base_dir: str | None
     cases: list
-    invalid: dict          # case index -> one-line error of the cases whose scenario is rejected
+    invalid: dict  # case index -> one-line error of the cases whose scenario is rejected
     n_links: int
     columns: list
     definition: dict
@@ -112,14 +118,26 @@ def _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep) -> SweepP
             invalid[c.index] = one_line(exc)
             continue
         why = trust_problem_of(sc) if sc.mode.type == "controller" else None
-        if why is not None:                 # refused for the whole sweep, before anything runs
+        if why is not None:  # refused for the whole sweep, before anything runs
             raise ScenarioError(f"case {c.case_id}: {why}")
         n_links = max(n_links, sc.vehicle.segments - 1)
         if keep:
             kept[c.index] = sc
     if len(invalid) == len(cases):
         first = invalid[cases[0].index]
-        raise ScenarioError(f"every case of the sweep is invalid, e.g. case {cases[0].case_id} "
-                            f"({', '.join(f'{a.key}={v}' for a, v in zip(axes, cases[0].values))}): {first}")
-    return SweepPlan(axes, raw, source, base_dir, cases, invalid, n_links, summary_columns(axes, n_links),
-                 _definition(raw, axes, zip_, base_dir), kept)
+        raise ScenarioError(
+            f"every case of the sweep is invalid, e.g. case {cases[0].case_id} "
+            f"({', '.join(f'{a.key}={v}' for a, v in zip(axes, cases[0].values))}): {first}"
+        )
+    return SweepPlan(
+        axes,
+        raw,
+        source,
+        base_dir,
+        cases,
+        invalid,
+        n_links,
+        summary_columns(axes, n_links),
+        _definition(raw, axes, zip_, base_dir),
+        kept,
+    )

@@ -6,6 +6,7 @@ mapping, never a big object) -> an executor running :func:`~snoworm.studies.swee
 one row per case, appended to ``summary.csv`` as it finishes -> a :class:`SweepTable` sorted
 by case id (and a plot).
 """
+
 from __future__ import annotations
 
 import json
@@ -57,11 +58,27 @@ class _Progress:
 
 
 # ---------------------------------------------------------------------------------- driver
-def run_sweep(scenario, sets, out_dir=None, *, jobs: int = 1, scheduler=None, zip_: bool = False,
-              save_cases: bool = False, progress=None, plot: bool = True, executor=None,
-              batch: int = 0, series: str = "folders", plot_format: str = "png",
-              overwrite: bool = False, allow_code=(), restart: bool = False, figure_size=None,
-              command: str | None = None) -> SweepTable:
+def run_sweep(
+    scenario,
+    sets,
+    out_dir=None,
+    *,
+    jobs: int = 1,
+    scheduler=None,
+    zip_: bool = False,
+    save_cases: bool = False,
+    progress=None,
+    plot: bool = True,
+    executor=None,
+    batch: int = 0,
+    series: str = "folders",
+    plot_format: str = "png",
+    overwrite: bool = False,
+    allow_code=(),
+    restart: bool = False,
+    figure_size=None,
+    command: str | None = None,
+) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
 
     Parameters
@@ -111,11 +128,12 @@ def run_sweep(scenario, sets, out_dir=None, *, jobs: int = 1, scheduler=None, zi
         A malformed SPEC, unequal zip lengths, every case invalid, or an output directory holding another sweep.
     """
     save_cases = _check_series(series) or save_cases
-    local = executor is None and scheduler is None     # this process or its own pool: pass scenarios on
+    local = executor is None and scheduler is None  # this process or its own pool: pass scenarios on
     plan = plan_sweep(scenario, sets, zip_, save_cases, out_dir, jobs, keep=local, allow_code=allow_code)
     out = _new_output_folder(out_dir, overwrite)
-    opts = _Options(progress, plot, zip_, save_cases and series, overwrite or restart, plot_format, figure_size,
-                    command)
+    opts = _Options(
+        progress, plot, zip_, save_cases and series, overwrite or restart, plot_format, figure_size, command
+    )
     return _on_executor(plan, out, executor, (scheduler, batch, jobs), opts)
 
 
@@ -123,18 +141,18 @@ def _on_executor(plan, out, executor, how, opts) -> SweepTable:
     """Run the planned sweep on ``executor`` (None: a new one for ``how`` = (scheduler, batch, jobs),
     closed at the end); an I/O failure becomes :class:`OutputError`."""
     own = executor is None
-    if own:                         # before anything is written: an unreachable scheduler writes nothing
+    if own:  # before anything is written: an unreachable scheduler writes nothing
         executor = _make_executor(*how)
     try:
         return _in_folder(plan, out, executor, own, opts)
-    except OSError as exc:            # writing sweep.json, the manifest or the plot
+    except OSError as exc:  # writing sweep.json, the manifest or the plot
         raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
 
 
 def _new_output_folder(out_dir, overwrite):
     """``out_dir`` as a Path (None: nothing is written), checked before any case runs unless it holds
     a sweep already (resumed or refused later, by :func:`~snoworm.studies.sweep.summary.prepare_dir`)."""
-    out = Path(os.path.abspath(out_dir)) if out_dir is not None else None     # once: a chdir does not move it
+    out = Path(os.path.abspath(out_dir)) if out_dir is not None else None  # once: a chdir does not move it
     if out is not None and not (out / "sweep.json").exists():
         check_output_folder(out, overwrite)
     return out
@@ -150,8 +168,10 @@ def _check_series(series: str) -> bool:
             require_xarray()
             import h5netcdf  # noqa: F401  # lazy: optional dependency (snoworm[data]), checked before any case runs
         except ImportError:
-            raise ScenarioError("--series netcdf needs xarray and h5netcdf: pip install 'snoworm[data]' "
-                                "(or keep the default --series folders).") from None
+            raise ScenarioError(
+                "--series netcdf needs xarray and h5netcdf: pip install 'snoworm[data]' "
+                "(or keep the default --series folders)."
+            ) from None
         return True
     return False
 
@@ -160,14 +180,14 @@ def _check_series(series: str) -> bool:
 class _Options:
     """How a sweep reports and what it writes besides the table (:func:`run_sweep`'s options)."""
 
-    progress: object          # None/True: progress on stderr; False: none
+    progress: object  # None/True: progress on stderr; False: none
     plot: bool
     zip_: bool
-    keep_series: object       # False, or the series format ("folders" or "netcdf")
+    keep_series: object  # False, or the series format ("folders" or "netcdf")
     overwrite: bool
     plot_format: str
-    figure_size: object       # print size of the plot (None: page width)
-    command: str | None       # the command line the manifest records (None: this process's)
+    figure_size: object  # print size of the plot (None: page width)
+    command: str | None  # the command line the manifest records (None: this process's)
 
 
 def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
@@ -178,8 +198,9 @@ def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
             try:
                 _mkdir(out)
                 stack.enter_context(folder_lock(out))
-                done = prepare_dir(out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source,
-                                   overwrite=opts.overwrite)
+                done = prepare_dir(
+                    out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source, overwrite=opts.overwrite
+                )
                 write_manifest(out, opts.command, status="running")
             except BaseException:
                 if own:
@@ -206,8 +227,14 @@ def _run(plan, done, out, executor, own, opts: _Options) -> SweepTable:
     _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, keep_series)
     table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys, out_dir=out)
     if keep_series == "netcdf":
-        combine_series(out, plan.axes, plan.cases, opts.zip_, {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS},
-                       {"scenario": plan.source, "sweep_definition": json.dumps(plan.definition)})
+        combine_series(
+            out,
+            plan.axes,
+            plan.cases,
+            opts.zip_,
+            {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS},
+            {"scenario": plan.source, "sweep_definition": json.dumps(plan.definition)},
+        )
     if out is not None and opts.plot:
         write_plot(table, out, opts.plot_format, opts.figure_size)
     return table
@@ -218,8 +245,9 @@ def _make_executor(scheduler, batch, jobs):
     if scheduler is not None:
         return DaskExecutor(scheduler)
     if int(batch) > 1:
-        return BatchExecutor(int(batch), int(jobs), ProcessExecutor(int(jobs)) if int(jobs) > 1 else None,
-                             metrics=case_metrics)
+        return BatchExecutor(
+            int(batch), int(jobs), ProcessExecutor(int(jobs)) if int(jobs) > 1 else None, metrics=case_metrics
+        )
     if int(jobs) > 1:
         return ProcessExecutor(int(jobs))
     return SerialExecutor()
@@ -258,9 +286,11 @@ class _Recorder:
                 os.write(self.fd, self.table.csv_line(row).encode("utf-8"))
                 os.fsync(self.fd)
             except OSError as exc:
-                raise OutputError(f"cannot append to the summary: {os_error_message(exc, self.path)}; the "
-                                  f"{len(self.rows)} finished cases are kept, re-run the same command to "
-                                  "resume.") from None
+                raise OutputError(
+                    f"cannot append to the summary: {os_error_message(exc, self.path)}; the "
+                    f"{len(self.rows)} finished cases are kept, re-run the same command to "
+                    "resume."
+                ) from None
         self.rows[c.index] = row
         self.bar.update(row["status"] != "ok")
 
@@ -273,10 +303,17 @@ def _tasks(plan: SweepPlan, todo, out, keep_series):
         if c.index in plan.invalid:
             continue
         save = case_series_path(out, c.case_id, keep_series) if keep_series else None
-        sc = plan.scenarios.pop(c.index, None)        # validated by _plan: not again
+        sc = plan.scenarios.pop(c.index, None)  # validated by _plan: not again
         raw = apply_overrides(plan.raw, c.overrides(plan.axes)) if sc is None else None
-        yield SweepTask(c.index, raw=raw, scenario=sc, source=plan.source, base_dir=plan.base_dir, save_dir=save,
-                        allow_code=tuple(plan.allow_code))
+        yield SweepTask(
+            c.index,
+            raw=raw,
+            scenario=sc,
+            source=plan.source,
+            base_dir=plan.base_dir,
+            save_dir=save,
+            allow_code=tuple(plan.allow_code),
+        )
 
 
 def _execute(plan: SweepPlan, todo, executor, rec: _Recorder, own: bool, out, keep_series):
@@ -306,4 +343,6 @@ def _run_cases(plan: SweepPlan, todo, executor, rec: _Recorder, out, keep_series
     except Exception as exc:  # the executor itself failed (a worker died, the cluster went away)
         n = len(rec.rows)
         where = f"; the {n} finished cases are in {out / 'summary.csv'}, re-run to resume" if out is not None else ""
-        raise SweepExecutionError(f"the sweep's executor failed ({type(exc).__name__}: {one_line(exc)}){where}.") from exc
+        raise SweepExecutionError(
+            f"the sweep's executor failed ({type(exc).__name__}: {one_line(exc)}){where}."
+        ) from exc

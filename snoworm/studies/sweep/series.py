@@ -21,6 +21,7 @@ Cases with fewer samples or segments, and failed cases, are padded with NaN.  At
 scenario, the sweep definition (JSON) and the package versions.  :func:`load_series` also reads
 the netCDF3 files of earlier versions.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -36,8 +37,17 @@ from ...config.schema import split_unit
 from ...infra.folders import OutputError, atomic_path
 from ...results.frames import long_name_of, require_xarray, units_of, versions
 
-__all__ = ["SERIES_FORMATS", "SERIES_FILE", "save_series", "case_series_path", "combine_series", "load_series",
-           "dim_names", "key_attrs", "COMPRESSION"]
+__all__ = [
+    "SERIES_FORMATS",
+    "SERIES_FILE",
+    "save_series",
+    "case_series_path",
+    "combine_series",
+    "load_series",
+    "dim_names",
+    "key_attrs",
+    "COMPRESSION",
+]
 
 #: Where a sweep keeps its cases' time series: a folder per case, or one netCDF file.
 SERIES_FORMATS = ("folders", "netcdf")
@@ -103,8 +113,10 @@ def save_series(result, save_dir) -> None:
     path = Path(save_dir)
     for p in (path.parent, path):
         if p.is_symlink():
-            raise OutputError(f"{p} is a symbolic link: a sweep's case series are never written through one. "
-                              "Give a new --out directory.")
+            raise OutputError(
+                f"{p} is a symbolic link: a sweep's case series are never written through one. "
+                "Give a new --out directory."
+            )
     if path.suffix != ".npz":
         result.write(path, plot=False)
         return
@@ -123,15 +135,15 @@ def _from_old(path: Path, n_cases: int) -> dict:
         ds = ds.load()
 
     def flat(v):
-        return np.asarray(ds[v].values).reshape((n_cases,) + ds[v].shape[ds["ok"].ndim:])
+        return np.asarray(ds[v].values).reshape((n_cases,) + ds[v].shape[ds["ok"].ndim :])
 
     ok, nt, ns = flat("ok"), flat("n_time"), flat("n_segments")
     names = [v for v in ds.data_vars if "time" in ds[v].dims and v != "t_s"]
     for i in np.nonzero(ok)[0]:
-        a = {"t_s": flat("t_s")[i, :nt[i]]}
+        a = {"t_s": flat("t_s")[i, : nt[i]]}
         for v in names:
             kind = "segments" if "segment" in ds[v].dims else "links"
-            a[f"{kind}/{ds[v].attrs['column']}"] = flat(v)[i, :nt[i], :ns[i] - (kind == "links")]
+            a[f"{kind}/{ds[v].attrs['column']}"] = flat(v)[i, : nt[i], : ns[i] - (kind == "links")]
         out[int(i)] = a
     return out
 
@@ -163,16 +175,18 @@ def _stack(per_case, n_cases, columns):
     T, S = max(int(nt.max()), 1), max(int(ns.max()), 1)
     t = np.full((n_cases, T), np.nan)
     data = {}
-    for kind, cols, dim, width in (("segments", columns["segments"], "segment", S),
-                                   ("links", columns["links"], "link", S - 1)):
+    for kind, cols, dim, width in (
+        ("segments", columns["segments"], "segment", S),
+        ("links", columns["links"], "link", S - 1),
+    ):
         for col in cols:
             name = col if kind == "segments" or col not in columns["segments"] else f"link_{col}"
             data[name] = (np.full((n_cases, T, width), np.nan), dim, col, kind)
     for i, a in per_case.items():
-        t[i, :nt[i]] = a["t_s"]
+        t[i, : nt[i]] = a["t_s"]
         for arr, _, col, kind in data.values():
             v = a[f"{kind}/{col}"]
-            arr[i, :v.shape[0], :v.shape[1]] = v
+            arr[i, : v.shape[0], : v.shape[1]] = v
     return t, data, nt, ns
 
 
@@ -198,20 +212,40 @@ def combine_series(out, axes, cases, zip_, columns, attrs) -> Path:
     variables = {
         "t_s": (dims + ("time",), t.reshape(shape + t.shape[1:]), {"units": "s", "long_name": "output time"}),
         "ok": (dims, ok.reshape(shape), {**one, "long_name": "1 where the case has a time series"}),
-        "case_index": (dims, np.arange(n, dtype=np.int32).reshape(shape), {**one, "long_name": "case id as an integer"}),
-        "n_time": (dims, nt.reshape(shape), {**one, "long_name": "output samples of the case (the rest is NaN padding)"}),
+        "case_index": (
+            dims,
+            np.arange(n, dtype=np.int32).reshape(shape),
+            {**one, "long_name": "case id as an integer"},
+        ),
+        "n_time": (
+            dims,
+            nt.reshape(shape),
+            {**one, "long_name": "output samples of the case (the rest is NaN padding)"},
+        ),
         "n_segments": (dims, ns.reshape(shape), {**one, "long_name": "segments of the case (the rest is NaN padding)"}),
     }
     for name, (arr, dim, col, kind) in data.items():
-        variables[name] = (dims + ("time", dim), arr.reshape(shape + arr.shape[1:]),
-                           {"units": units[col], "long_name": long_name_of(columns[kind][col]), "column": col})
-    rows = [t[i, :nt[i]] for i in per_case]
-    if rows and all(r.shape == rows[0].shape and np.array_equal(r, rows[0]) for r in rows) and rows[0].size == t.shape[1]:
+        variables[name] = (
+            dims + ("time", dim),
+            arr.reshape(shape + arr.shape[1:]),
+            {"units": units[col], "long_name": long_name_of(columns[kind][col]), "column": col},
+        )
+    rows = [t[i, : nt[i]] for i in per_case]
+    if (
+        rows
+        and all(r.shape == rows[0].shape and np.array_equal(r, rows[0]) for r in rows)
+        and rows[0].size == t.shape[1]
+    ):
         coords["time"] = ("time", rows[0], {"units": "s", "long_name": "output time (the same for every case)"})
     S = data["x_m"][0].shape[2]
-    coords.update(segment=("segment", np.arange(S, dtype=np.int32), {**one, "long_name": "segment index, 0 = leader"}),
-                  link=("link", np.arange(S - 1, dtype=np.int32),
-                        {**one, "long_name": "link index, link j joins segments j and j+1"}))
+    coords.update(
+        segment=("segment", np.arange(S, dtype=np.int32), {**one, "long_name": "segment index, 0 = leader"}),
+        link=(
+            "link",
+            np.arange(S - 1, dtype=np.int32),
+            {**one, "long_name": "link index, link j joins segments j and j+1"},
+        ),
+    )
     ds = xr.Dataset(variables, coords=coords, attrs={**attrs, **{f"version_{k}": v for k, v in versions().items()}})
     path = out / SERIES_FILE
     with atomic_path(path) as tmp:

@@ -5,6 +5,7 @@ values) or an inclusive range ``START:STOP:COUNT`` (``0.3:1.0:15``).  The same g
 ``snoworm sweep --set`` and ``snoworm mobility-map --xt/--tow`` (:func:`parse_spec` names the
 option in its messages).
 """
+
 from __future__ import annotations
 
 import math
@@ -109,12 +110,16 @@ def parse_spec(key: str, spec, option: str | None = None) -> tuple:
             items = _split_top_level(text)
             for it in items:
                 if ":" in it and "[" not in it and "{" not in it and _looks_numeric(it.split(":")):
-                    raise ScenarioError(f"{opt}: {quote(it.strip(), 60)} is not a range: a range is START:STOP:COUNT "
-                                        "(two colons, no commas; a range cannot be mixed with a list), e.g. 0.3:1.0:15 for 15 values "
-                                        "from 0.3 to 1.0.")
+                    raise ScenarioError(
+                        f"{opt}: {quote(it.strip(), 60)} is not a range: a range is START:STOP:COUNT "
+                        "(two colons, no commas; a range cannot be mixed with a list), e.g. 0.3:1.0:15 for 15 values "
+                        "from 0.3 to 1.0."
+                    )
             if any(not it.strip() for it in items):
-                raise ScenarioError(f"{opt}: empty item in the list. Separate values by single commas, "
-                                    "e.g. 0,100,200, with no trailing comma.")
+                raise ScenarioError(
+                    f"{opt}: empty item in the list. Separate values by single commas, "
+                    "e.g. 0,100,200, with no trailing comma."
+                )
             try:
                 values = tuple(parse_scalar(it, opt) for it in items)
             except yaml.YAMLError as exc:
@@ -136,7 +141,9 @@ def _parse_range(opt, text):
     try:
         start, stop = _number(a), _number(b)
     except ValueError:
-        raise ScenarioError(f"{opt}: START and STOP must be numbers (finite), got {quote(a, 40)} and {quote(b, 40)}. {hint}") from None
+        raise ScenarioError(
+            f"{opt}: START and STOP must be numbers (finite), got {quote(a, 40)} and {quote(b, 40)}. {hint}"
+        ) from None
     try:
         count = int(c)
     except ValueError:
@@ -144,8 +151,10 @@ def _parse_range(opt, text):
     if count < 1:
         raise ScenarioError(f"{opt}: COUNT must be at least 1, got {count}. {hint}")
     if count > MAX_CASES:
-        raise ScenarioError(f"{opt}: COUNT {count} is over the {MAX_CASES} values allowed in one range; "
-                            "use fewer values or split the study.")
+        raise ScenarioError(
+            f"{opt}: COUNT {count} is over the {MAX_CASES} values allowed in one range; "
+            "use fewer values or split the study."
+        )
     if count == 1:
         if start != stop:
             raise ScenarioError(f"{opt}: COUNT 1 needs START = STOP; give {start} alone or COUNT >= 2. {hint}")
@@ -181,8 +190,10 @@ def _number(text):
 def parse_sweep_option(item: str) -> Axis:
     """Split one ``KEY=SPEC`` option into an :class:`Axis`."""
     if not isinstance(item, str) or "=" not in item:
-        raise ScenarioError(f"--set {quote(item)}: expected KEY=SPEC with a dotted scenario key, e.g. "
-                            "terrain.xt=0.6:1.0:9 or tow.force_N=0,100,200.")
+        raise ScenarioError(
+            f"--set {quote(item)}: expected KEY=SPEC with a dotted scenario key, e.g. "
+            "terrain.xt=0.6:1.0:9 or tow.force_N=0,100,200."
+        )
     key, _, spec = item.partition("=")
     key = key.strip()
     if not key or any(not p.strip() for p in key.split(".")):
@@ -204,8 +215,9 @@ def as_axes(sets) -> list:
             key, spec = s
             axes.append(Axis(str(key), parse_spec(str(key), spec), spec if isinstance(spec, str) else ""))
     if not axes:
-        raise ScenarioError("no --set KEY=SPEC given: a sweep needs at least one key to vary, "
-                            "e.g. --set terrain.xt=0.6:1.0:9.")
+        raise ScenarioError(
+            "no --set KEY=SPEC given: a sweep needs at least one key to vary, e.g. --set terrain.xt=0.6:1.0:9."
+        )
     keys = [a.key for a in axes]
     for k in keys:
         if keys.count(k) > 1:

@@ -5,6 +5,7 @@ order; cells formatted by :mod:`snoworm.infra.csvwriter` at full precision).  ``
 sweep's definition and columns: :func:`prepare_dir` refuses an output directory holding another
 sweep and returns the cases already finished there, dropping a truncated last line.
 """
+
 from __future__ import annotations
 
 import csv
@@ -38,10 +39,14 @@ MAX_SWEEP_JSON = 64 * 2**20
 
 def summary_columns(axes, n_links) -> list:
     """Columns of ``summary.csv``: ids, swept keys, status, metrics, link forces, wall time."""
-    return (["case_id", "case_key"] + [a.key for a in axes] + ["status", "error"]
-            + list(METRIC_COLUMNS)[:7] + [f"final_link_force_{j}_N" for j in range(n_links)]
-            + ["energy_per_m_J", "immobilised", "wall_time_s"])
-
+    return (
+        ["case_id", "case_key"]
+        + [a.key for a in axes]
+        + ["status", "error"]
+        + list(METRIC_COLUMNS)[:7]
+        + [f"final_link_force_{j}_N" for j in range(n_links)]
+        + ["energy_per_m_J", "immobilised", "wall_time_s"]
+    )
 
 
 def _parse_cell(col, text, swept):
@@ -56,7 +61,6 @@ def _parse_cell(col, text, swept):
     if col == "immobilised":
         return text == "true"
     return float(text)
-
 
 
 class SweepTable:
@@ -79,7 +83,7 @@ class SweepTable:
         self.keys = list(keys)
         self.rows = sorted(rows, key=lambda r: r["case_id"])
         self.out_dir = Path(out_dir) if out_dir is not None else None
-        self.dropped = 0          #: lines of summary.csv dropped when read back (load_sweep)
+        self.dropped = 0  #: lines of summary.csv dropped when read back (load_sweep)
 
     def __len__(self):
         return len(self.rows)
@@ -110,8 +114,10 @@ class SweepTable:
         written by ``run_sweep(..., series="netcdf")``; see :mod:`snoworm.studies.sweep.series`)."""
         path = self.out_dir / SERIES_FILE if self.out_dir is not None else None
         if path is None or not path.exists():
-            raise FileNotFoundError(f"no {SERIES_FILE} in {self.out_dir}: run the sweep with --save-cases "
-                                    "--series netcdf (series='netcdf') to keep every case's series in one file")
+            raise FileNotFoundError(
+                f"no {SERIES_FILE} in {self.out_dir}: run the sweep with --save-cases "
+                "--series netcdf (series='netcdf') to keep every case's series in one file"
+            )
         return load_series(path)
 
     def plot(self, metric=None, *, size=None, ax=None, fig=None):
@@ -176,19 +182,21 @@ def load_sweep(out_dir) -> SweepTable:
     except (ValueError, RecursionError, AttributeError, TypeError, KeyError):
         raise ResultFileError(f"{dpath}: not a sweep definition (a JSON object with definition.axes[].key)") from None
     header, rows, dropped = read_summary(spath, keys)
-    if header[:2] != ["case_id", "case_key"] or "status" not in header or (keys and header[2:2 + len(keys)] != keys):
+    if header[:2] != ["case_id", "case_key"] or "status" not in header or (keys and header[2 : 2 + len(keys)] != keys):
         raise ResultFileError(f"{spath}: its columns {quote(header)} are not those of the sweep in {dpath}")
     table = SweepTable(header, rows, keys or _keys_from_header(header), out_dir=out)
     table.dropped = dropped
     if dropped:
-        warnings.warn(f"{spath}: {dropped} line(s) dropped (truncated or malformed); the table holds the "
-                      f"{len(rows)} others", stacklevel=2)
+        warnings.warn(
+            f"{spath}: {dropped} line(s) dropped (truncated or malformed); the table holds the {len(rows)} others",
+            stacklevel=2,
+        )
     return table
 
 
 def _keys_from_header(header):
     try:
-        return header[2:header.index("status")]
+        return header[2 : header.index("status")]
     except ValueError:
         return []
 
@@ -202,7 +210,7 @@ def read_summary(path: Path, keys=None):
     except ManifestProblem as exc:
         raise ResultFileError(str(exc)) from None
     lines = data.split("\n")
-    complete, dropped = lines[:-1], (1 if lines[-1] else 0)   # no final newline: truncated
+    complete, dropped = lines[:-1], (1 if lines[-1] else 0)  # no final newline: truncated
     if not complete:
         return [], [], dropped
     header = next(csv.reader([complete[0]]))
@@ -220,8 +228,17 @@ def read_summary(path: Path, keys=None):
 
 
 #: The files a sweep writes at the top of its folder (besides the manifest).
-SWEEP_FILES = ("summary.csv", "sweep.json", "sweep.png", "heatmap.png", "sweep.pdf", "heatmap.pdf", "sweep.svg",
-               "heatmap.svg", SERIES_FILE)
+SWEEP_FILES = (
+    "summary.csv",
+    "sweep.json",
+    "sweep.png",
+    "heatmap.png",
+    "sweep.pdf",
+    "heatmap.pdf",
+    "sweep.svg",
+    "heatmap.svg",
+    SERIES_FILE,
+)
 
 
 def _case_entries(out: Path) -> list:
@@ -231,12 +248,14 @@ def _case_entries(out: Path) -> list:
     if not os.path.lexists(cases):
         return []
     if cases.is_symlink() or not cases.is_dir():
-        raise ScenarioError(f"{cases} is not a folder snoworm wrote (a symbolic link or a file); nothing was "
-                            "touched. Move it away or give a new --out directory.")
+        raise ScenarioError(
+            f"{cases} is not a folder snoworm wrote (a symbolic link or a file); nothing was "
+            "touched. Move it away or give a new --out directory."
+        )
     found = []
     for e in sorted(os.listdir(cases)):
         p = cases / e
-        if STAGE in e or ".snoworm-old-" in e:     # a killed writer's staging folder: cleaned when rewritten
+        if STAGE in e or ".snoworm-old-" in e:  # a killed writer's staging folder: cleaned when rewritten
             continue
         if p.is_symlink():
             ok = False
@@ -245,9 +264,11 @@ def _case_entries(out: Path) -> list:
         else:
             ok = p.is_file() and e.endswith(".npz")
         if not ok:
-            raise ScenarioError(f"{p} was not written by this sweep (a symbolic link, or a file or folder without "
-                                f"snoworm's {MANIFEST}); nothing was touched. Move it away or give a new --out "
-                                "directory.")
+            raise ScenarioError(
+                f"{p} was not written by this sweep (a symbolic link, or a file or folder without "
+                f"snoworm's {MANIFEST}); nothing was touched. Move it away or give a new --out "
+                "directory."
+            )
         found.append(p)
     return found
 
@@ -269,7 +290,7 @@ def _clear(out: Path):
             p.unlink()
     try:
         os.rmdir(out / "cases")
-    except OSError:           # missing, or a killed writer's staging folder is left in it
+    except OSError:  # missing, or a killed writer's staging folder is left in it
         pass
 
 
@@ -280,8 +301,10 @@ def check_resumable(out: Path):
     for name in ("summary.csv", "sweep.json", MANIFEST):
         p = out / name
         if os.path.lexists(p) and (p.is_symlink() or not p.is_file()):
-            raise ScenarioError(f"{p} is not a regular file (a symbolic link, a folder, a FIFO or a device); "
-                                "snoworm will not read or write through it. Give a new --out directory.")
+            raise ScenarioError(
+                f"{p} is not a regular file (a symbolic link, a folder, a FIFO or a device); "
+                "snoworm will not read or write through it. Give a new --out directory."
+            )
     _case_entries(out)
 
 
@@ -290,16 +313,22 @@ def _other_sweep(out, dpath, old, new) -> str:
     old = old if isinstance(old, dict) else {}
     if all(old.get(k) == new[k] for k in new if k not in ("inputs", "snoworm_version")):
         changed = changed_inputs(old.get("inputs"), new.get("inputs"))
-        why = (f"{quote(changed[0], 200)} changed since it ran" + (f" (and {len(changed) - 1} more file(s))"
-                                                                     if len(changed) > 1 else "")
-               if changed else f"it was run by snoworm {quote(old.get('snoworm_version'), 40)}, this is "
-                               f"{new.get('snoworm_version')}")
-        return (f"{out} holds this sweep run from other inputs: {why}, so its rows would mix old and new results. "
-                "Pass --restart (restart=True in Python) to run it afresh (its rows are removed), or give a new "
-                "--out directory.")
+        why = (
+            f"{quote(changed[0], 200)} changed since it ran"
+            + (f" (and {len(changed) - 1} more file(s))" if len(changed) > 1 else "")
+            if changed
+            else f"it was run by snoworm {quote(old.get('snoworm_version'), 40)}, this is {new.get('snoworm_version')}"
+        )
+        return (
+            f"{out} holds this sweep run from other inputs: {why}, so its rows would mix old and new results. "
+            "Pass --restart (restart=True in Python) to run it afresh (its rows are removed), or give a new "
+            "--out directory."
+        )
     what = [k for k in new if old.get(k) != new[k]]
-    return (f"{out} holds another sweep (its {', '.join(what) or 'definition'} differs from this one, see {dpath}). "
-            "Re-run the original command to resume it, give a new --out directory, or pass --overwrite to replace it.")
+    return (
+        f"{out} holds another sweep (its {', '.join(what) or 'definition'} differs from this one, see {dpath}). "
+        "Re-run the original command to resume it, give a new --out directory, or pass --overwrite to replace it."
+    )
 
 
 def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: bool = False) -> dict:
@@ -330,12 +359,25 @@ def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: 
         if old.get("definition") != definition:
             raise ScenarioError(_other_sweep(out, dpath, old.get("definition"), definition))
     elif spath.exists():
-        raise ScenarioError(f"{spath} exists but {dpath} does not, so the sweep it belongs to is unknown. "
-                            "Give a new --out directory (or delete the old one).")
-    atomic_write_text(dpath, json.dumps({
-        "snoworm_version": __version__, "scenario": source, "definition": definition,
-        "n_cases": len(cases), "columns": columns,
-        "immobilised": METRIC_COLUMNS["immobilised"]}, indent=2) + "\n")
+        raise ScenarioError(
+            f"{spath} exists but {dpath} does not, so the sweep it belongs to is unknown. "
+            "Give a new --out directory (or delete the old one)."
+        )
+    atomic_write_text(
+        dpath,
+        json.dumps(
+            {
+                "snoworm_version": __version__,
+                "scenario": source,
+                "definition": definition,
+                "n_cases": len(cases),
+                "columns": columns,
+                "immobilised": METRIC_COLUMNS["immobilised"],
+            },
+            indent=2,
+        )
+        + "\n",
+    )
     if not spath.exists():
         write_csv(spath, columns, [], FULL)
         return {}
@@ -352,7 +394,7 @@ def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: 
             continue
         r.update(dict(zip(keys, c.values)))
         done[c.index] = r
-    if dropped:   # rewrite without the truncated or foreign lines, so appends start on a fresh line
+    if dropped:  # rewrite without the truncated or foreign lines, so appends start on a fresh line
         keep = SweepTable(columns, list(done.values()), keys)
         keep.to_csv(spath)
     return done
