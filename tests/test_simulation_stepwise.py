@@ -158,11 +158,15 @@ def test_dt_out_of_bounds_is_a_clear_value_error(tow6, dt):
 def _snoworm_bytes(snapshot):
     """Bytes still allocated by snoworm's own code (innermost frame in the package): SciPy 1.17's
     LSODA keeps ~24 kB per solve_ivp call alive by itself, which snoworm cannot free."""
+    import os
     import tracemalloc
 
-    return sum(
-        st.size for st in snapshot.filter_traces([tracemalloc.Filter(True, "*/snoworm/*")]).statistics("filename")
-    )
+    import snoworm
+
+    # the package's own folder, not any path holding "snoworm" (a checkout named snoworm/ holds the
+    # venv, and with it SciPy)
+    package = os.path.join(os.path.dirname(os.path.abspath(snoworm.__file__)), "*")
+    return sum(st.size for st in snapshot.filter_traces([tracemalloc.Filter(True, package)]).statistics("filename"))
 
 
 def test_record_false_keeps_snoworms_memory_flat_and_record_true_is_bounded(tow6):
