@@ -40,7 +40,7 @@ _SWEEP_CHILD = r"""
 import json, sys, time
 sys.path.insert(0, {tree!r})
 import snoworm
-from snoworm.studies.sweep import run_sweep
+from snoworm import run_sweep   # the public name: any version of the tree, before or after the layout
 assert snoworm.__file__.startswith({tree!r}), snoworm.__file__
 t0 = time.perf_counter()
 tab = run_sweep({tree!r} + "/snoworm/scenarios/inchworm6.yaml", {sets!r}, plot=False, progress=False, jobs={jobs})
