@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from ..config.scenario import Scenario, load_scenario
+from ..modes.command import Observation, observed_fields
 
 __all__ = [
     "ENV_ID",
@@ -23,19 +24,9 @@ __all__ = [
 #: The registered id (``gymnasium.make(ENV_ID, scenario=...)``).
 ENV_ID = "snoworm/Snoworm-v0"
 
-#: Observation arrays in the order they fill the observation vector (then ``t_s / duration_s``).
-OBSERVATION_FIELDS = (
-    "x_m",
-    "v_mps",
-    "wheel_speed_mps",
-    "slip",
-    "motor_torque_Nm",
-    "xt",
-    "grade_deg",
-    "link_force_N",
-    "link_length_m",
-    "joint_extension_m",
-)
+#: Observation arrays in the order they fill the observation vector (then ``t_s / duration_s``):
+#: the :class:`~snoworm.modes.command.Observation`'s fields but ``t_s``.
+OBSERVATION_FIELDS = Observation.FIELDS[1:]
 
 #: The scale each field is divided by (names of :meth:`EnvCore.scales`): ``distance`` = the fastest
 #: no-load wheel speed times ``duration_s``, ``speed`` = the fastest no-load wheel speed R_w w_nl,
@@ -213,11 +204,7 @@ class EnvCore:
         return np.sum(0.5 * (p[1:] + p[:-1]) * dt, axis=0)
 
 
-#: Observation field -> the column of output_series' tables where the names differ.
-_TABLE_NAME = {"link_force_N": "force_N", "link_length_m": "length_m", "joint_extension_m": "extension_m"}
-
-
 def table_fields(seg, lk, row=-1) -> dict:
     """The :data:`OBSERVATION_FIELDS` arrays at sample ``row`` of output tables ``seg, lk``
     (:func:`snoworm.model.quantities.output_series`)."""
-    return {f: (seg if f in seg else lk)[_TABLE_NAME.get(f, f)][row] for f in OBSERVATION_FIELDS}
+    return observed_fields(seg, lk, row)

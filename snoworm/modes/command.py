@@ -19,7 +19,7 @@ import numpy as np
 from ..model.inputs import Controls
 from ..model.quantities import output_series
 
-__all__ = ["Observation", "observe", "CommandState", "COMMAND_KEYS"]
+__all__ = ["Observation", "observe", "CommandState", "COMMAND_KEYS", "observed_fields"]
 
 #: Keys a command may hold, with their length ("N": one per segment, "N-1": one per link).
 COMMAND_KEYS = {
@@ -44,6 +44,13 @@ _SOURCES = {
     "link_length_m": (1, "length_m"),
     "joint_extension_m": (1, "extension_m"),
 }
+
+
+def observed_fields(seg, lk, row=-1) -> dict:
+    """The observation's arrays (every field but ``t_s``, in :attr:`Observation.FIELDS` order) at
+    sample ``row`` of :func:`~snoworm.model.quantities.output_series`' tables ``seg, lk``."""
+    tables = (seg, lk)
+    return {k: tables[i][c][row] for k, (i, c) in _SOURCES.items()}
 
 
 class Observation:
@@ -95,8 +102,8 @@ class Observation:
     def _values(self) -> dict:
         if self._vals is None:
             model, y, ctl = self._src
-            tables = output_series(model, y[None, :], ctl)
-            object.__setattr__(self, "_vals", {k: _frozen(tables[i][c][0]) for k, (i, c) in _SOURCES.items()})
+            fields = observed_fields(*output_series(model, y[None, :], ctl), row=0)
+            object.__setattr__(self, "_vals", {k: _frozen(v) for k, v in fields.items()})
             object.__setattr__(self, "_src", None)
         return self._vals
 
