@@ -205,3 +205,19 @@ def test_write_records_the_command_it_is_given(short_run, tmp_path):
     assert read_manifest(tmp_path / "given")["command"] == "snoworm run x.yaml --out given"
     short_run.write(tmp_path / "default", plot=False)  # default: this process's command line
     assert read_manifest(tmp_path / "default")["command"] != "snoworm run x.yaml --out given"
+
+
+def test_csv_text_is_what_numpy_savetxt_writes():
+    """The CSV writer formats all rows in one operation: byte for byte the text of ``np.savetxt``
+    with the same formats (time decimals, integer index, 6 significant digits), special values
+    and signed zeros included."""
+    from snoworm.results.result import _csv
+
+    rng = np.random.default_rng(1)
+    data = rng.normal(size=(50, 5)) * 10.0 ** rng.integers(-12, 12, size=(50, 5))
+    data[:, 0], data[:, 1] = np.arange(50) * 0.0125, np.arange(50) % 6
+    data[3, 2], data[4, 3], data[5, 4], data[6, 2] = np.nan, np.inf, -np.inf, -0.0
+    buf = io.StringIO()
+    np.savetxt(buf, data, fmt=["%.4f", "%d", "%.6g", "%.6g", "%.6g"], delimiter=",")
+    assert _csv(["t", "i", "a", "b", "c"], data, int_cols=(1,)) == "t,i,a,b,c\n" + buf.getvalue()
+    assert _csv(["t", "i"], np.empty((0, 2)), int_cols=(1,)) == "t,i\n"
