@@ -48,6 +48,31 @@ wall = time.perf_counter() - t0
 print(json.dumps({{"wall_s": wall, "cases": len(tab.rows), "ok": sum(r["status"] == "ok" for r in tab.rows)}}))
 """
 
+_ENV_CHILD = r"""
+import json, sys, time, warnings
+sys.path.insert(0, {tree!r})
+warnings.filterwarnings("ignore", module="gymnasium")  # the old environment's unnormalised spaces
+import snoworm
+from snoworm import load_scenario
+from snoworm.env import SnowormEnv
+assert snoworm.__file__.startswith({tree!r}), snoworm.__file__
+env = SnowormEnv(load_scenario({tree!r} + "/snoworm/scenarios/tow6_uniform.yaml"), dt_s=0.1)
+
+def rate(steps):
+    env.reset(seed=0)
+    env.action_space.seed(0)  # explicitly: the environment before issue 27 did not seed it in reset
+    w0, c0 = time.perf_counter(), time.process_time()
+    for _ in range(steps):
+        out = env.step(env.action_space.sample())
+        if out[2] or out[3]:
+            env.reset()
+    return steps / (time.perf_counter() - w0), steps / (time.process_time() - c0)
+
+rate(20)                                        # warm-up: imports, generated code, caches
+wall, cpu = rate({steps})
+print(json.dumps({{"steps_per_s_wall": wall, "steps_per_s_cpu": cpu}}))
+"""
+
 
 def export_tree(ref: str, dest: Path) -> Path:
     """``git archive`` of ``ref``'s ``snoworm`` package into ``dest`` (returns ``dest``)."""
@@ -93,6 +118,31 @@ def compare_runs(base: str, names, rounds: int, repeats: dict, report) -> dict:
             f"{out[name]['speedup_wall']:.2f}x wall, {out[name]['speedup_cpu']:.2f}x CPU; current "
             f"{out[name]['rtf_wall']:.1f}x real time (wall)"
         )
+    return out
+
+
+def compare_envs(base: str, rounds: int, steps: int, report) -> dict:
+    """Random-action env-steps/s of ``SnowormEnv`` on tow6_uniform (dt 0.1 s) in the baseline tree
+    and in this checkout, each in child processes taking turns, best of ``rounds`` (issue 27's
+    single-environment target: the environment as users had it, on the code they had)."""
+    best = {"baseline": None, "current": None}
+    for _ in range(rounds):
+        for side, tree in (("baseline", base), ("current", str(ROOT))):
+            r = _child(_ENV_CHILD.format(tree=tree, steps=steps), tree)
+            b = best[side]
+            best[side] = r if b is None else {k: max(b[k], r[k]) for k in r}
+    b, c = best["baseline"], best["current"]
+    out = {
+        "baseline": b,
+        "current": c,
+        "speedup_wall": c["steps_per_s_wall"] / b["steps_per_s_wall"],
+        "speedup_cpu": c["steps_per_s_cpu"] / b["steps_per_s_cpu"],
+    }
+    report(
+        f"  SnowormEnv in child processes: baseline {b['steps_per_s_wall']:6.1f} env-steps/s wall "
+        f"({b['steps_per_s_cpu']:6.1f} CPU), current {c['steps_per_s_wall']:6.1f} wall ({c['steps_per_s_cpu']:6.1f} "
+        f"CPU): {out['speedup_wall']:.2f}x wall, {out['speedup_cpu']:.2f}x CPU"
+    )
     return out
 
 

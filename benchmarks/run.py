@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from benchmarks.baseline import baseline_section  # noqa: E402
+from benchmarks.baseline import baseline_section, compare_envs, export_tree  # noqa: E402
 from snoworm import Simulator, load_scenario, simulate  # noqa: E402
 from snoworm.simulation.driver import assemble  # noqa: E402
 from snoworm.studies.sweep import run_sweep  # noqa: E402
@@ -373,7 +373,7 @@ def bench_controllers(repeats, report):
 
 # ---------------------------------------------------------------- reinforcement learning (issue 27)
 RL_TARGETS = {
-    "rl_single_speedup": (">=", 3.0, "SnowormEnv random actions / main's env (steps/s, dt 0.1 s)"),
+    "rl_single_speedup": (">=", 3.0, "SnowormEnv random actions / the baseline's (steps/s, dt 0.1 s)"),
     "rl_vector64_speedup": (">=", 15.0, "vector env B = 64 / SnowormEnv (env-steps/s)"),
 }
 TARGETS.update(RL_TARGETS)
@@ -391,21 +391,30 @@ def _rl_rate(env, steps, vector=False):
     return n * steps / (time.perf_counter() - t0)
 
 
-def bench_rl(repeats, report, steps=200, batch=64):
-    """Issue 27: random-action env-steps/s on tow6_uniform at dt 0.1 s, all interleaved (one run of
-    each per round, best of ``repeats`` rounds): main's environment (benchmarks/env_baseline.py,
-    default solver), the new SnowormEnv (default: VODE restarted when the command changes; and on
-    LSODA), and the vector environment with B = ``batch`` (``steps / 4`` periods; default VODE with
-    its tolerances / sqrt(B), and on LSODA)."""
+def bench_rl(repeats, report, base_ref, steps=200, batch=64):
+    """Issue 27: random-action env-steps/s on tow6_uniform at dt 0.1 s.
+
+    The single-environment target compares ``SnowormEnv`` of ``base_ref`` (exported from git, the
+    code users had) with this checkout's, in child processes taking turns
+    (:func:`benchmarks.baseline.compare_envs`).  In this process, interleaved (one run of each per
+    round, best of ``repeats`` rounds): the old environment's code kept in
+    benchmarks/env_baseline.py on today's Simulator (so it gains from the float kernel too), the new
+    SnowormEnv (default: VODE restarted when the command changes; and on LSODA), and the vector
+    environment with B = ``batch`` (``steps / 4`` periods; default VODE with its tolerances / sqrt(B),
+    and on LSODA): the vector target is the vector environment against the single one."""
+    import tempfile
     import warnings
 
     warnings.filterwarnings("ignore", module="gymnasium")  # the baseline's unnormalised spaces
     from benchmarks.env_baseline import SnowormEnv as BaselineEnv
     from snoworm.env import SnowormEnv, SnowormVectorEnv
 
+    with tempfile.TemporaryDirectory(prefix="snoworm-baseline-") as tmp:
+        base = str(export_tree(base_ref, Path(tmp)))
+        against = compare_envs(base, repeats, steps, report)
     sc = load_scenario(SC / "tow6_uniform.yaml")
     envs = {
-        "main's SnowormEnv (LSODA, restarted every period)": (BaselineEnv(sc, dt_s=0.1), False),
+        "old env code (env_baseline.py) on today's Simulator": (BaselineEnv(sc, dt_s=0.1), False),
         "SnowormEnv (VODE, default)": (SnowormEnv(sc, dt_s=0.1), False),
         "SnowormEnv (method LSODA)": (SnowormEnv(sc, dt_s=0.1, method="LSODA"), False),
         f"SnowormVectorEnv B = {batch}": (SnowormVectorEnv(batch, sc, dt_s=0.1), True),
@@ -422,12 +431,13 @@ def bench_rl(repeats, report, steps=200, batch=64):
         "rates": best,
         "batch": batch,
         "steps": steps,
-        "single_speedup": best[labels[1]] / best[labels[0]],
+        "against": dict(against, ref=base_ref),
+        "single_speedup": against["speedup_wall"],
         "vector_speedup": best[labels[3]] / best[labels[1]],
     }
     report(
-        f"  SnowormEnv / main's env: {out['single_speedup']:.2f}x; vector B = {batch} / SnowormEnv: "
-        f"{out['vector_speedup']:.2f}x (vector / main's env: {best[labels[3]] / best[labels[0]]:.1f}x)"
+        f"  SnowormEnv / {base_ref}'s SnowormEnv: {out['single_speedup']:.2f}x (child processes); vector B = "
+        f"{batch} / SnowormEnv: {out['vector_speedup']:.2f}x (in this process)"
     )
     return out
 
@@ -618,7 +628,7 @@ def main(argv=None):
             "rl",
             "Gymnasium environments (issue 27: tow6_uniform, dt 0.1 s, random actions, interleaved, best of "
             f"{repeats} rounds):",
-            lambda: bench_rl(repeats, report),
+            lambda: bench_rl(repeats, report, args.baseline),
         ),
     ]
     for key, title, fn in steps:
