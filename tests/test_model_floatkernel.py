@@ -9,6 +9,7 @@ compared at the scale of wheel accelerations, not at its own).
 """
 
 import functools
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -137,8 +138,13 @@ def test_one_generated_function_per_structure_of_controls():
         ctl = Controls.rolling(m.n, np.ones(m.n), rng.uniform(0, 2, m.n))
         assert scaled_difference(m, m.float_kernel(y, ctl), numpy_rhs(m, y, ctl)) <= REL
     assert len(m.float_kernel._by_key) == 1
+    # motors off (a settle before the start): the same code, which always applies the on/off mask
     off = Controls.rolling(m.n, np.r_[0.0, np.ones(m.n - 1)], np.ones(m.n))
-    m.float_kernel(y, off)
+    assert scaled_difference(m, m.float_kernel(y, off), numpy_rhs(m, y, off)) <= REL
+    assert len(m.float_kernel._by_key) == 1
+    # a structural change (a motor on direct torque): new code
+    direct = replace(off, torque_active=np.r_[1.0, np.zeros(m.n - 1)], torque_cmd_Nm=np.r_[3.0, np.zeros(m.n - 1)])
+    assert scaled_difference(m, m.float_kernel(y, direct), numpy_rhs(m, y, direct)) <= REL
     assert len(m.float_kernel._by_key) == 2
 
 

@@ -40,7 +40,7 @@ from .. import drivetrain, feedback, links, terrain
 from .inputs import Controls, control_arrays, control_flags
 from .symbolic import Expr, SymArray, interp, source, symbols, tracing  # noqa: F401 (interp: the generated code's)
 
-__all__ = ["FloatKernel", "MAX_SEGMENTS", "STRUCTURAL_FIELDS", "structure_key"]
+__all__ = ["FloatKernel", "MAX_SEGMENTS", "STRUCTURAL_FIELDS", "kernel_flags", "structure_key"]
 
 #: Longest chain run on the float kernel: measured faster than the NumPy kernel up to N ~ 24
 #: (docs/performance.md); longer chains and stacked batches keep the vectorised kernel.
@@ -51,9 +51,16 @@ MAX_SEGMENTS = 16
 STRUCTURAL_FIELDS = ("fc_active", "fc_link", "joint_mover", "joint_anchor", "joint_length_mode", "torque_active")
 
 
+def kernel_flags(model, ctl: Controls) -> dict:
+    """:func:`~snoworm.model.inputs.control_flags` as the float kernel uses them: the motors' on/off
+    mask is always applied (``all_on`` False), so a run whose motors start off and later all run
+    shares one generated function (multiplying by an ``on`` of exactly 1.0 changes no bit)."""
+    return dict(control_flags(model, ctl), all_on=False)
+
+
 def structure_key(model, ctl: Controls):
     """What a generated function depends on in ``ctl``: the structural fields and the kernel's flags."""
-    flags = control_flags(model, ctl)
+    flags = kernel_flags(model, ctl)
     key = [np.asarray(getattr(ctl, f)).tobytes() for f in STRUCTURAL_FIELDS]
     key += [
         repr(flags.get(k)) if not isinstance(flags.get(k), np.ndarray) else flags[k].tobytes() for k in sorted(flags)
@@ -235,7 +242,7 @@ def generate(model, ctl: Controls):
             n_p[0] += 1
         return arr.view(SymArray) if isinstance(v, np.ndarray) else flat[0]
 
-    flags = control_flags(model, ctl)
+    flags = kernel_flags(model, ctl)
     pm = _walk_parameters(model, leaf)
     with tracing() as tr, np.errstate(all="ignore"):
         cd = control_arrays(pm, sym_ctl, flags)
