@@ -91,19 +91,27 @@ def _child(code: str, cwd: str) -> dict:
     return json.loads(p.stdout.strip().splitlines()[-1])
 
 
+def _best_of_turns(base: str, rounds: int, code, keep) -> tuple:
+    """``(baseline, current)``: each side's child process (source ``code(tree)``) run ``rounds``
+    times, the two sides taking turns; ``keep(best, new)`` merges a side's results into its best."""
+    best = {"baseline": None, "current": None}
+    for _ in range(rounds):
+        for side, tree in (("baseline", base), ("current", str(ROOT))):
+            r = _child(code(tree), tree)
+            best[side] = r if best[side] is None else keep(best[side], r)
+    return best["baseline"], best["current"]
+
+
 def compare_runs(base: str, names, rounds: int, repeats: dict, report) -> dict:
     """Best wall and CPU time of each scenario on the baseline tree and this checkout, interleaved."""
     out = {}
     for name in names:
-        best = {"baseline": None, "current": None}
-        for _ in range(rounds):
-            for side, tree in (("baseline", base), ("current", str(ROOT))):
-                r = _child(_RUN_CHILD.format(tree=tree, name=name, repeats=repeats.get(name, 1)), tree)
-                b = best[side]
-                best[side] = (
-                    r if b is None else dict(r, wall_s=min(b["wall_s"], r["wall_s"]), cpu_s=min(b["cpu_s"], r["cpu_s"]))
-                )
-        b, c = best["baseline"], best["current"]
+        b, c = _best_of_turns(
+            base,
+            rounds,
+            lambda tree, name=name: _RUN_CHILD.format(tree=tree, name=name, repeats=repeats.get(name, 1)),
+            lambda old, r: dict(r, wall_s=min(old["wall_s"], r["wall_s"]), cpu_s=min(old["cpu_s"], r["cpu_s"])),
+        )
         out[name] = {
             "baseline": b,
             "current": c,
@@ -125,13 +133,12 @@ def compare_envs(base: str, rounds: int, steps: int, report) -> dict:
     """Random-action env-steps/s of ``SnowormEnv`` on tow6_uniform (dt 0.1 s) in the baseline tree
     and in this checkout, each in child processes taking turns, best of ``rounds`` (issue 27's
     single-environment target: the environment as users had it, on the code they had)."""
-    best = {"baseline": None, "current": None}
-    for _ in range(rounds):
-        for side, tree in (("baseline", base), ("current", str(ROOT))):
-            r = _child(_ENV_CHILD.format(tree=tree, steps=steps), tree)
-            b = best[side]
-            best[side] = r if b is None else {k: max(b[k], r[k]) for k in r}
-    b, c = best["baseline"], best["current"]
+    b, c = _best_of_turns(
+        base,
+        rounds,
+        lambda tree: _ENV_CHILD.format(tree=tree, steps=steps),
+        lambda old, r: {k: max(old[k], r[k]) for k in r},
+    )
     out = {
         "baseline": b,
         "current": c,
