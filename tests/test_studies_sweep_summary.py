@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -141,3 +142,18 @@ def test_dropped_rows_are_reported(sweep_dir, tmp_path):
     with pytest.warns(UserWarning, match="1 line\\(s\\) dropped"):
         table = load_sweep(d)
     assert table.dropped == 1 and len(table) == 2
+
+
+@pytest.mark.parametrize("bad", ["nan", "-inf", "inf"])
+def test_a_non_finite_metric_drops_its_line_with_a_warning(sweep_dir, tmp_path, bad):
+    """Metrics are finite or empty: a NaN or infinite cell is a tampered line, dropped and reported."""
+    d = _copy(sweep_dir, tmp_path)
+    lines = (d / "summary.csv").read_text().splitlines(keepends=True)
+    header = lines[0].rstrip("\n").split(",")
+    cells = lines[1].rstrip("\n").split(",")
+    cells[header.index("distance_m")] = bad
+    (d / "summary.csv").write_text(lines[0] + ",".join(cells) + "\n" + "".join(lines[2:]))
+    with pytest.warns(UserWarning, match="1 line\\(s\\) dropped"):
+        table = load_sweep(d)
+    assert table.dropped == 1 and len(table) == len(lines) - 2  # the header and the tampered line
+    assert all(np.isfinite(r["distance_m"]) for r in table.rows)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import os
 import shutil
 import warnings
@@ -60,7 +61,10 @@ def _parse_cell(col, text, swept):
         return int(text)
     if col == "immobilised":
         return text == "true"
-    return float(text)
+    value = float(text)
+    if not math.isfinite(value):  # metrics are finite or empty (None): a NaN or inf is a tampered line
+        raise ValueError(f"{col}: non-finite value {text!r}")
+    return value
 
 
 class SweepTable:
