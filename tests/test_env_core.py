@@ -57,3 +57,9 @@ def test_energy_is_the_trapezoid_of_the_power(core6):
     assert e == pytest.approx(6 * 160.0 * 0.1, rel=1e-12)  # exact for a linear power
     batched = core6.energy_J(ts, {"motor_electrical_power_W": np.stack([power, 2 * power], axis=1)})
     np.testing.assert_allclose(batched, [96.0, 192.0], rtol=1e-12)
+
+
+@pytest.mark.parametrize("action", [["a"] * 6, [object()] * 6, [[1.0, "x"]] * 3])
+def test_an_action_that_is_not_numbers_is_refused_naming_the_action(core6, action):
+    with pytest.raises(ValueError, match=r"^action: expected numbers in \[-1, 1\] of shape \(6,\)"):
+        core6.physical_action(action)

@@ -223,3 +223,13 @@ def test_batched_force_control_matches_one_by_one(scenario_path):
         fa, fb = (r.mode_summary["force_control"] for r in (alone, mb.result))
         np.testing.assert_allclose(fb["final_setpoints_mps"], fa["final_setpoints_mps"], rtol=0, atol=1e-3)
         np.testing.assert_allclose(fb["final_link_force_errors_N"], fa["final_link_force_errors_N"], rtol=0, atol=0.1)
+
+
+@pytest.mark.parametrize("given", ["tow6_uniform", None, {"name": "x"}])
+def test_simulate_and_the_simulator_name_the_scenario_when_given_something_else(given):
+    """A scenario name, None or a raw mapping is refused with one TypeError that says how to read one."""
+    from snoworm import Simulator
+
+    for make in (simulate, Simulator):
+        with pytest.raises(TypeError, match=r"^scenario: expected a Scenario, got .*snoworm\.load_scenario"):
+            make(given)

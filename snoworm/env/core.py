@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from ..config.scenario import Scenario, load_scenario
+from ..config.schema import quote
 from ..modes.command import Observation, observed_fields
 
 __all__ = [
@@ -178,7 +179,10 @@ class EnvCore:
         Raises ValueError for a wrong shape (a scalar is not broadcast) or a non-finite value.
         """
         shape = self.single_action_space.shape if batch is None else (batch,) + self.single_action_space.shape
-        a = np.asarray(action, dtype=float)
+        try:
+            a = np.asarray(action, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"action: expected numbers in [-1, 1] of shape {shape}, got {quote(action, 60)}") from None
         if a.shape != shape:
             raise ValueError(f"action: expected an array of shape {shape} in [-1, 1], got shape {a.shape}")
         if not np.all(np.isfinite(a)):

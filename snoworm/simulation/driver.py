@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..config.scenario import Scenario
+from ..config.schema import quote
 from ..dynamics import ChainModel
 from ..model.inputs import Controls
 from ..modes import mode_class
@@ -44,7 +46,13 @@ class AssembledRun:
 
 
 def assemble(sc) -> AssembledRun:
-    """Pair a scenario's chain model (built once per scenario) with a new instance of its mode."""
+    """Pair a scenario's chain model (built once per scenario) with a new instance of its mode.
+
+    Raises TypeError naming ``scenario`` if ``sc`` is not a :class:`~snoworm.config.scenario.Scenario`."""
+    if not isinstance(sc, Scenario):
+        raise TypeError(
+            f"scenario: expected a Scenario, got {quote(sc, 60)}; read one with snoworm.load_scenario(name or path)"
+        )
     model = sc.chain_model
     return AssembledRun(sc, model, mode_class(sc.mode)(sc.mode, sc, model))
 
