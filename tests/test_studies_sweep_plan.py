@@ -25,6 +25,13 @@ def test_every_case_invalid_is_one_error_naming_a_case():
         plan_sweep(TOW6, ["terrain.xt=-1,-2", SHORT], False, False, None, 1)
 
 
+def test_the_every_case_invalid_error_quotes_a_huge_key_short():
+    """A 100 000-character swept key is cut in the message (it printed all of it before)."""
+    with pytest.raises(ScenarioError) as err:
+        plan_sweep(TOW6, [SHORT, "x" * 100_000 + "=1"], False, False, None, 1)
+    assert str(err.value).startswith("every case of the sweep is invalid") and len(str(err.value)) < 400
+
+
 def test_the_resume_key_depends_on_the_axes_and_validated_scenarios_are_bounded(monkeypatch):
     a = plan_sweep(TOW6, ["terrain.xt=0.8,0.9", SHORT], False, False, None, 1)
     b = plan_sweep(TOW6, ["terrain.xt=0.8,0.95", SHORT], False, False, None, 1)

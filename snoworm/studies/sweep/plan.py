@@ -16,7 +16,7 @@ from dataclasses import dataclass, field as dc_field
 
 from ..._version import __version__
 from ...config.scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
-from ...config.schema import ScenarioError
+from ...config.schema import ScenarioError, short_key
 from ...infra.csvwriter import canonical_json
 from ...modes.codeload import allow_code as allowed_code
 from ...modes.controller import trust_problem_of
@@ -127,7 +127,7 @@ def _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep) -> SweepP
         first = invalid[cases[0].index]
         raise ScenarioError(
             f"every case of the sweep is invalid, e.g. case {cases[0].case_id} "
-            f"({', '.join(f'{a.key}={v}' for a, v in zip(axes, cases[0].values))}): {first}"
+            f"({', '.join(f'{short_key(a.key)}={short_key(v)}' for a, v in zip(axes, cases[0].values))}): {first}"
         )
     return SweepPlan(
         axes,
