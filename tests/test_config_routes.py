@@ -1,6 +1,7 @@
 """Grade inputs and route files (snoworm.config.routes): validation messages and what they compile to."""
 
 import math
+import os
 
 import pytest
 
@@ -87,3 +88,11 @@ def test_grade_limit_is_the_documented_one():
     sc = load_scenario("tow6_uniform", ["terrain.grade_deg=-40"])
     assert sc.chain_model.elevation.grade_deg == -40.0
     assert math.isclose(sc.terrain.elevation_profile().max_abs_grade_deg(), 40.0)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+def test_a_route_that_is_a_fifo_is_refused_at_once(tmp_path):
+    p = tmp_path / "r.csv"
+    os.mkfifo(p)
+    with pytest.raises(ScenarioError, match=r"terrain\.route: .*r\.csv: the route file is not a regular file"):
+        read_route(p)

@@ -349,7 +349,7 @@ def test_read_yaml_refuses_latin1_with_line(tmp_path):
 def test_read_yaml_missing_file_and_directory(tmp_path):
     with pytest.raises(ScenarioError, match=r"no such file\. Check the path"):
         read_yaml(tmp_path / "missing.yaml")
-    with pytest.raises(ScenarioError, match=r"cannot read the file \(.+\)"):
+    with pytest.raises(ScenarioError, match=r"not a regular file \(a FIFO, a device or a folder\)"):
         read_yaml(tmp_path)
 
 
@@ -426,3 +426,12 @@ def test_set_controller_on_a_shipped_scenario_is_taken_from_the_working_director
     (own / "s.yaml").write_text(Path(scenario_path("tow6_uniform")).read_text())
     sc = load_scenario(own / "s.yaml", ["mode={type: controller, controller: 'ctl.py:Go', period_s: 0.1}"])
     assert sc.mode.controller == f"{own / 'ctl.py'}:Go"  # the user's file: its own folder
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+def test_a_fifo_scenario_is_refused_at_once(tmp_path):
+    """`mkfifo s.yaml; snoworm validate s.yaml` blocked forever before (found by the trust battery)."""
+    p = tmp_path / "s.yaml"
+    os.mkfifo(p)
+    with pytest.raises(ScenarioError, match=r"s\.yaml: not a regular file \(a FIFO, a device or a folder\)"):
+        read_yaml(p)

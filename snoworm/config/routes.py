@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..infra.files import FileProblem, read_regular_file
 from ..slope import MAX_GRADE_DEG, ElevationProfile
 from .schema import Config, ScenarioError, field
 
@@ -44,6 +45,8 @@ GRADE_DOMAIN = dict(
 
 #: Columns a route file must have (units in the names); others are ignored.
 ROUTE_COLUMNS = ("distance_m", "elevation_m", "xt")
+#: Largest route file read (bytes): a survey of a million points is ~30 MB.
+MAX_ROUTE_BYTES = 64 * 2**20
 
 _FAR_M = 1e7
 
@@ -196,11 +199,13 @@ def read_route(path) -> Route:
     p = Path(path)
     where = f"terrain.route: {p}"
     try:
-        text = p.read_text(encoding="utf-8")
+        text = read_regular_file(p, MAX_ROUTE_BYTES).decode("utf-8")
     except FileNotFoundError:
         raise ScenarioError(
             f"{where}: no such file; give a CSV route file relative to the scenario's folder."
         ) from None
+    except FileProblem as exc:
+        raise ScenarioError(f"{where}: the route file is {exc}; give a CSV file.") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ScenarioError(f"{where}: cannot read it ({exc.__class__.__name__}: {exc}).") from None
     rows = [(n, r) for n, r in enumerate(csv.reader(text.splitlines()), 1) if r and not r[0].lstrip().startswith("#")]

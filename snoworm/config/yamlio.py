@@ -14,6 +14,7 @@ import yaml
 from yaml.events import MappingStartEvent, SequenceStartEvent
 from yaml.nodes import ScalarNode, SequenceNode
 
+from ..infra.files import FileProblem, read_regular_file
 from .schema import ScenarioError, quote
 
 __all__ = [
@@ -230,14 +231,17 @@ def read_yaml(path):
     """
     name = os.fsdecode(path)
     try:
-        with open(name, "rb") as fh:
-            data = fh.read(MAX_BYTES + 1)
+        data = read_regular_file(name, MAX_BYTES)
     except FileNotFoundError:
         raise ScenarioError(f"{name}: no such file. Check the path.") from None
     except OSError as exc:
         raise ScenarioError(f"{name}: cannot read the file ({exc.strerror or exc}).") from None
-    if len(data) > MAX_BYTES:
-        raise ScenarioError(f"{name}: larger than {MAX_BYTES} bytes (a scenario is a few kB); wrong file?")
+    except FileProblem as exc:
+        if exc.too_large:
+            raise ScenarioError(
+                f"{name}: larger than {MAX_BYTES} bytes (a scenario is a few kB); wrong file?"
+            ) from None
+        raise ScenarioError(f"{name}: {exc}; give a YAML file saved on disk.") from None
     if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE) or b"\0" in data:  # UTF-32 BOMs are caught too
         raise ScenarioError(
             f"{name}: the file is not UTF-8 text (a UTF-16 or UTF-32 byte-order mark or NUL "

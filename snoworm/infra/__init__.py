@@ -2,5 +2,7 @@
 
 :mod:`~snoworm.infra.folders` (atomic files, all-or-nothing output folders, manifests, locks),
 :mod:`~snoworm.infra.csvwriter` (the one CSV writer of result tables), :mod:`~snoworm.infra.pool`
-(the local process pool of studies) and :mod:`~snoworm.infra.progress` (progress bars and logs).
+(the local process pool of studies), :mod:`~snoworm.infra.progress` (progress bars and logs),
+:mod:`~snoworm.infra.manifest` (manifests read defensively), :mod:`~snoworm.infra.durable` (staged files
+synced together) and :mod:`~snoworm.infra.files` (a user's small file read without hanging on a FIFO).
 """

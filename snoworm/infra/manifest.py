@@ -26,6 +26,8 @@ import os
 import stat
 from pathlib import Path, PurePosixPath
 
+from .files import FileProblem, read_regular_file
+
 __all__ = [
     "MANIFEST",
     "LOCK",
@@ -77,34 +79,15 @@ def read_small_file(path, limit: int) -> bytes:
     ManifestProblem
         ``path`` is not a regular file, or is larger than ``limit``; the message names it.
     """
-    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
     try:
-        fd = os.open(path, flags)
+        return read_regular_file(path, limit, follow_symlinks=False)
     except FileNotFoundError:
         raise
     except OSError as exc:
         kind = "a symbolic link" if os.path.islink(path) else f"unreadable ({exc.strerror or exc})"
         raise ManifestProblem(f"{path} is {kind}, not a regular file") from None
-    try:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise ManifestProblem(f"{path} is not a regular file (a FIFO, a device or a folder)")
-        if st.st_size > limit:
-            raise ManifestProblem(
-                f"{path} is {st.st_size} bytes, more than the {limit} a snoworm file of its kind holds"
-            )
-        chunks, size = [], 0
-        while size <= limit:
-            chunk = os.read(fd, min(1 << 20, limit + 1 - size))
-            if not chunk:
-                break
-            chunks.append(chunk)
-            size += len(chunk)
-        if size > limit:
-            raise ManifestProblem(f"{path} grew beyond {limit} bytes while being read")
-        return b"".join(chunks)
-    finally:
-        os.close(fd)
+    except FileProblem as exc:
+        raise ManifestProblem(f"{path} is {exc}") from None
 
 
 def entry_problem(entry) -> str | None:

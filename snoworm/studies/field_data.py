@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config.schema import ScenarioError, suggest
+from ..infra.files import FileProblem, read_regular_file
 
 __all__ = ["FIELD_COLUMNS", "FieldData", "default_data_path", "read_field_data"]
 
@@ -36,6 +37,8 @@ FIELD_COLUMNS = {
 _NUMERIC = ("speed_mps", "wheel_speed_mps", "slip", "torque_Nm", "drawbar_N", "xt")
 
 _DATA_FILE = "frostyboy_2020.csv"
+#: Largest field-data file read (bytes; the shipped one is ~2 kB).
+MAX_FIELD_DATA_BYTES = 16 * 2**20
 
 
 def default_data_path() -> Path:
@@ -131,9 +134,11 @@ def read_field_data(path=None) -> FieldData:
 def _read_rows(path):
     """(line numbers, CSV rows) of a field-data file, the header first; ``#`` and blank lines skipped."""
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_regular_file(path, MAX_FIELD_DATA_BYTES).decode("utf-8")
     except FileNotFoundError:
         _bad(path, "no such file. Give the path of a field-data CSV (see data/frostyboy_2020.csv for the format).")
+    except FileProblem as exc:
+        _bad(path, f"the file is {exc}; give a field-data CSV.")
     except (OSError, UnicodeDecodeError) as exc:
         _bad(path, f"cannot be read as UTF-8 text ({exc}).")
     lines = [(n, ln) for n, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
