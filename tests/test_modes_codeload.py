@@ -245,3 +245,30 @@ def test_a_controllers_chdir_does_not_move_a_relative_out(tmp_path, monkeypatch)
     r = cli("run", p, "--out", "rel_out", "--no-plot", "--set", f"mode.params.chdir={tmp_path / 'elsewhere'}")
     assert r.exit_code == 0, r.output
     assert (tmp_path / "rel_out" / "summary.json").exists() and not (tmp_path / "elsewhere" / "rel_out").exists()
+
+
+def test_a_module_of_an_editable_install_is_found_without_importing_it(tmp_path, monkeypatch):
+    """`pip install -e` maps a package with a meta path finder, not a sys.path entry: the static
+    check asks the meta path's finders for the top-level package (the battery found such
+    packages refused as 'not found on the Python path'), and still imports nothing."""
+    import importlib.machinery
+
+    from snoworm.modes.codeload import find_module_source
+
+    pkg = tmp_path / "src" / "edctl_pkg"
+    pkg.mkdir(parents=True)
+    (pkg / "__init__.py").write_text("raise RuntimeError('imported')\n")
+    (pkg / "pi.py").write_text("class PI:\n    pass\n")
+
+    class EditableFinder:  # what setuptools' editable finder does: a mapping of names to folders
+        @classmethod
+        def find_spec(cls, fullname, path=None, target=None):
+            if fullname == "edctl_pkg":
+                return importlib.machinery.PathFinder.find_spec(fullname, [str(pkg.parent)])
+            return None
+
+    monkeypatch.setattr(sys, "meta_path", [*sys.meta_path, EditableFinder])
+    assert find_module_source("edctl_pkg.pi", "s.yaml") == (pkg / "pi.py").resolve()
+    assert "edctl_pkg" not in sys.modules
+    with pytest.raises(ScenarioError, match="edctl_pkg.nope"):
+        find_module_source("edctl_pkg.nope", "s.yaml")

@@ -159,6 +159,26 @@ def _stdlib_dirs() -> list:
     return [Path(paths[k]).resolve() for k in ("stdlib", "platstdlib") if paths.get(k)]
 
 
+def _find_top_level(name: str):
+    """The spec of top-level module ``name`` without importing it: on ``sys.path``, else from the
+    other finders of ``sys.meta_path`` (an editable install, ``pip install -e``, maps its packages
+    with one), the interpreter's own built-in and frozen modules excepted."""
+    spec = importlib.machinery.PathFinder.find_spec(name)
+    if spec is not None:
+        return spec
+    skip = (importlib.machinery.BuiltinImporter, importlib.machinery.FrozenImporter, importlib.machinery.PathFinder)
+    for finder in sys.meta_path:
+        if finder in skip or not hasattr(finder, "find_spec"):
+            continue
+        try:
+            spec = finder.find_spec(name, None)
+        except Exception:  # a third-party finder's failure is "not found" here
+            spec = None
+        if spec is not None:
+            return spec
+    return None
+
+
 def find_module_source(target: str, path) -> Path:
     """The source file of module ``target``, found on ``sys.path`` without importing it or its parents."""
     parts = target.split(".")
@@ -172,7 +192,7 @@ def find_module_source(target: str, path) -> Path:
     search, spec = None, None
     for i, part in enumerate(parts):
         try:
-            spec = importlib.machinery.PathFinder.find_spec(part, search)
+            spec = importlib.machinery.PathFinder.find_spec(part, search) if i else _find_top_level(part)
         except (ImportError, ValueError, OSError):
             spec = None
         if spec is None:
