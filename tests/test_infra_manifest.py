@@ -314,3 +314,16 @@ def test_load_manifest_names_the_problem(tmp_path):
 def test_messages_quote_at_most_about_100_characters():
     assert len(short("x" * 10**6)) <= 100
     assert len(entry_problem("../" + "y" * 10**5)) < 300
+
+
+def test_a_manifest_changed_after_a_good_one_is_checked_again(tmp_path):
+    """The entries' checks are skipped only for the very bytes checked last (a command reads its
+    folder's manifest several times): a manifest rewritten with a bad entry is refused."""
+    from snoworm.infra.manifest import MANIFEST, ManifestProblem, load_manifest
+
+    (tmp_path / MANIFEST).write_text(json.dumps({"files": ["a.csv", "b/c.csv"]}))
+    assert load_manifest(tmp_path)["files"] == ["a.csv", "b/c.csv"]
+    assert load_manifest(tmp_path)["files"] == ["a.csv", "b/c.csv"]
+    (tmp_path / MANIFEST).write_text(json.dumps({"files": ["a.csv", "/etc/passwd"]}))
+    with pytest.raises(ManifestProblem, match="absolute path"):
+        load_manifest(tmp_path)
