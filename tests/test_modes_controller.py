@@ -8,6 +8,7 @@ import yaml
 
 from snoworm import Simulator, load_scenario, simulate
 from snoworm.config.schema import ScenarioError
+from snoworm.modes import watchdog
 from snoworm.modes.controller import ControllerError, load_controller
 from snoworm.studies.sweep import SweepTask
 from tests.conftest import SCENARIOS
@@ -106,6 +107,28 @@ def test_controller_raising_reports_time_and_only_user_frames(tmp_path):
     assert msg.startswith("controller raised at t = 0.35 s:")
     assert "mine.py" in msg and "in inner" in msg and "my controller broke" in msg
     assert "snoworm" not in msg.replace(str(tmp_path), "")  # no frame of the package
+
+
+LOOPING_STR = """
+    class Loop(Exception):
+        def __str__(self):
+            while True:
+                pass
+    class RaisesLoop:
+        def __init__(self, params, scenario):
+            pass
+        def __call__(self, obs):
+            raise Loop()
+"""
+
+
+@pytest.mark.skipif(not watchdog.bounded(), reason="no POSIX interval timer here")
+def test_an_exception_whose_str_loops_is_bounded_by_max_wall_s(tmp_path):
+    """The controller's exception is formatted under the wall-clock guard: its __str__ is the
+    user's code too (it hung the run before, found by the trust battery)."""
+    sc = load_scenario(_write(tmp_path, LOOPING_STR, _mode("RaisesLoop"), sim={"duration_s": 1.0, "max_wall_s": 0.5}))
+    with pytest.raises(ControllerError, match=r"^(controller raised at t = 0 s|simulation\.max_wall_s)"):
+        simulate(sc)
 
 
 def test_bad_command_names_key_and_time(tmp_path):

@@ -191,13 +191,12 @@ class ControllerMode(Mode):
             command (the key and the time in the message).
         """
         obs = observe(self.model, y, self.commands.controls, t)
-        try:
-            with _guard(self.deadline, f"at t = {t:.6g} s", self.scenario.simulation.max_wall_s):
+        with _guard(self.deadline, f"at t = {t:.6g} s", self.scenario.simulation.max_wall_s):
+            try:
                 command = self.controller(obs)
-        except ControllerError:  # the wall-clock limit or sys.exit (_guard's own message)
-            raise
-        except Exception as exc:  # noqa: BLE001 - the user's code: report it with their frames
-            raise ControllerError(f"controller raised at t = {t:.6g} s:\n{user_traceback(exc)}".rstrip()) from None
+            except Exception as exc:  # noqa: BLE001 - the user's code: report it with their frames
+                # formatted under the guard: the exception's __str__ is the user's code too
+                raise ControllerError(f"controller raised at t = {t:.6g} s:\n{user_traceback(exc)}".rstrip()) from None
         self.calls += 1
         try:
             ctl = self.commands.apply(command)
