@@ -16,7 +16,8 @@ Mode, ModeConfig, register_mode     -> add a mobility mode of your own
 Simulator(scenario)                 -> reset() / step(command, dt) -> Observation; result() -> Result
 mode: {type: controller, ...}       -> your own discrete-time controller (docs/controllers.md)
 import snoworm.env                  -> registers the Gymnasium env "snoworm/Snoworm-v0" and its vector
-                                       env (extra: gym; ``import snoworm`` never imports gymnasium)
+                                       env (extra: gym); ``import snoworm`` registers it too when
+                                       gymnasium is already imported (it never imports gymnasium)
 
 The layers and their modules are described in docs/architecture.md.
 """
@@ -24,6 +25,7 @@ The layers and their modules are described in docs/architecture.md.
 from __future__ import annotations
 
 import importlib
+import sys
 from typing import TYPE_CHECKING
 
 from ._version import __version__
@@ -109,3 +111,7 @@ def __getattr__(name: str):
 
 def __dir__():
     return sorted(set(globals()) | set(__all__) | {"modes"})
+
+
+if "gymnasium" in sys.modules:  # an RL script imported gymnasium first: register the env id now
+    importlib.import_module(".env", __name__)  # (never imported otherwise: the CLI stays light)

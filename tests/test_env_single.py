@@ -51,6 +51,17 @@ def test_import_snoworm_stays_light_and_the_module_form_registers():
     assert out.stdout.split() == ["snoworm/Snoworm-v0", "200"]
 
 
+def test_import_snoworm_after_gymnasium_registers_the_id():
+    """The usual order of a training script: gymnasium first, then snoworm, then make by id."""
+    code = (
+        "import gymnasium, snoworm\n"
+        "env = gymnasium.make('snoworm/Snoworm-v0', scenario='tow6_uniform')\n"
+        "print(env.spec.id, env.spec.max_episode_steps)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["snoworm/Snoworm-v0", "200"]
+
+
 def test_gymnasium_checkers_pass_without_warnings(short6):
     from gymnasium.utils.env_checker import check_env
 

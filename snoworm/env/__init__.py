@@ -10,9 +10,10 @@
     envs = gymnasium.make_vec("snoworm/Snoworm-v0", num_envs=64, vectorization_mode="vector_entry_point")
 
 ``gymnasium.make("snoworm.env:snoworm/Snoworm-v0")`` imports this package first (no separate
-import needed).  ``import snoworm`` alone does not register the id: it never imports gymnasium
-(or NumPy), so the command line starts fast, and gymnasium 1.x has no plugin entry points
-(removed in 1.0) through which a package could register without being imported.
+import needed).  ``import snoworm`` registers the id when gymnasium is already imported (it
+imports this package then); otherwise not: it never imports gymnasium (or NumPy), so the command
+line starts fast, and gymnasium 1.x has no plugin entry points (removed in 1.0) through which a
+package could register without being imported.
 
 * **Action** (:meth:`snoworm.env.core.EnvCore.physical_action`): a ``Box(-1, 1)`` of float32 holding the arrays of
   ``action_keys`` (command keys of :data:`snoworm.modes.command.COMMAND_KEYS`; default the
