@@ -1,5 +1,6 @@
 """The controller mode (snoworm.modes.controller): loading, validation, the run, its errors."""
 
+import os
 import textwrap
 
 import numpy as np
@@ -220,3 +221,26 @@ def test_resolve_paths_takes_a_relative_file_from_the_given_folder_only(tmp_path
         assert ControllerConfig.resolve_paths({**raw, "controller": spec}, tmp_path)["controller"] == spec
     with pytest.raises(ScenarioError, match=r"^mode\.controller: expected 'file\.py:ClassName'"):
         ControllerConfig.resolve_paths({**raw, "controller": "no colon.py"}, tmp_path)
+
+
+CHDIR = """
+    import os
+    class Wanders:
+        def __init__(self, params, scenario):
+            self.to = params["to"]
+        def __call__(self, obs):
+            os.chdir(self.to)
+            return {}
+"""
+
+
+def test_a_controller_chdir_does_not_outlive_the_run(tmp_path, monkeypatch):
+    """The caller's working directory is restored when simulate returns (a relative res.write
+    after the run landed in the controller's folder before; found by the trust battery)."""
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path)
+    sc = load_scenario(
+        _write(tmp_path, CHDIR, _mode("Wanders", to=str(tmp_path / "elsewhere")), sim={"duration_s": 0.2})
+    )
+    simulate(sc)
+    assert os.getcwd() == str(tmp_path)

@@ -11,6 +11,7 @@ A failed run never returns a partial result as if it were whole.
 from __future__ import annotations
 
 import logging
+import os
 import time
 from dataclasses import dataclass
 
@@ -113,6 +114,21 @@ def _guarded_integrate(model, modes, sim, name, progress=None):
     return pieces, phases, stats
 
 
+def _working_directory():
+    try:
+        return os.getcwd()
+    except OSError:  # the working directory was removed
+        return None
+
+
+def _restore_working_directory(cwd) -> None:
+    if cwd is not None and _working_directory() != cwd:
+        try:
+            os.chdir(cwd)
+        except OSError:
+            pass
+
+
 def simulate(sc, progress=None, allow_code=()) -> Result:
     """Run a scenario and return its :class:`~snoworm.results.result.Result`.
 
@@ -122,7 +138,8 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
     :class:`snoworm.infra.progress.Progress`).
     ``allow_code``: paths (files or folders) whose controller code may run although they lie
     outside the scenario's folder (a controller in the scenario's folder tree runs without it;
-    docs/controllers.md).
+    docs/controllers.md). A controller that changes the working directory (``os.chdir``) does not
+    move the caller's: it is restored when the run ends.
 
     Raises
     ------
@@ -131,9 +148,13 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
         messages, the time reached and the interval's label).
     """
     wall0 = time.perf_counter()
-    with allowed_code(allow_code):
-        case = assemble(sc)
-        pieces, phases, stats = _guarded_integrate(case.model, [case.mode], sc.simulation, sc.name, progress)
+    cwd = _working_directory()
+    try:
+        with allowed_code(allow_code):
+            case = assemble(sc)
+            pieces, phases, stats = _guarded_integrate(case.model, [case.mode], sc.simulation, sc.name, progress)
+    finally:  # a controller's os.chdir does not outlive the run (the caller's relative paths stay theirs)
+        _restore_working_directory(cwd)
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
 
