@@ -13,6 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
 
 from snoworm import load_scenario, simulate
 from snoworm.dynamics import ChainModel, Controls
@@ -227,3 +228,106 @@ def test_a_model_with_generated_code_pickles_for_worker_processes():
     m2 = pickle.loads(pickle.dumps(m))
     assert m2.float_kernel.model is m2 and not m2.float_kernel._by_key
     np.testing.assert_array_equal(m2.float_kernel(y, ctl), before)  # the same code on the same numbers
+
+
+# ------------------------------------------------------------------ the cache key holds every value the code holds
+_GROUNDS = st.sampled_from(["level", "grade", "table", "patches"])
+
+
+@st.composite
+def same_structure_pair(draw):
+    """Two models of one structure (segment count, ground kind, table lengths, links, force loop)
+    that differ in values: X_t (constant or patches), grade or elevations, tow, mass, wheel radius."""
+    force_loop, prismatic = draw(st.booleans()), draw(st.booleans())
+    n = draw(st.integers(2, 8))
+    ground = draw(_GROUNDS)
+    patch_xt = draw(st.booleans())
+
+    f = st.floats
+    ranges = {
+        "terrain.xt": f(0.2, 1.0),
+        "tow.force_N": f(0.0, 300.0),
+        "vehicle.segment.mass_kg": f(40.0, 90.0),
+        "vehicle.segment.wheel_radius_m": f(0.15, 0.3),
+        "grade": f(-15.0, 15.0).filter(lambda g: abs(g) > 0.1),
+        "elevation_m": f(-60.0, 60.0),
+        "patch_grade": f(-12.0, 12.0),
+        "patch_xt": f(0.2, 1.0),
+    }
+    # each value is either the same in both models or drawn for each: a value left out of the key
+    # shows only when the models agree on everything the key holds and differ in that value
+    shared = {k: draw(s) for k, s in ranges.items()}
+    varies = draw(st.sets(st.sampled_from(sorted(ranges)), min_size=1))
+
+    def one():
+        v = {k: draw(ranges[k]) if k in varies else shared[k] for k in ranges}
+        ov = [
+            (k, v[k])
+            for k in ("terrain.xt", "tow.force_N", "vehicle.segment.mass_kg", "vehicle.segment.wheel_radius_m")
+        ]
+        ov.append(("vehicle.segments", n))
+        if prismatic:
+            ov.append(("vehicle.links.type", "prismatic"))
+        if ground == "grade":
+            ov.append(("terrain.grade_deg", v["grade"]))
+        elif ground == "table":
+            ov.append(("terrain.elevation", [[-100.0, 0.0], [3.0, 0.0], [600.0, v["elevation_m"]]]))
+        elif ground == "patches":
+            ov.append(("terrain.grade_deg", 0.0))
+            ov.append(("terrain.grade_patches", [{"start_m": 1.0, "end_m": 20.0, "grade_deg": v["patch_grade"]}]))
+        if patch_xt:
+            ov.append(("terrain.patches", [{"start_m": 2.0, "end_m": 9.0, "xt": v["patch_xt"], "ramp_m": 0.5}]))
+        return ov
+
+    return force_loop, one(), one()
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(same_structure_pair(), st.integers(0, 2**32 - 1))
+def test_generated_code_holds_no_value_outside_its_key(pair, seed):
+    """The class of defect behind a sweep over X_t on an elevation table returning its first case
+    for every case: a model's value traced into generated code as a literal while the code is
+    shared by every model with the same key.  For two models of one structure: the same key
+    implies the same source text (no model's value in it), and the second model, run on the code
+    the first one generated, equals its own NumPy kernel."""
+    force_loop, ov_a, ov_b = pair
+    ms = [model_for(SCENARIOS / "tow6_uniform.yaml", ov, force_loop=force_loop) for ov in (ov_a, ov_b)]
+    rng = np.random.default_rng(seed)
+    ctl = busy_controls(ms[0], rng)
+    sigs = [floatkernel.model_parameters(m)[1] for m in ms]
+    if sigs[0] == sigs[1]:
+        assert floatkernel.generate(ms[0], ctl) == floatkernel.generate(ms[1], ctl)
+    for m in ms:  # in this order: the second runs on the code the first one generated (when shared)
+        for y in states_along_track(m, rng, 3):
+            assert scaled_difference(m, m.float_kernel(y, ctl), numpy_rhs(m, y, ctl)) <= REL
+
+
+def test_the_x_t_of_a_route_with_an_elevation_table_is_a_parameter():
+    """The reported case: constant X_t on an elevation table, three X_t, one process (on 8ca4e02
+    the three models shared code holding the first X_t as a literal)."""
+    elev = ("terrain.elevation", [[-100.0, 0.0], [3.0, 0.0], [600.0, 52.03]])
+    ms = [model_for(SCENARIOS / "tow6_uniform.yaml", [("terrain.xt", xt), elev]) for xt in (0.7, 0.8, 1.0)]
+    assert len({floatkernel.model_parameters(m)[1] for m in ms}) == 1  # one key: one generated code ...
+    ctl = Controls.rolling(ms[0].n, np.ones(ms[0].n), np.full(ms[0].n, 1.5))
+    y = random_state(ms[0], np.random.default_rng(3))  # moving: X_t acts on traction and resistance
+    outs = [m.float_kernel(y, ctl) for m in ms]
+    for m, out in zip(ms, outs):  # ... that reads each model's own X_t
+        assert scaled_difference(m, out, numpy_rhs(m, y, ctl)) <= REL
+    assert sum(m.float_kernel.generated for m in ms) <= 1
+
+
+def test_the_process_wide_cache_of_generated_code_is_bounded(monkeypatch):
+    monkeypatch.setattr(floatkernel, "SHARED_MAX", 2)
+    monkeypatch.setattr(floatkernel, "_SHARED", type(floatkernel._SHARED)())
+    for n in (2, 3, 4, 5):
+        m = model_for(SCENARIOS / "tow6_uniform.yaml", [("vehicle.segments", n)])
+        m.float_kernel(m.initial_state(), Controls.rolling(n, np.ones(n), np.ones(n)))
+    assert len(floatkernel._SHARED) == 2
+
+
+def test_an_attribute_the_walk_cannot_classify_is_refused():
+    """A model attribute that is neither a parameter nor keyed would be traced as a literal: refused."""
+    m = model_for(SCENARIOS / "tow6_uniform.yaml")
+    m.mystery = object()
+    with pytest.raises(TypeError, match="mystery"):
+        floatkernel.model_parameters(m)

@@ -107,6 +107,10 @@ class StateLayout:
         self.q = self.index.get("q_mps")
         self.s = self.index.get("s_m")
 
+    def __kernel_key__(self):
+        """What the layout is made of (it keys generated code, :mod:`snoworm.model.floatkernel`)."""
+        return (self.n, self.fields, self.batch_shape)
+
     def unpack(self, y):
         """View a flat state (or a stack of states, leading dims) as ``(..., N, n_s)``."""
         y = np.asarray(y)

@@ -22,8 +22,18 @@ every shipped scenario and changes a law to check that both paths move).  Python
 of the kernel on the controls (which joints move, which segments run a force loop, ...) are
 taken at trace time, so one generated function serves every interval with the same *structure*
 of controls (:func:`structure_key`) and every model of the same structure (a sweep's cases
-share it; :data:`_SHARED`); the values of the controls are read at run time.  The code is
-Python bytecode (``compile``): no compiled extension, no JIT.
+share it; :data:`_SHARED`, bounded by :data:`SHARED_MAX`); the values of the controls are read at
+run time.
+
+**The key holds everything the code holds.**  Generated code is shared between models, so a
+model's value traced into it as a literal would silently serve every later model with the same
+key.  The model is therefore walked mechanically (:func:`_walk_model`): every float it holds
+(arrays, scalars, and tables such as X_t and elevation tables) enters the code as a run-time
+parameter, everything else (sizes, flags, strings, the types and methods of the objects walked,
+the law functions and constants) enters the key by value, and an attribute that is neither is
+refused.  tests/test_model_floatkernel.py checks that two models with one key generate the same
+source text, and tests/test_differential.py that results never depend on what ran before in
+the process.  The code is Python bytecode (``compile``): no compiled extension, no JIT.
 """
 
 from __future__ import annotations
@@ -32,13 +42,15 @@ import copy
 import math
 import sys
 import types
+from collections import OrderedDict
 from dataclasses import fields as dc_fields, is_dataclass, replace
 
 import numpy as np
 
-from .. import drivetrain, feedback, links, terrain
+from .. import drivetrain, feedback, links, slope, terrain
+from . import inputs
 from .inputs import Controls, control_arrays, control_flags
-from .symbolic import Expr, SymArray, interp, source, symbols, tracing  # noqa: F401 (interp: the generated code's)
+from .symbolic import Expr, SymArray, SymTable, interp, slopes, source, symbols, tracing
 
 __all__ = ["FloatKernel", "MAX_SEGMENTS", "STRUCTURAL_FIELDS", "kernel_flags", "structure_key"]
 
@@ -153,34 +165,69 @@ def _replace_name(src, name, new):
         i = j + n
 
 
-#: attributes of a model the trace leaves as they are (objects, caches, the layout, integers)
-_NOT_PARAMETERS = {"float_kernel", "_fd", "_bands", "_ctl_cache", "layout", "profile", "elevation", "tp", "batch_shape"}
+#: attributes of a model that are caches of derived objects, never read by the kernel's laws
+_CACHES = frozenset({"float_kernel", "_fd", "_bands", "_ctl_cache"})
 
 
-def _walk_parameters(model, leaf):
-    """A shallow copy of ``model`` with every float parameter replaced by ``leaf(value)``, in a fixed order.
+def _methods(cls):
+    """The functions a class defines (and inherits): traced code calls them, so they key it."""
+    return tuple((k, v) for c in cls.__mro__ for k, v in vars(c).items() if isinstance(v, types.FunctionType))
 
-    Float arrays, Python floats, and the float fields of the dataclasses and tuples the model
-    holds (segment and link arrays, terrain coefficients, precomputed law factors) are
-    parameters; integers, flags, strings and objects are not.
+
+def _walk_model(model, leaf):
+    """``(copy, static)``: a shallow copy of ``model`` with every float it holds replaced by
+    ``leaf(value, kind)``, and everything else it holds, by value (the generated code's key).
+
+    Every attribute but the caches (:data:`_CACHES`) is walked, recursively through tuples and
+    dataclasses, in a fixed order:
+
+    * a float array (``kind`` ``"array"``), a Python float (``"float"``) and a tuple of floats
+      (``"table"``: an X_t or elevation table, a constant profile's value) are **parameters**:
+      the generated code reads them at run time, so models that differ in them share it;
+    * integers, flags, strings, ``None``, non-float arrays, the types of the dataclasses walked
+      (with their methods: the trace calls them) and objects that state their own key
+      (``__kernel_key__``, e.g. the state layout) are **static**: ``static`` lists them with their
+      path, and the generated code is shared only by models whose static parts are all equal.
+
+    Anything else is refused (``TypeError``): a value the walk cannot classify could be traced
+    into the code as a literal without entering its key.
     """
+    static = []
 
-    def conv(v):
+    def conv(v, path):
         if isinstance(v, np.ndarray):
-            return leaf(v) if v.dtype.kind == "f" else v
+            if v.dtype.kind == "f":
+                return leaf(v, "array")
+            static.append((path, v.dtype.str, v.shape, v.tobytes()))
+            return v
         if isinstance(v, float):
-            return leaf(v)
+            return leaf(v, "float")
+        if v is None or isinstance(v, (bool, int, str)):
+            static.append((path, v))
+            return v
         if isinstance(v, tuple):
-            return tuple(conv(x) for x in v)
+            if v and all(isinstance(x, float) for x in v):
+                return leaf(v, "table")
+            static.append((path, "tuple", len(v)))
+            return tuple(conv(x, f"{path}[{k}]") for k, x in enumerate(v))
         if is_dataclass(v) and not isinstance(v, type):
-            return replace(v, **{f.name: conv(getattr(v, f.name)) for f in dc_fields(v)})
-        return v
+            static.append((path, type(v), _methods(type(v))))
+            return replace(v, **{f.name: conv(getattr(v, f.name), f"{path}.{f.name}") for f in dc_fields(v)})
+        key = getattr(v, "__kernel_key__", None)
+        if key is not None:
+            static.append((path, type(v), key()))
+            return v
+        raise TypeError(f"float kernel: model attribute {path} ({type(v).__name__}) is neither a parameter nor keyed")
 
     pm = copy.copy(model)
-    for name, v in vars(model).items():
-        if name not in _NOT_PARAMETERS:
-            setattr(pm, name, conv(v))
-    return pm
+    for name in sorted(vars(model)):
+        if name not in _CACHES:
+            setattr(pm, name, conv(getattr(model, name), name))
+    return pm, tuple(static)
+
+
+#: modules whose functions and constants the traced laws read (with the model's own module)
+_LAW_MODULES = (terrain, drivetrain, links, feedback, slope, inputs)
 
 
 def _law_fingerprint(model):
@@ -188,40 +235,29 @@ def _law_fingerprint(model):
     code is shared only while they are the same objects (a law changed at run time, e.g. by a
     test's monkeypatch, is traced anew)."""
     items = []
-    for mod in (terrain, drivetrain, links, feedback, *(sys.modules[type(model).__module__],)):
-        items += [(k, v) for k, v in vars(mod).items() if isinstance(v, (types.FunctionType, float))]
-    items += [(k, v) for k, v in vars(type(model)).items() if isinstance(v, types.FunctionType)]
-    return tuple(items)
+    for mod in (*_LAW_MODULES, sys.modules[type(model).__module__]):
+        items += [(k, v) for k, v in vars(mod).items() if isinstance(v, (types.FunctionType, float, int, str, tuple))]
+    return tuple(items) + _methods(type(model))
 
 
 def model_parameters(model):
-    """``(values, signature)``: the model's float parameters in trace order, and what a generated
-    function depends on besides them (sizes, flags, X_t table, torque-balance convention)."""
+    """``(values, signature)``: the model's parameters in trace order (floats, and tuples for
+    tables), and everything else the generated code depends on (:func:`_walk_model`'s static
+    parts, the parameters' kinds and shapes, the laws' fingerprint)."""
     values, shapes = [], []
 
-    def leaf(v):
+    def leaf(v, kind):
+        if kind == "table":
+            shapes.append(("table", len(v)))
+            values.append(tuple(float(x) for x in v))
+            return v
         a = np.asarray(v, float)
-        shapes.append(a.shape)
+        shapes.append((kind, a.shape))
         values.extend(a.reshape(-1).tolist())
         return v
 
-    _walk_parameters(model, leaf)
-    prof = model.profile
-    elev = getattr(model, "elevation", None)
-    sig = (
-        _law_fingerprint(model),
-        model.n,
-        model.layout.fields,
-        model.force_loop,
-        model.has_joints,
-        model.tp.torque_balance,
-        None if getattr(prof, "is_constant", False) else prof,
-        model._coef is None,
-        None if elev is None else ("constant grade" if elev.is_constant else elev),
-        getattr(model, "_G_const", None) is None,
-        tuple(shapes),
-    )
-    return values, sig
+    _, static = _walk_model(model, leaf)
+    return values, (_law_fingerprint(model), static, tuple(shapes))
 
 
 def generate(model, ctl: Controls):
@@ -233,7 +269,10 @@ def generate(model, ctl: Controls):
     sym_ctl, n_c = _symbolic_controls(ctl)
     n_p = [0]
 
-    def leaf(v):
+    def leaf(v, kind):
+        if kind == "table":
+            n_p[0] += 1
+            return SymTable(f"p{n_p[0] - 1}", len(v))
         a = np.asarray(v, float)
         arr = np.empty(a.shape, dtype=object)
         flat = arr.reshape(-1)
@@ -243,7 +282,7 @@ def generate(model, ctl: Controls):
         return arr.view(SymArray) if isinstance(v, np.ndarray) else flat[0]
 
     flags = kernel_flags(model, ctl)
-    pm = _walk_parameters(model, leaf)
+    pm, _ = _walk_model(model, leaf)
     with tracing() as tr, np.errstate(all="ignore"):
         cd = control_arrays(pm, sym_ctl, flags)
         dY, _ = pm.evaluate(Y, sym_ctl, cd=cd)
@@ -265,6 +304,7 @@ def generate(model, ctl: Controls):
         "_sqrt": math.sqrt,
         "_exp": math.exp,
         "_interp": interp,
+        "_slopes": slopes,
         "inf": math.inf,
         "nan": math.nan,
         **tr.consts,
@@ -273,8 +313,28 @@ def generate(model, ctl: Controls):
 
 
 #: generated ``make`` functions by (model signature, structure of controls), shared by every model
-#: of the process (the cases of a sweep differ in parameters only)
-_SHARED = {}
+#: of the process (the cases of a sweep differ in parameters only); least recently used first,
+#: at most :data:`SHARED_MAX` of them
+_SHARED = OrderedDict()
+
+#: bound of the process-wide cache of generated code (a sweep over structures, e.g. segment
+#: counts or route lengths, generates one per structure; each is a few kB of bytecode)
+SHARED_MAX = 256
+
+
+def _shared_make(model, ctl, sig, key):
+    """The generated ``make`` for ``(sig, key)`` from the process-wide cache, generated on a miss
+    (``(make, generated)``)."""
+    make = _SHARED.get((sig, key))
+    if make is not None:
+        _SHARED.move_to_end((sig, key))
+        return make, False
+    src, glb = generate(model, ctl)
+    exec(compile(src, f"<snoworm float kernel, N={model.n}>", "exec"), glb)
+    make = _SHARED[(sig, key)] = glb["make"]
+    while len(_SHARED) > SHARED_MAX:
+        _SHARED.popitem(last=False)
+    return make, True
 
 
 class FloatKernel:
@@ -314,12 +374,8 @@ class FloatKernel:
             if self._params is None:
                 self._params = model_parameters(self.model)
             values, sig = self._params
-            make = _SHARED.get((sig, key))
-            if make is None:
-                src, glb = generate(self.model, ctl)
-                exec(compile(src, f"<snoworm float kernel, N={self.model.n}>", "exec"), glb)
-                make = _SHARED[(sig, key)] = glb["make"]
-                self.generated += 1
+            make, new = _shared_make(self.model, ctl, sig, key)
+            self.generated += new
             f = self._by_key[key] = make(values)
         vals = control_values(ctl)
         self._last = (ctl, f, vals)

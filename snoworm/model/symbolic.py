@@ -16,7 +16,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-__all__ = ["Expr", "SymArray", "Trace", "interp", "source", "symbols", "tracing"]
+__all__ = ["Expr", "SymArray", "SymTable", "Trace", "interp", "slopes", "source", "symbols", "tracing"]
 
 _TRACE = None  # the trace being recorded (tracing is single-threaded and short)
 
@@ -110,6 +110,29 @@ class Expr:
         raise TypeError("the kernel branches on a state value: it cannot be traced to float code")
 
 
+class SymTable(Expr):
+    """A symbolic table: a tuple of floats passed to the generated code at run time (an X_t or
+    elevation table, a constant profile's one value).  Its length is known at trace time (it is
+    part of the generated code's key); its items are symbols."""
+
+    __slots__ = ("length",)
+
+    def __init__(self, name, length):
+        super().__init__(name)
+        self.length = int(length)
+
+    def __len__(self):
+        return self.length
+
+    def __getitem__(self, k):
+        if not isinstance(k, int) or not -self.length <= k < self.length:
+            raise TypeError(f"a symbolic table of length {self.length} is indexed with {k!r}")
+        return _TRACE.emit(f"{self.name}[{k}]", (self.name,))
+
+    def __iter__(self):
+        return (self[k] for k in range(self.length))
+
+
 def _unary(fname, ufunc):
     def f(a):
         return float(ufunc(a)) if _num(a) else _TRACE.emit(f"{fname}({a.name})", (a.name,))
@@ -189,20 +212,37 @@ def interp(x, xp, fp, slopes):
     return slopes[j] * (x - xp[j]) + fp[j]
 
 
+def slopes(xp, fp):
+    """The slopes of the segments of the table ``(xp, fp)``, as :func:`interp` reads them."""
+    return tuple((fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) for j in range(len(xp) - 1))
+
+
 def _interp_traced(x, xp, fp, left=None, right=None, period=None):
+    """``np.interp`` on symbols: literal tables become constants of the generated code, symbolic
+    tables (:class:`SymTable`, run-time parameters) are read by name and their slopes computed once
+    per model (a line on parameters alone)."""
     if left is not None or right is not None or period is not None:
         raise TypeError("float kernel: interp with left/right/period is not supported")
-    xp_t, fp_t = tuple(float(v) for v in xp), tuple(float(v) for v in fp)
-    slopes = tuple((fp_t[j + 1] - fp_t[j]) / (xp_t[j + 1] - xp_t[j]) for j in range(len(xp_t) - 1))
+    symbolic = isinstance(xp, SymTable) or isinstance(fp, SymTable)
+    if not symbolic:
+        xp, fp = tuple(float(v) for v in xp), tuple(float(v) for v in fp)
     names = None
+
+    def table_names():
+        if symbolic:
+            xs, fs = (t.name if isinstance(t, SymTable) else _TRACE.table(t, p) for t, p in ((xp, "XP"), (fp, "FP")))
+            sl = _TRACE.emit(f"_slopes({xs}, {fs})", _deps(*(t for t in (xp, fp) if isinstance(t, SymTable))))
+            return [xs, fs, sl.name]
+        return [_TRACE.table(v, p) for v, p in ((xp, "XP"), (fp, "FP"), (slopes(xp, fp), "SL"))]
 
     def one(a):
         nonlocal names
-        if _num(a):
-            return float(np.interp(a, xp_t, fp_t))
+        if _num(a) and not symbolic:
+            return float(np.interp(a, xp, fp))
         if names is None:
-            names = [_TRACE.table(v, p) for v, p in ((xp_t, "XP"), (fp_t, "FP"), (slopes, "SL"))]
-        return _TRACE.emit(f"_interp({a.name}, {', '.join(names)})", (a.name,))
+            names = table_names()
+        deps = tuple(n for n in names if not n.startswith("_")) + _deps(a)
+        return _TRACE.emit(f"_interp({_src(a)}, {', '.join(names)})", deps)
 
     return _wrap(np.asarray(np.frompyfunc(one, 1, 1)(_plain(x)), dtype=object))
 
