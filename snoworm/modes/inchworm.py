@@ -46,6 +46,15 @@ __all__ = ["InchwormConfig", "InchwormMode"]
 #: A joint is at its stroke limit this close to it [m] (the soft end stop approaches it smoothly).
 STROKE_TOL_M = 1e-3
 
+#: A joint within this distance of its event level (``STROKE_TOL_M`` short of its limit) when an
+#: interval starts counts as having reached it [m].  Identical groups (a long chain's gait moves
+#: several alike) reach their limits within ~1e-13 s of each other; the solver stops at the first
+#: crossing, and whether the others are then a rounding error short of their level or past it
+#: must not decide whether their group is done: past it, their rising-crossing event would never
+#: fire and the phase would never end (docs/model.md section 5.1, "Phase changes").  1e-9 m is
+#: 1e4 times that rounding and 1e-6 of ``STROKE_TOL_M``.
+EVENT_TOL_M = 1e-9
+
 
 @dataclass(frozen=True)
 class InchwormConfig(ModeConfig):
@@ -242,10 +251,15 @@ class InchwormMode(Mode):
         if t < cfg.start_time_s - 1e-12:
             ctl = Controls.rolling(n, np.zeros(n), np.zeros(n))
             return Interval(cfg.start_time_s, ctl, [], "before start")
-        plan = self.plans[self.phase]
         if self.group_done is None:
-            self.group_done = np.zeros(len(plan.groups), bool)
+            self.group_done = np.zeros(len(self.plans[self.phase].groups), bool)
             self._begin_phase(t, y)
+        for _ in range(sum(len(p.groups) for p in self.plans)):  # groups already at their limit are done
+            j = self._joint_at_limit(y)
+            if j is None:
+                break
+            self._group_done(t, y, j)
+        plan = self.plans[self.phase]
         active, ff, limit, capacity, _, _, _ = self._joint_commands(plan, y)
         moving = np.zeros(n, bool)
         for g, grp in enumerate(plan.groups):
@@ -273,14 +287,10 @@ class InchwormMode(Mode):
         events, self._event_joints = [], []
         for j in np.nonzero(active)[0]:
             k = m.layout.flat_index(j, "s_m")  # extension of joint j (the link behind segment j)
-            if plan.role[j] > 0:
+            sign, level = self._event_level(plan, j)
 
-                def ev(t_, y_, k=k, a=L.stroke_max_m[j] - STROKE_TOL_M):
-                    return y_[k] - a
-            else:
-
-                def ev(t_, y_, k=k, a=L.stroke_min_m[j] + STROKE_TOL_M):
-                    return a - y_[k]
+            def ev(t_, y_, k=k, sign=sign, level=level):
+                return sign * (y_[k] - level)
 
             ev.direction = 1  # scipy's solve_ivp event API (rising crossings only)
             events.append(ev)
@@ -323,9 +333,32 @@ class InchwormMode(Mode):
             }
         )
 
-    def on_event(self, t, y, index):
+    def _event_level(self, plan, j):
+        """``(sign, level)``: joint ``j`` has reached its stroke limit when ``sign (s_j - level) >= 0``."""
+        L = self.model.links
+        if plan.role[j] > 0:
+            return 1.0, float(L.stroke_max_m[j] - STROKE_TOL_M)
+        return -1.0, float(L.stroke_min_m[j] + STROKE_TOL_M)
+
+    def _joint_at_limit(self, y):
+        """A joint of a group of the current phase not yet done that is within :data:`EVENT_TOL_M`
+        of its event level (or past it), or None."""
         plan = self.plans[self.phase]
-        j = self._event_joints[index]
+        s = self.model.field(self.model.unpack(y), "s_m")
+        for j in np.nonzero(plan.role != 0)[0]:
+            if self.group_done[int(plan.group_of_joint[j])]:
+                continue
+            sign, level = self._event_level(plan, j)
+            if sign * (s[j] - level) >= -EVENT_TOL_M:
+                return int(j)
+        return None
+
+    def on_event(self, t, y, index):
+        self._group_done(t, y, self._event_joints[index])
+
+    def _group_done(self, t, y, j):
+        """Joint ``j`` reached its stroke limit: its group is done; the next phase starts when all are."""
+        plan = self.plans[self.phase]
         g = int(plan.group_of_joint[j])
         self.group_done[g] = True
         word = "extended" if plan.role[j] > 0 else "contracted"
