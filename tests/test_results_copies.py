@@ -160,3 +160,27 @@ def test_a_sweeps_case_folders_are_self_contained(tmp_path):
     copy.write_bytes(copy.read_bytes() + b"# edited\n")
     with pytest.raises(ResultFileError, match="changed since the run was written"):
         load_result(cases[0])
+
+
+@pytest.mark.parametrize("how", ["symlinked copy", "fifo copy", "symlinked folder", "deleted copy", "added file"])
+def test_hostile_input_copies_are_refused_unread(written, tmp_path, how):
+    """A copy replaced by a symlink or a FIFO (never opened: no hang), ``inputs/`` a symlink, a
+    recorded copy deleted or an unrecorded file added: one ResultFileError naming the path."""
+    res, out, src = written
+    copy = out / "inputs" / "drift.csv"
+    if how == "symlinked copy":
+        copy.unlink()
+        copy.symlink_to(src / "routes" / "drift.csv")  # same bytes, but outside the folder
+    elif how == "fifo copy":
+        copy.unlink()
+        os.mkfifo(copy)
+    elif how == "symlinked folder":
+        shutil.move(out / "inputs", tmp_path / "away")
+        (out / "inputs").symlink_to(tmp_path / "away", target_is_directory=True)
+    elif how == "deleted copy":
+        copy.unlink()
+    else:
+        (out / "inputs" / "extra.csv").write_text("distance_m,elevation_m,xt\n")
+    with pytest.raises(ResultFileError) as err:
+        load_result(out)
+    assert str(out / "inputs") in str(err.value) and len(str(err.value)) < 600

@@ -100,15 +100,17 @@ def input_problem(folder) -> str | None:
     not record (copied without the manifest, or added), one missing, or not a regular file."""
     d = Path(folder)
     base = d / INPUTS
+    if not os.path.lexists(base):
+        return None  # the run read no file (or a folder written before issue 30, naming its originals)
+    if base.is_symlink() or not base.is_dir():
+        return f"{base}: not a folder (a symbolic link or a file); a run's input copies are a folder"
     try:
         man = load_manifest(d)
     except ManifestProblem as exc:
         return str(exc)
     recorded = (man or {}).get("inputs")
     recorded = recorded if isinstance(recorded, dict) else {}
-    if os.path.lexists(base) and (base.is_symlink() or not base.is_dir()):
-        return f"{base}: not a folder (a symbolic link or a file); a run's input copies are a folder"
-    present = [f"{INPUTS}/{rel}" for rel in folder_files(base)] if base.is_dir() else []
+    present = [f"{INPUTS}/{rel}" for rel in folder_files(base)]
     for entry in present:
         want = recorded.get(entry)
         if not isinstance(want, str):
