@@ -184,3 +184,20 @@ def test_hostile_input_copies_are_refused_unread(written, tmp_path, how):
     with pytest.raises(ResultFileError) as err:
         load_result(out)
     assert str(out / "inputs") in str(err.value) and len(str(err.value)) < 600
+
+
+def test_groundtruth_and_calibrate_keep_the_field_data_they_read(tmp_path):
+    """The field data a ground truth compared with, or a calibration fitted, is in its folder as read."""
+    from snoworm.studies.calibrate import run_calibration
+    from snoworm.studies.field_data import default_data_path
+    from snoworm.studies.groundtruth import run_groundtruth
+
+    data = tmp_path / "runs.csv"
+    shutil.copy(default_data_path(), data)
+    _, _, gt_paths = run_groundtruth(tmp_path / "gt", data, plot=False)
+    _, _, cal_paths = run_calibration(data, ["tau0"], tmp_path / "cal")
+    for out, paths in ((tmp_path / "gt", gt_paths), (tmp_path / "cal", cal_paths)):
+        copy = out / "inputs" / "runs.csv"
+        assert copy in paths and copy.read_bytes() == data.read_bytes()
+        man = json.loads((out / MANIFEST).read_text(encoding="utf-8"))
+        assert man["inputs"] == {"inputs/runs.csv": _sha(data)}

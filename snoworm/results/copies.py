@@ -26,7 +26,7 @@ from ..infra.files import FileProblem, read_regular_file
 from ..infra.folders import OutputError, atomic_path
 from ..infra.manifest import INPUTS, MANIFEST, ManifestProblem, folder_files, load_manifest, read_small_file
 
-__all__ = ["INPUTS", "MAX_INPUT_BYTES", "copy_inputs", "input_problem"]
+__all__ = ["INPUTS", "MAX_INPUT_BYTES", "copy_inputs", "write_copies", "input_problem"]
 
 #: Largest input file copied or checked (bytes): the largest route file read (64 MiB).
 MAX_INPUT_BYTES = 64 * 2**20
@@ -60,6 +60,19 @@ def _bytes_read(sc, key: str, path: Path) -> bytes:
         raise OutputError(f"{key}: cannot copy {path} into the results folder ({exc}).") from None
 
 
+def write_copies(stage, files: dict) -> dict:
+    """Write ``{key: (file name, bytes)}`` into ``stage/inputs/`` (a name taken twice becomes
+    ``stem-2.suffix``, in the order given); return ``{key: path relative to stage}``.  The folder's
+    manifest then records each copy's SHA-256 (:func:`snoworm.infra.folders.write_manifest`)."""
+    used, out = set(), {}
+    for key, (name, data) in files.items():
+        name = _free_name(name, used)
+        with atomic_path(Path(stage) / INPUTS / name) as tmp:
+            tmp.write_bytes(data)
+        out[key] = f"{INPUTS}/{name}"
+    return out
+
+
 def copy_inputs(sc, stage) -> dict:
     """Copy each file ``sc`` read into ``stage/inputs/``; return ``{dotted key: path relative to
     stage}`` for :func:`~snoworm.config.scenario.dump_scenario`.
@@ -71,19 +84,14 @@ def copy_inputs(sc, stage) -> dict:
         (the folder would not hold what the run used).
     """
     files = sc.data_files()
-    used, out = set(), {}
-    for key in sorted(files, key=lambda k: _ORDER.index(k) if k in _ORDER else len(_ORDER)):
-        src = Path(files[key])
-        name = _free_name(src.name, used)
-        dst = Path(stage) / INPUTS / name
-        with atomic_path(dst) as tmp:
-            tmp.write_bytes(_bytes_read(sc, key, src))
-        if key == "vehicle.parameter_set" and sc.origin is not None and _entries(dst) != sc.origin.entries:
-            raise OutputError(
-                f"vehicle.parameter_set: {src} changed since the scenario was read; its results would "
-                "not hold the values the run used. Run the scenario again."
-            )
-        out[key] = f"{INPUTS}/{name}"
+    keys = sorted(files, key=lambda k: _ORDER.index(k) if k in _ORDER else len(_ORDER))
+    out = write_copies(stage, {k: (Path(files[k]).name, _bytes_read(sc, k, Path(files[k]))) for k in keys})
+    ps = out.get("vehicle.parameter_set")
+    if ps is not None and sc.origin is not None and _entries(Path(stage) / ps) != sc.origin.entries:
+        raise OutputError(
+            f"vehicle.parameter_set: {files['vehicle.parameter_set']} changed since the scenario was read; "
+            "its results would not hold the values the run used. Run the scenario again."
+        )
     return out
 
 
