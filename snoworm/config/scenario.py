@@ -464,7 +464,7 @@ def dump_scenario(sc: Scenario, paths: dict | None = None) -> str:
     lines = [
         "",
         "# Sources of the physical values (parameter set "
-        f"{sc.vehicle.parameter_set}; [user] scenario: changed by the scenario):",
+        f"{data['vehicle']['parameter_set']}; [user] scenario: changed by the scenario):",
     ]
     lines += [f"#   {k}: {v}" for k, v in sc.sources.items()]
     return yaml.safe_dump(data, sort_keys=False) + "\n".join(lines) + "\n"
