@@ -275,12 +275,12 @@ class Result:
                 atomic_write_text(stage / "links.csv", self.links_csv()),
                 atomic_write_text(stage / "summary.json", json.dumps(self.summary(), indent=2) + "\n"),
                 atomic_write_text(stage / "scenario.yaml", dump_scenario(self.scenario, copies)),
-                *(stage / rel for rel in copies.values()),
             ]
             if plot:
                 from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
 
                 paths += plotting.plot_result(self, stage, plot_format, size=figure_size)
+            paths += [stage / rel for rel in copies.values()]
         return relocate(paths, stage, out_dir)
 
 

@@ -229,14 +229,15 @@ def run_groundtruth(
         + format_table2(rows)
     )
     with output_folder(out_dir, overwrite, command) as out:
-        copies = write_copies(out, {"data": (Path(data.source).name, data.data)})  # the data compared, as read
-        paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows), *(out / rel for rel in copies.values())]
+        paths = [write_csv(out / "table2.csv", TABLE2_COLUMNS, rows)]
         if plot:
             from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
 
             paths.append(
                 plotting.write_figure(out / "table2.png", plotting.plot_table2, rows, fmt=plot_format, size=figure_size)
             )
+        copies = write_copies(out, {"data": (Path(data.source).name, data.data)})  # the data compared, as read
+        paths += [out / rel for rel in copies.values()]
     return rows, text, relocate(paths, out, out_dir)
 
 
