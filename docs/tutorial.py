@@ -74,6 +74,26 @@ print(ds.attrs["scenario_yaml"].splitlines()[0], "| snoworm", ds.attrs["version_
 res.plot("forces", size="column")
 
 # %% [markdown]
+# A figure kept in a name shows as well (pyplot's inline backend shows every new figure at the
+# end of its cell), in every cell, and so do your own pyplot figures: snoworm leaves pyplot's
+# interactive mode, backend and rcParams as they were.
+
+# %%
+fig_speeds = res.plot("speeds", size="column")
+
+# %%
+fig_energy = res.plot("energy", size="column")
+
+# %%
+import matplotlib.pyplot as plt  # noqa: E402 - a cell of its own, as in a notebook
+
+plt.figure(figsize=(3.5, 2.5), layout="constrained")
+plt.plot(late["t_s"], late["v_mps"], ".", ms=3)
+plt.xlabel("time [s]")
+plt.ylabel("ground speed [m/s]")
+plt.title("your own pyplot figure")
+
+# %% [markdown]
 # Several runs on one figure: `plotting.compare`.
 
 # %%

@@ -5,6 +5,8 @@ non-default matplotlib backend set first, which must survive it, and as a notebo
 kernel, where its figures must show inline.
 """
 
+import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -85,18 +87,24 @@ def test_tutorial_as_a_notebook_shows_its_figures(tmp_path, monkeypatch):
     from nbclient import NotebookClient
 
     monkeypatch.delenv("MPLBACKEND", raising=False)  # the kernel picks its own inline backend
+    paths = [str(ROOT), *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(paths))  # the kernel imports this checkout's snoworm
     nb = _percent_to_notebook(ROOT / "docs" / "tutorial.py")
     assert "%matplotlib" not in "".join(c.source for c in nb.cells)
     NotebookClient(nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}).execute()
-    plot_cells = [
-        c
-        for c in nb.cells
-        if c.cell_type == "code"
-        and c.source.splitlines()[-1].split("#")[0].strip() in ("fig", "fig2")
-        or c.source.splitlines()[-1].startswith(("res.plot(", "plotting.compare(", "table.plot("))
+    code = [c for c in nb.cells if c.cell_type == "code"]
+    last = [c.source.splitlines()[-1] for c in code]
+    ending = [c for c, ln in zip(code, last) if ln.split("#")[0].strip() in ("fig", "fig2")] + [
+        c for c, ln in zip(code, last) if ln.startswith(("res.plot(", "plotting.compare(", "table.plot("))
     ]
-    assert len(plot_cells) >= 5
-    for c in plot_cells:
+    # issue 30: a figure assigned to a name (shown by the inline backend at the end of the cell), in
+    # every cell and not only the first; and the user's own pyplot figure after snoworm's figures
+    assigned = [c for c, ln in zip(code, last) if re.match(r"fig\w* = res\.plot\(", ln)]
+    users = [c for c in code if "plt.plot(" in c.source]
+    first_snoworm = code.index(next(c for c in code if "res.plot(" in c.source and "ax=" not in c.source))
+    assert len(ending) >= 5 and len(assigned) >= 2 and users and code.index(users[0]) > code.index(assigned[-1])
+    assert first_snoworm < code.index(assigned[0])  # pyplot is first imported in a snoworm figure
+    for c in ending + assigned + users:
         images = [o for o in c.outputs if "image/png" in o.get("data", {})]
         assert len(images) == 1, (c.source.splitlines()[-1], [o.get("output_type") for o in c.outputs])
     errors = [o for c in nb.cells for o in c.get("outputs", ()) if o.get("output_type") == "error"]

@@ -79,7 +79,8 @@ def test_heatmap_on_the_users_axes():
 def test_groundtruth_figures_in_the_chosen_format(tmp_path):
     _, _, paths = run_groundtruth(tmp_path / "gt", plot_format="svg")  # each run owns its folder
     _, _, paths2 = run_terrain_curves([1.0, 0.5], tmp_path / "tc", n_points=51, plot_format="pdf")
-    assert [p.name for p in paths + paths2] == ["table2.csv", "table2.svg", "terrain_curves.csv", "terrain_curves.pdf"]
+    names = ["table2.csv", "table2.svg", "frostyboy_2020.csv", "terrain_curves.csv", "terrain_curves.pdf"]
+    assert [p.name for p in paths + paths2] == names  # the field data compared, copied (issue 30)
     assert b"<svg" in paths[1].read_bytes() and paths2[1].read_bytes()[:5] == b"%PDF-"
 
 

@@ -164,3 +164,100 @@ def test_the_readability_check_can_fail():
     assert "'tiny' at 5.0 pt" in found
     assert "legend.text" in found and "overlaps" in found
     assert "'far outside' sticks out" in found
+
+
+# ---------------------------------------------------------------------------- pyplot's global state
+import json  # noqa: E402
+import os  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+
+from tests.conftest import ROOT  # noqa: E402
+
+#: A fresh interpreter that draws figures and prints pyplot's global state after each step:
+#: interactive mode, the backend and a full copy of rcParams.  ``kernel``: an IPython shell with
+#: the inline backend, as a Jupyter kernel has (loading that backend turns interactive mode on);
+#: ``script``: a plain interpreter whose user chose the svg backend.  ``user``: the user's own
+#: figure only (the reference); ``snoworm``: snoworm's figures first (pyplot first imported
+#: inside them), then the user's own, then snoworm's again.
+_STATE_SCRIPT = """
+import json, sys
+env, who = sys.argv[1], sys.argv[2]
+if env == "kernel":
+    from IPython.core.interactiveshell import InteractiveShell
+    InteractiveShell.instance()
+import matplotlib
+if env == "script":
+    matplotlib.use("svg")
+
+def state(step):
+    p = matplotlib.rcParams
+    rc = {k: repr(p[k]) for k in sorted(p)}
+    print(json.dumps({"step": step, "interactive": matplotlib.is_interactive(), "backend": matplotlib.get_backend(), "rc": rc}))
+
+def users_figure():
+    import matplotlib.pyplot as plt
+    plt.figure()
+    plt.plot([0, 1], [1, 0])
+
+def snoworm_figures():
+    import snoworm
+    from snoworm import plotting
+    sc = snoworm.load_scenario("tow6_uniform").with_({"simulation.duration_s": 0.5})
+    res = snoworm.simulate(sc)
+    res.plot("speeds")
+    res.plot("forces", size="column")
+    plotting.compare([res, res], "speeds", labels=["a", "b"], size="3.5x3")
+    with plotting.headless():
+        fig = res.plot("slip")
+    plotting.save(fig, sys.argv[3] + "/slip.pdf")
+
+if who == "user":
+    users_figure()
+    state("user")
+else:
+    snoworm_figures()
+    state("snoworm")
+    users_figure()
+    state("snoworm, then the user's")
+    snoworm_figures()
+    state("snoworm again")
+"""
+
+
+def _pyplot_states(env, who, tmp_path):
+    environ = {**os.environ, "PYTHONPATH": str(ROOT)}
+    environ.pop("MPLBACKEND", None)
+    if env == "kernel":
+        environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"  # what ipykernel sets
+    r = subprocess.run(
+        [sys.executable, "-c", _STATE_SCRIPT, env, who, str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+        env=environ,
+    )
+    assert r.returncode == 0, r.stdout + r.stderr
+    return [json.loads(line) for line in r.stdout.splitlines() if line.startswith("{")]
+
+
+@pytest.mark.parametrize("env", ["kernel", "script"])
+def test_figures_never_change_pyplots_global_state(env, tmp_path):
+    """snoworm's figures leave interactive mode, the backend and every rcParam as the user's own
+    figure leaves them, whether pyplot is first imported inside snoworm's style or before
+    (issue 30: in a Jupyter kernel, interactive mode was left off after snoworm's first figure,
+    and no later figure of the session showed)."""
+    if env == "kernel":
+        pytest.importorskip("IPython")
+        pytest.importorskip("matplotlib_inline")
+    (reference,) = _pyplot_states(env, "user", tmp_path)
+    assert reference["interactive"] is (env == "kernel")  # the inline backend turns it on
+    assert reference["backend"] == ("module://matplotlib_inline.backend_inline" if env == "kernel" else "svg")
+    states = _pyplot_states(env, "snoworm", tmp_path)
+    assert len(states) == 3
+    for s in states:
+        assert s["interactive"] == reference["interactive"], s["step"]
+        assert s["backend"] == reference["backend"], s["step"]
+        changed = sorted(k for k in reference["rc"] if s["rc"].get(k) != reference["rc"][k])
+        assert changed == [] and s["rc"].keys() == reference["rc"].keys(), (s["step"], changed)

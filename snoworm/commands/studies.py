@@ -50,7 +50,8 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
 
     Runs the steady-state model on every case at its measured wheel speed R_w*omega, drawbar
     and X_t, prints measured against modelled speed, slip and torque, and writes
-    --out/table2.csv (with residuals, model minus measured) and --out/table2.png.
+    --out/table2.csv (with residuals, model minus measured), --out/table2.png and a copy of the
+    field data compared, --out/inputs/ (its SHA-256 in the folder's manifest).
     """
     from ..studies.groundtruth import run_groundtruth  # lazy: start-up
 
@@ -150,8 +151,9 @@ def calibrate(field_csv, fit, out_dir, **options):
     torque_Nm (per wheel), drawbar_N, xt; lines starting with # are comments (see
     data/frostyboy_2020.csv).  Each case gives a torque and a slip residual.  Prints fitted
     values with standard errors and the residual table before and after, and writes
-    --out/terrain_model.yaml (use it in a scenario with terrain.model_file) and
-    --out/calibration.json.  Nothing is written if the input is invalid (exit 2).
+    --out/terrain_model.yaml (use it in a scenario with terrain.model_file),
+    --out/calibration.json and a copy of FIELD.csv as fitted, --out/inputs/ (its SHA-256 in the
+    folder's manifest).  Nothing is written if the input is invalid (exit 2).
     """
     from ..studies.calibrate import run_calibration  # lazy: start-up
 

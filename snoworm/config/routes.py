@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import csv
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field as dc_field
 from pathlib import Path
 
 from ..infra.files import FileProblem, read_regular_file
@@ -163,12 +163,14 @@ def _check_step(prev, pair, where):
 
 @dataclass(frozen=True)
 class Route:
-    """A route read from a file: distances along the track [m], elevations [m] and X_t, one per row."""
+    """A route read from a file: distances along the track [m], elevations [m] and X_t, one per row;
+    ``data``: the file's bytes as read (what a results folder keeps a copy of, issue 30)."""
 
     path: str
     distance_m: tuple
     elevation_m: tuple
     xt: tuple
+    data: bytes = dc_field(default=b"", repr=False, compare=False)
 
     def elevation_profile(self) -> ElevationProfile:
         return ElevationProfile(self.distance_m, self.elevation_m)
@@ -199,7 +201,8 @@ def read_route(path) -> Route:
     p = Path(path)
     where = f"terrain.route: {p}"
     try:
-        text = read_regular_file(p, MAX_ROUTE_BYTES).decode("utf-8")
+        data = read_regular_file(p, MAX_ROUTE_BYTES)
+        text = data.decode("utf-8")
     except FileNotFoundError:
         raise ScenarioError(
             f"{where}: no such file; give a CSV route file relative to the scenario's folder."
@@ -242,7 +245,7 @@ def read_route(path) -> Route:
         xts.append(vals["xt"])
     if len(dist) < 2:
         raise ScenarioError(f"{where}: needs at least two rows of numbers after the header.")
-    return Route(str(p), tuple(dist), tuple(elev), tuple(xts))
+    return Route(str(p), tuple(dist), tuple(elev), tuple(xts), data)
 
 
 def check_vehicle_on_grade(vehicle, elevation: ElevationProfile | None, path: str = "vehicle.segment") -> None:

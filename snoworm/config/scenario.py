@@ -20,7 +20,7 @@ import yaml
 from ..dynamics import ChainModel
 from . import yamlio
 from .mode_registry import MODES, ModeConfig, build_mode_config
-from .params import parameter_entries, read_model_file, source_notes
+from .params import PARAMETER_SETS, parameter_entries, read_model_file, source_notes
 from .routes import check_vehicle_on_grade, resolve_route
 from .schema import Config, ScenarioError, build, dump, field, internal, quote, short_key, suggest
 from .sections import (
@@ -184,6 +184,18 @@ class Scenario(Config):
         if self.origin is not None and self.origin.notes:
             data["sources"] = dict(self.origin.notes)
         return data
+
+    def data_files(self) -> dict:
+        """The files this scenario reads, ``{dotted key: path}``: the route file (``terrain.route``)
+        and a parameter-set file (``vehicle.parameter_set``).  A results folder holds copies of them
+        (:mod:`snoworm.results.copies`).  A ``terrain.model_file`` is not among them (its values are
+        written into the scenario), nor is a controller's code (docs/controllers.md)."""
+        out = {}
+        if self.vehicle.parameter_set not in PARAMETER_SETS:
+            out["vehicle.parameter_set"] = self.vehicle.parameter_set
+        if self.terrain.route is not None:
+            out["terrain.route"] = self.terrain.route
+        return out
 
     def with_(self, changes=None, **kw) -> Scenario:
         """A new, validated scenario with dotted-key changes applied.
@@ -435,13 +447,24 @@ def load_scenario(path, overrides=(), *, trust_folder: bool = True) -> Scenario:
     return scenario_from_dict(raw, str(path), base_dir=Path(path).parent, trust_folder=trust_folder)
 
 
-def dump_scenario(sc: Scenario) -> str:
+def dump_scenario(sc: Scenario, paths: dict | None = None) -> str:
     """The resolved scenario as YAML text, every value filled in (re-runnable), followed by the
-    source of every physical value as comments (:attr:`Scenario.sources`)."""
+    source of every physical value as comments (:attr:`Scenario.sources`).
+
+    ``paths``: ``{dotted key: path}`` written instead of the scenario's own file paths (a results
+    folder names its copies of :meth:`Scenario.data_files` relative to itself, e.g.
+    ``{"terrain.route": "inputs/route.csv"}``; they are read relative to the scenario file)."""
+    data = sc.to_dict()
+    for key, value in (paths or {}).items():
+        *sections, leaf = key.split(".")
+        node = data
+        for part in sections:
+            node = node[part]
+        node[leaf] = value
     lines = [
         "",
         "# Sources of the physical values (parameter set "
-        f"{sc.vehicle.parameter_set}; [user] scenario: changed by the scenario):",
+        f"{data['vehicle']['parameter_set']}; [user] scenario: changed by the scenario):",
     ]
     lines += [f"#   {k}: {v}" for k, v in sc.sources.items()]
-    return yaml.safe_dump(sc.to_dict(), sort_keys=False) + "\n".join(lines) + "\n"
+    return yaml.safe_dump(data, sort_keys=False) + "\n".join(lines) + "\n"

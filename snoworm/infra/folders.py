@@ -34,6 +34,7 @@ except ImportError:  # pragma: no cover - not POSIX
     fcntl = None
 
 from .._version import __version__
+from . import manifest as _manifest
 from .durable import STAGING as _STAGING, sync_files
 from .manifest import LOCK, MANIFEST, STAGE as _STAGE, ManifestProblem, folder_files, listed_files, load_manifest
 
@@ -146,13 +147,14 @@ def _command_line() -> str:
 
 
 def write_manifest(folder, command: str | None = None, **extra) -> Path:
-    """Write :data:`MANIFEST` listing every file now in ``folder``; returns its path."""
+    """Write :data:`MANIFEST` listing every file now in ``folder`` (and the SHA-256 of its ``inputs/``)."""
     folder = Path(folder)
     doc = {
         "snoworm_version": __version__,
         "command": command or _command_line(),
         "written_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         **extra,
+        **_manifest.input_record(folder),
         "files": _files(folder),
     }
     return atomic_write_text(folder / MANIFEST, json.dumps(doc, indent=2) + "\n")

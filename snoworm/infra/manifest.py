@@ -1,7 +1,8 @@
 """Output-folder manifests, read defensively: snoworm never touches a path outside ``--out``.
 
 A snoworm output folder holds :data:`MANIFEST`, a JSON file listing (as relative POSIX paths)
-the files snoworm wrote there.  A folder received from someone else (a shared results folder,
+the files snoworm wrote there (and, under ``inputs``, the SHA-256 of the copies of the files a
+run read: :func:`input_digests`).  A folder received from someone else (a shared results folder,
 an archive, a cloned repository) may hold a manifest crafted to name other files, so every
 manifest is checked before any of its entries is acted on:
 
@@ -43,6 +44,10 @@ __all__ = [
     "listed_files",
     "folder_files",
     "short",
+    "INPUTS",
+    "input_digests",
+    "input_record",
+    "sha256_of",
 ]
 
 #: Name of the manifest a snoworm output folder holds.
@@ -51,6 +56,9 @@ MANIFEST = ".snoworm-manifest.json"
 LOCK = ".snoworm-lock"
 #: Part of the name of a staging folder (never listed, never a reason to call a folder foreign).
 STAGE = ".snoworm-tmp-"
+#: Folder of a results folder holding copies of the files its run read (a route, a parameter-set
+#: file): the manifest records the SHA-256 of each (:func:`input_digests`, issue 30).
+INPUTS = "inputs"
 #: Largest manifest read (bytes): a sweep of 100 000 saved cases lists about 600 000 files (~40 MB).
 MAX_MANIFEST_BYTES = 64 * 2**20
 #: Longest entry accepted (characters): PATH_MAX on Linux.
@@ -216,3 +224,32 @@ def folder_files(folder) -> list:
             if rel not in (MANIFEST, LOCK):
                 out.append(rel)
     return sorted(out)
+
+
+def sha256_of(path) -> str:
+    """The SHA-256 (hex) of the file at ``path``, read in 1 MiB chunks."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def input_digests(folder) -> dict:
+    """``{entry: SHA-256}`` of the regular files under ``folder/inputs/`` (:data:`INPUTS`): what a
+    manifest records of the copies of a run's input files ({} without that folder)."""
+    base = Path(folder) / INPUTS
+    if base.is_symlink() or not base.is_dir():
+        return {}
+    out = {}
+    for rel in folder_files(base):
+        p = base / rel
+        if p.is_file() and not p.is_symlink():
+            out[f"{INPUTS}/{rel}"] = sha256_of(p)
+    return out
+
+
+def input_record(folder) -> dict:
+    """``{"inputs": input_digests(folder)}`` for a manifest, or {} without copies."""
+    digests = input_digests(folder)
+    return {"inputs": digests} if digests else {}

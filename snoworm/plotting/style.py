@@ -11,10 +11,11 @@ The library never selects the matplotlib backend nor changes the user's ``rcPara
   the CLI, sweeps and the paper report) are bare :class:`matplotlib.figure.Figure` objects:
   pyplot is not imported, no window opens, nothing is left for pyplot to release.
 
-Every plotting function draws inside snoworm's own style (:func:`figure_style`, a
-:func:`matplotlib.rc_context`): font sizes for print, TrueType fonts in PDF (``pdf.fonttype``
-42, no Type 3 fonts) and text kept as ``<text>`` in SVG (``svg.fonttype`` ``none``); :func:`save`
-applies the same font settings while writing.
+Every plotting function draws inside snoworm's own style (:func:`figure_style`): font sizes for
+print, TrueType fonts in PDF (``pdf.fonttype`` 42, no Type 3 fonts) and text kept as ``<text>`` in
+SVG (``svg.fonttype`` ``none``); :func:`save` applies the same font settings while writing.  Both
+set and restore only their own rcParams (:func:`own_rc`), never pyplot's global state: a first
+``pyplot`` import inside them (IPython's inline backend turns interactive mode on then) stays.
 """
 
 from __future__ import annotations
@@ -49,6 +50,7 @@ __all__ = [
     "force_text",
     "legend_outside",
     "figure_style",
+    "own_rc",
     "headless",
     "figure_function",
     "parse_size",
@@ -143,11 +145,32 @@ def style_rc(size=None) -> dict:
     }
 
 
+@contextlib.contextmanager
+def own_rc(rc: dict):
+    """Set the rcParams ``rc`` for the block and, on exit, give exactly those keys back their
+    earlier values; nothing else is touched.
+
+    Unlike :func:`matplotlib.rc_context`, which restores *every* rcParam on exit, this keeps what
+    happens to pyplot's global state inside the block: pyplot imported and its backend activated
+    there for the first time (IPython's inline backend then turns interactive mode on, which a
+    full restore would turn off again, and no later figure of the session would show) stays as
+    if the user had done it outside.
+    """
+    params = matplotlib.rcParams
+    before = {k: params[k] for k in rc}
+    params.update(rc)
+    try:
+        yield
+    finally:
+        params.update(before)
+
+
 def figure_style(size=None):
-    """snoworm's style as a context manager (:func:`matplotlib.rc_context`; the user's rcParams
-    come back on exit): print font sizes for ``size``, TrueType in PDF, text as text in SVG.
+    """snoworm's style as a context manager: print font sizes for ``size``, TrueType in PDF, text
+    as text in SVG; on exit those rcParams, and only those, get their earlier values back
+    (:func:`own_rc`: interactive mode, the backend and every other rcParam are never changed).
     Use it around your own ``fig.savefig(...)`` to embed the fonts the same way :func:`save` does."""
-    return matplotlib.rc_context(style_rc(size))
+    return own_rc(style_rc(size))
 
 
 @contextlib.contextmanager
@@ -290,7 +313,7 @@ def save(fig, path, fmt: str | None = None, dpi: int = DPI) -> Path:
     with atomic_path(path) as tmp:
         # svg: no hash salt, so the same figure gives the same file
         meta = {"Date": None} if fmt in ("pdf", "svg") else None
-        with matplotlib.rc_context(FONT_RC):
+        with own_rc(FONT_RC):
             fig.savefig(tmp, dpi=dpi, format=fmt, metadata=meta)
     return path
 

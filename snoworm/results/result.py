@@ -21,6 +21,7 @@ from ..infra.folders import atomic_write_text, output_folder, relocate
 from ..infra.manifest import ManifestProblem, read_small_file
 from ..model.quantities import output_series
 from . import frames
+from .copies import copy_inputs, input_problem
 from .energy import energy_along, energy_metrics
 
 __all__ = ["Result", "ResultFileError", "SEGMENT_COLUMNS", "LINK_COLUMNS", "load_result", "read_back"]
@@ -252,7 +253,9 @@ class Result:
     ) -> list:
         """Write ``segments.csv``, ``links.csv``, ``summary.json``, ``scenario.yaml`` (and plots,
         ``plot_format`` files: png at 200 dpi, pdf or svg, at print ``figure_size``: column,
-        page or WxH).
+        page or WxH), and under ``inputs/`` a copy of every file the scenario read (a route, a
+        parameter-set file; :mod:`snoworm.results.copies`), which ``scenario.yaml`` names relative
+        to the folder: the folder reads back and re-runs wherever it is moved.
 
         All or nothing (:func:`snoworm.infra.folders.output_folder`): the files are written into a
         temporary sibling folder that replaces ``out_dir`` at the end, with a manifest; an earlier
@@ -266,16 +269,18 @@ class Result:
             Unusable ``out_dir`` or an I/O failure (nothing is written then).
         """
         with output_folder(out_dir, overwrite, command) as stage:
+            copies = copy_inputs(self.scenario, stage)  # the folder holds what the run read
             paths = [
                 atomic_write_text(stage / "segments.csv", self.segments_csv()),
                 atomic_write_text(stage / "links.csv", self.links_csv()),
                 atomic_write_text(stage / "summary.json", json.dumps(self.summary(), indent=2) + "\n"),
-                atomic_write_text(stage / "scenario.yaml", dump_scenario(self.scenario)),
+                atomic_write_text(stage / "scenario.yaml", dump_scenario(self.scenario, copies)),
             ]
             if plot:
                 from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; runs without plots never pay it
 
                 paths += plotting.plot_result(self, stage, plot_format, size=figure_size)
+            paths += [stage / rel for rel in copies.values()]
         return relocate(paths, stage, out_dir)
 
 
@@ -386,19 +391,25 @@ def load_result(run_dir) -> Result:
     The series come from ``segments.csv`` and ``links.csv``, so they carry the files' precision:
     6 significant digits (times: 4 decimals, more for an ``output_dt_s`` below 1e-3).  The scenario is ``scenario.yaml`` (validated
     again, and never run: its controller, if any, is checked statically and trusts no folder, see
-    docs/controllers.md); ``stats``, ``events`` and the mode's metrics come from ``summary.json``.
+    docs/controllers.md), reading the folder's copies of its files (``inputs/``: a route, a
+    parameter-set file), each checked first against the SHA-256 the folder's manifest recorded;
+    ``stats``, ``events`` and the mode's metrics come from ``summary.json``.
     The integration intervals (``phases``) are not written to disk and come back empty.
 
     Raises
     ------
     ResultFileError
         A file missing, unreadable (a FIFO, a device), malformed, with NaN values, or whose shape
-        disagrees with the scenario or the other files; the message names the file.
+        disagrees with the scenario or the other files; a copy in ``inputs/`` changed since the
+        run was written (or not recorded in the manifest); the message names the file.
     """
     d = Path(run_dir)
     missing = [f for f in ("segments.csv", "links.csv", "summary.json", "scenario.yaml") if not (d / f).is_file()]
     if missing:
         raise ResultFileError(f"{d} is not a snoworm run folder: {', '.join(missing)} missing")
+    why = input_problem(d)  # the copies of the run's input files, checked before they are read
+    if why is not None:
+        raise ResultFileError(why)
     try:
         sc = load_scenario(d / "scenario.yaml", trust_folder=False)  # its controller, if any, runs from nowhere
     except (ScenarioError, RecursionError) as exc:

@@ -35,6 +35,7 @@ import dataclasses
 import json
 import math
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 import yaml
@@ -44,6 +45,7 @@ from .. import steady
 from ..config.schema import ScenarioError, suggest
 from ..config.sections import TerrainConfig, TerrainModelConfig
 from ..infra.folders import atomic_write_text, check_output_folder, output_folder, relocate
+from ..results.copies import write_copies
 from ..terrain import TerrainParams
 from .field_data import FieldData, read_field_data
 from .groundtruth import compare_table2, format_table2, vehicle_model
@@ -427,7 +429,8 @@ def run_calibration(
     progress=None,
     command: str | None = None,
 ):
-    """Read, validate, fit, then write ``terrain_model.yaml`` and ``calibration.json`` to ``out_dir``.
+    """Read, validate, fit, then write ``terrain_model.yaml``, ``calibration.json`` and a copy of the
+    field data as read (``inputs/<file>``, its SHA-256 in the folder's manifest) to ``out_dir``.
 
     Nothing is written if the input is invalid (every check runs before the first write).
     ``command`` is the command line the folder's manifest records (default: this process's).
@@ -442,8 +445,10 @@ def run_calibration(
     check_output_folder(out_dir, overwrite)  # before the fit, not after
     res = calibrate(data, fit, seg, tp, torque_scale_Nm=torque_scale_Nm, slip_scale=slip_scale, progress=progress)
     with output_folder(out_dir, overwrite, command) as out:
+        copies = write_copies(out, {"data": (Path(data.source).name, data.data)})  # the data fitted, as read
         paths = [
             atomic_write_text(out / "terrain_model.yaml", terrain_model_yaml(res, data.source)),
             atomic_write_text(out / "calibration.json", calibration_json(res, data.source, parameter_set_name)),
+            *(out / rel for rel in copies.values()),
         ]
     return res, format_report(res), relocate(paths, out, out_dir)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import csv
 import io
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -58,6 +58,8 @@ class FieldData:
         Case labels and surface descriptions.
     speed_mps, wheel_speed_mps, slip, torque_Nm, drawbar_N, xt : ndarray
         Columns of :data:`FIELD_COLUMNS` (slip as a fraction).
+    data : bytes
+        The file's bytes as read (a results folder keeps a copy of them, :mod:`snoworm.results.copies`).
     """
 
     source: str
@@ -69,6 +71,7 @@ class FieldData:
     torque_Nm: np.ndarray
     drawbar_N: np.ndarray
     xt: np.ndarray
+    data: bytes = field(default=b"", repr=False, compare=False)
 
     def __len__(self) -> int:
         return len(self.case)
@@ -97,7 +100,7 @@ def read_field_data(path=None) -> FieldData:
         wheel speed or X_t not positive, duplicate case labels, no data rows.
     """
     path = Path(path) if path is not None else default_data_path()
-    linenos, rows = _read_rows(path)
+    linenos, rows, raw = _read_rows(path)
     header = [h.strip() for h in rows[0]]
     missing = [c for c in FIELD_COLUMNS if c not in header]
     if missing:
@@ -128,13 +131,16 @@ def read_field_data(path=None) -> FieldData:
         case=tuple(values["case"]),
         surface=tuple(values["surface"]),
         **{c: np.array(values[c], float) for c in _NUMERIC},
+        data=raw,
     )
 
 
 def _read_rows(path):
-    """(line numbers, CSV rows) of a field-data file, the header first; ``#`` and blank lines skipped."""
+    """(line numbers, CSV rows, the file's bytes) of a field-data file, the header first; ``#`` and
+    blank lines skipped."""
     try:
-        text = read_regular_file(path, MAX_FIELD_DATA_BYTES).decode("utf-8")
+        raw = read_regular_file(path, MAX_FIELD_DATA_BYTES)
+        text = raw.decode("utf-8")
     except FileNotFoundError:
         _bad(path, "no such file. Give the path of a field-data CSV (see data/frostyboy_2020.csv for the format).")
     except FileProblem as exc:
@@ -148,7 +154,7 @@ def _read_rows(path):
             "no header and no data rows. Expected a header line "
             f"'{','.join(FIELD_COLUMNS)}' followed by one row per case.",
         )
-    return [n for n, _ in lines], list(csv.reader(io.StringIO("\n".join(ln for _, ln in lines))))
+    return [n for n, _ in lines], list(csv.reader(io.StringIO("\n".join(ln for _, ln in lines)))), raw
 
 
 def _row_values(path, lineno, row, header, col) -> dict:

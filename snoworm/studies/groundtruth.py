@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import brentq
@@ -28,6 +29,7 @@ from ..config.scenario import SegmentConfig, TerrainConfig, TerrainModelConfig
 from ..config.schema import ScenarioError, build, check_field, dump, suggest
 from ..infra.csvwriter import csv_text, write_csv
 from ..infra.folders import output_folder, relocate
+from ..results.copies import write_copies
 from ..terrain import TerrainParams
 from .field_data import FieldData, read_field_data
 
@@ -205,7 +207,8 @@ def run_groundtruth(
     command: str | None = None,
 ):
     """Compare the model with field data and write ``table2.csv`` (and ``table2.png``, or the
-    ``plot_format``: png, pdf, svg; at print ``figure_size``: column, page or WxH).
+    ``plot_format``: png, pdf, svg; at print ``figure_size``: column, page or WxH), with a copy of
+    the field data as read (``inputs/<file>``, its SHA-256 in the folder's manifest).
 
     Everything is computed and validated before anything is written; each file is written
     atomically.  ``command`` is the command line the folder's manifest records (default: this
@@ -233,6 +236,8 @@ def run_groundtruth(
             paths.append(
                 plotting.write_figure(out / "table2.png", plotting.plot_table2, rows, fmt=plot_format, size=figure_size)
             )
+        copies = write_copies(out, {"data": (Path(data.source).name, data.data)})  # the data compared, as read
+        paths += [out / rel for rel in copies.values()]
     return rows, text, relocate(paths, out, out_dir)
 
 
