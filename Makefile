@@ -5,7 +5,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 OUT ?= out
 
-.PHONY: demo test lint test-x86-64-v2 bench paper docs clean
+.PHONY: demo test lint test-x86-64-v2 differential bench paper docs clean
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -40,6 +40,11 @@ lint: $(VENV)/.installed
 X86_64_V2 := OPENBLAS_CORETYPE=Nehalem NPY_DISABLE_CPU_FEATURES="X86_V3 X86_V4 AVX512_ICL AVX512_SPR"
 test-x86-64-v2: $(VENV)/.installed
 	$(X86_64_V2) $(PY) -m pytest -q -p no:cacheprovider tests/test_reference_summaries.py tests/test_tight_reference.py
+
+# The differential tests at length: 60 hypothesis sequences of scenarios in one process against
+# each run alone in a fresh process (make test runs 4; tests/test_differential.py)
+differential: $(VENV)/.installed
+	SNOWORM_DIFF_EXAMPLES=60 $(PY) -m pytest -q -p no:cacheprovider tests/test_differential.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis
