@@ -193,11 +193,11 @@ class _Options:
 def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
     """Run the sweep with ``out`` (or None) locked and prepared."""
     with ExitStack() as stack:
-        done = {}
+        done, lease = {}, None
         if out is not None:
             try:
                 _mkdir(out)
-                stack.enter_context(folder_lock(out))
+                lease = stack.enter_context(folder_lock(out))
                 done = prepare_dir(
                     out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source, overwrite=opts.overwrite
                 )
@@ -206,8 +206,9 @@ def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
                 if own:
                     executor.close()
                 raise
-        table = _run(plan, done, out, executor, own, opts)
-        if out is not None:
+        table = _run(plan, done, out, executor, own, opts, lease)
+        if lease is not None:
+            lease.check("running a sweep in")  # the folder is still the one locked: else no manifest
             write_manifest(out, opts.command, status="complete")
         return table
 
@@ -219,13 +220,17 @@ def _mkdir(out: Path):
         raise OutputError(f"cannot write results: {os_error_message(exc, out)}") from None
 
 
-def _run(plan, done, out, executor, own, opts: _Options) -> SweepTable:
+def _run(plan, done, out, executor, own, opts: _Options, lease=None) -> SweepTable:
+    """Run the cases still to do, then write ``series.nc`` and the plot (``lease``: the folder's
+    lock, checked before each write: a folder replaced meanwhile gets nothing)."""
     bar = _Progress(len(plan.cases), len(done), sys.stderr, opts.progress is None or bool(opts.progress))
     keep_series = opts.keep_series
     rows = dict(done)
     todo = [c for c in plan.cases if c.index not in done]
-    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, keep_series)
+    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar, lease), own, out, keep_series)
     table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys, out_dir=out)
+    if lease is not None:
+        lease.check("running a sweep in")
     if keep_series == "netcdf":
         combine_series(
             out,
@@ -257,8 +262,8 @@ class _Recorder:
     """Turns each case's result into a row: kept in ``rows``, appended to ``summary.csv`` (one
     ``write`` and ``fsync`` per case) and counted on the progress line."""
 
-    def __init__(self, plan: SweepPlan, rows: dict, out, bar):
-        self.plan, self.rows, self.bar = plan, rows, bar
+    def __init__(self, plan: SweepPlan, rows: dict, out, bar, lease=None):
+        self.plan, self.rows, self.bar, self.lease = plan, rows, bar, lease
         self.table = SweepTable(plan.columns, [], plan.keys)
         self.path = out / "summary.csv" if out is not None else None
         self.fd = None
@@ -281,6 +286,8 @@ class _Recorder:
         for j in range(self.plan.n_links):
             row[f"final_link_force_{j}_N"] = links[j] if j < len(links) else None
         row["wall_time_s"] = result.get("wall_time_s")
+        if self.lease is not None:
+            self.lease.check("running a sweep in")  # never a row into a file no longer in the folder
         if self.fd is not None:
             try:
                 os.write(self.fd, self.table.csv_line(row).encode("utf-8"))
