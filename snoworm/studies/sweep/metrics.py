@@ -21,6 +21,7 @@ import numpy as np
 
 from ...config.scenario import Scenario, scenario_from_dict
 from ...config.schema import ScenarioError
+from ...infra.folders import OutputError, os_error_message
 from ...modes.codeload import allow_code
 from ...modes.controller import ControllerError
 from ...simulation.driver import SolverError, simulate
@@ -31,6 +32,7 @@ __all__ = [
     "case_metrics",
     "run_case",
     "one_line",
+    "save_case_series",
     "IMMOBILISED_SPEED_MPS",
     "IMMOBILISED_SIGN_FACTOR",
     "LATE_FRACTION",
@@ -124,6 +126,19 @@ def case_metrics(result) -> dict:
     }
 
 
+def save_case_series(result, save_dir) -> dict:
+    """Save a case's series (:func:`~snoworm.studies.sweep.series.save_series`); an I/O failure (disk
+    full, read-only, a symlink in the way) is returned as ``{"output_error": message}``, never raised
+    and never a case status: the sweep stops on it (exit 2) without recording the case, so a
+    resume runs it again.  Returns ``{}`` on success."""
+    try:
+        save_series(result, save_dir)
+    except (OSError, OutputError) as exc:
+        msg = os_error_message(exc, save_dir) if isinstance(exc, OSError) else str(exc)
+        return {"output_error": one_line(msg)}
+    return {}
+
+
 def one_line(text: str) -> str:
     """``text`` on one line (line breaks become `` | ``), cut to :data:`MAX_ERROR_CHARS`."""
     text = " | ".join(s.strip() for s in str(text).splitlines() if s.strip())
@@ -187,7 +202,8 @@ def run_case(task: SweepTask) -> dict:
     -------
     dict
         ``index``, ``status``, ``error`` and, for ``ok``, the :func:`case_metrics` and
-        ``wall_time_s``.  Never raises for a failing case; the time series stay in the worker.
+        ``wall_time_s``; ``output_error`` if its series could not be saved (:func:`save_case_series`).
+        Never raises for a failing case; the time series stay in the worker.
     """
     wall0 = time.perf_counter()
     out = {"index": task.index, "status": "ok", "error": ""}
@@ -196,7 +212,7 @@ def run_case(task: SweepTask) -> dict:
             res = simulate(task.validated())
         out.update(case_metrics(res))
         if task.save_dir:
-            save_series(res, task.save_dir)
+            out.update(save_case_series(res, task.save_dir))
         del res
     except ScenarioError as exc:
         out.update(status="invalid", error=one_line(exc))

@@ -146,7 +146,10 @@ def _on_executor(plan, out, executor, how, opts) -> SweepTable:
     try:
         return _in_folder(plan, out, executor, own, opts)
     except OSError as exc:  # writing sweep.json, the manifest or the plot
-        raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
+        raise OutputError(
+            f"cannot write the sweep's files: {os_error_message(exc, out)}. Its finished cases (if any) are "
+            "kept in summary.csv: free space (or fix the folder) and re-run the same command to resume."
+        ) from None
 
 
 def _new_output_folder(out_dir, overwrite):
@@ -278,6 +281,13 @@ class _Recorder:
             self.fd = None
 
     def record(self, c, result):
+        if result.get("output_error"):  # the case's series could not be saved: stop, not recorded
+            n = len(self.rows)
+            raise OutputError(
+                f"cannot save the series of case {c.case_id}: {result['output_error']}. The sweep stopped; "
+                f"its {n} finished cases are kept in {self.path.parent if self.path else 'memory'} and case {c.case_id} is not recorded: "
+                "free space (or fix the folder) and re-run the same command to resume."
+            )
         row = {"case_id": c.case_id, "case_key": c.key, **dict(zip(self.plan.keys, c.values))}
         row.update(status=result["status"], error=result["error"])
         for m in list(METRIC_COLUMNS)[:7] + ["energy_per_m_J", "immobilised"]:
