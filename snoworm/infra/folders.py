@@ -7,7 +7,9 @@
   and moved into place at the end, with a manifest (:data:`MANIFEST`: the files, the snoworm
   version, the command).  A failure at any point leaves no result files.  An earlier snoworm
   folder is replaced as a whole; a non-empty folder snoworm did not write is refused unless
-  ``overwrite`` (then same-named files are replaced and the others kept).
+  ``overwrite`` (then same-named files are replaced and the others kept).  A folder that cannot
+  be renamed as a whole is committed entry by entry behind a journal (:mod:`snoworm.infra.commit`):
+  an interrupted commit is completed by the next command (:func:`check_output_folder`).
 * :func:`folder_lock` (:mod:`snoworm.infra.locks`): one process at a time in a folder.  A sweep
   holds its folder's lock while it runs; :func:`output_folder` holds the lock of the folder it
   replaces (from the start if it exists, else from the commit), so no command replaces or writes
@@ -31,6 +33,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from .._version import __version__
+from .commit import commit_in_place, owns_stage, recover, unfinished_commit
 from .durable import STAGING as _STAGING, sync_files
 from .locks import FolderLocked, OutputError, check_unlocked, folder_lock, os_error_message, pid_alive, try_folder_lock
 from .manifest import LOCK, MANIFEST, STAGE as _STAGE, ManifestProblem, folder_files, listed_files, load_manifest
@@ -150,6 +153,8 @@ def folder_report(path) -> tuple:
     entries = [e for e in os.listdir(path) if e != LOCK and _STAGE not in e]
     if not entries:
         return "empty", None
+    if unfinished_commit(path):  # never acted on as a snoworm folder until completed (recover)
+        return "foreign", "it holds an unfinished commit"
     try:
         man = load_manifest(path)
         if man is None:
@@ -219,6 +224,8 @@ def check_output_folder(path, overwrite: bool = False) -> str:
             raise OutputError(f"{path}: {what}, not a folder. Give a folder path for --out.")
         if parent.exists():
             break
+    if path.is_dir():
+        recover(path)  # a commit in place interrupted between its renames: completed first
     state, why = folder_report(path)
     if state == "foreign" and not overwrite:
         raise OutputError(_refusal(path, why))
@@ -239,7 +246,7 @@ def _clean_stale(parent: Path, name: str):
             prefix = f".{name}{tag}"
             if e.startswith(prefix):
                 pid = e[len(prefix) :].split("-")[0]
-                if pid.isdigit() and not pid_alive(int(pid)):
+                if pid.isdigit() and not pid_alive(int(pid)) and not owns_stage(parent / name, parent / e):
                     shutil.rmtree(parent / e, ignore_errors=True)
 
 
@@ -299,45 +306,6 @@ def remove_listed(folder) -> list:
     return paths
 
 
-def _ours(path: Path, listed: set, root: Path) -> bool:
-    """Whether the folder ``path`` holds only files the manifest lists (so snoworm wrote it)."""
-    rels = [(path / f).relative_to(root).as_posix() for f in _files(path)]
-    return all(r in listed for r in rels)
-
-
-def _check_in_place(stage: Path, target: Path, listed: set):
-    """Refuse (before anything is touched) to replace a folder of ``target`` snoworm did not write."""
-    for e in os.listdir(stage):
-        dst = target / e
-        if dst.is_dir() and not dst.is_symlink() and not _ours(dst, listed, target):
-            raise OutputError(
-                f"{dst} is a folder snoworm did not write, and a result file of the same name "
-                f"would replace it; nothing was written. Move it away or give another --out."
-            )
-
-
-def _commit_in_place(stage: Path, target: Path):
-    """Move the staged entries into ``target`` one by one (files of an earlier, trusted manifest
-    removed first; a folder snoworm did not write is never removed)."""
-    target.mkdir(parents=True, exist_ok=True)
-    target = Path(os.path.realpath(target))
-    try:
-        man = load_manifest(target)
-        listed_files(target, man or {"files": []})
-        listed = set((man or {}).get("files", []))
-    except ManifestProblem:
-        listed = set()
-    _check_in_place(stage, target, listed)
-    if listed:
-        remove_listed(target)
-    for e in sorted(os.listdir(stage), key=lambda n: n == MANIFEST):  # the manifest last
-        dst = target / e
-        if dst.is_dir() and not dst.is_symlink():
-            shutil.rmtree(dst)
-        os.replace(stage / e, dst)
-    shutil.rmtree(stage, ignore_errors=True)
-
-
 @contextmanager
 def output_folder(path, overwrite: bool = False, command: str | None = None):
     """Yield a staging folder for a command's results; on success they replace ``path``.
@@ -381,16 +349,22 @@ def output_folder(path, overwrite: bool = False, command: str | None = None):
             held.take()  # a folder made meanwhile (a sweep started there): its lock decides
             state = check_output_folder(target, overwrite) if held.lease is None else _recheck(target, overwrite)
             if in_place or state == "foreign" or target.is_symlink() or _inside_cwd(target):
-                _commit_in_place(stage, target)
+                commit_in_place(stage, target)
             else:
                 _commit_swap(stage, target)
         except OSError as exc:
+            if owns_stage(target, stage):  # a commit in place stopped half-way: completed by the next command
+                raise OutputError(
+                    f"cannot write results: {os_error_message(exc, target)}; the commit into {target} stopped "
+                    f"half-way. Run the command again with the same --out: it completes the commit first."
+                ) from None
             shutil.rmtree(stage, ignore_errors=True)
             raise OutputError(
                 f"cannot write results: {os_error_message(exc, target)}; nothing was written to {target}."
             ) from None
         except BaseException:
-            shutil.rmtree(stage, ignore_errors=True)
+            if not owns_stage(target, stage):
+                shutil.rmtree(stage, ignore_errors=True)
             raise
 
 

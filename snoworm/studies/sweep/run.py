@@ -18,6 +18,7 @@ from pathlib import Path
 
 from ...config.scenario import apply_overrides
 from ...config.schema import ScenarioError
+from ...infra.commit import finish_commit
 from ...infra.folders import OutputError, check_output_folder, folder_lock, os_error_message, write_manifest
 from ...infra.progress import Progress
 from ...results.frames import require_xarray
@@ -201,6 +202,7 @@ def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
             try:
                 _mkdir(out)
                 lease = stack.enter_context(folder_lock(out))
+                finish_commit(out)  # a commit in place interrupted between its renames: completed first
                 done = prepare_dir(
                     out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source, overwrite=opts.overwrite
                 )
