@@ -286,7 +286,7 @@ class _Recorder:
         if result.get("output_error"):  # the case's series could not be saved: stop, not recorded
             n = len(self.rows)
             raise OutputError(
-                f"cannot save the series of case {c.case_id}: {result['output_error']}. The sweep stopped; "
+                f"cannot save the series of case {c.case_id}: {str(result['output_error']).rstrip('.')}. The sweep stopped; "
                 f"its {n} finished cases are kept in {self.path.parent if self.path else 'memory'} and case {c.case_id} is not recorded: "
                 "free space (or fix the folder) and re-run the same command to resume."
             )
