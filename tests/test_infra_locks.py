@@ -135,7 +135,7 @@ def test_a_symlinked_lock_file_is_never_written_through(tmp_path):
 
 
 class _Replacing(SerialExecutor):
-    """Runs the cases; after the first, the sweep's folder is moved away and a new one made there
+    """Runs the cases; before the second, the sweep's folder is moved away and a new one made there
     (as ``mv X Y; mkdir X`` or an older snoworm replacing it would)."""
 
     def __init__(self, out):
@@ -143,19 +143,27 @@ class _Replacing(SerialExecutor):
         self.out = out
 
     def map_unordered(self, fn, tasks):
-        for i, row in enumerate(super().map_unordered(fn, tasks)):
+        for i, task in enumerate(tasks):
             if i == 1:
                 os.rename(self.out, self.out.parent / "moved")
                 self.out.mkdir()
                 (self.out / "theirs.txt").write_text("theirs\n")
-            yield row
+            yield fn(task)
 
 
-def test_a_sweep_writes_nothing_into_a_folder_that_replaced_the_one_it_locked(tmp_path):
+@pytest.mark.parametrize("save", [False, True], ids=["rows", "save-cases"])
+def test_a_sweep_writes_nothing_into_a_folder_that_replaced_the_one_it_locked(tmp_path, save):
     out = tmp_path / "X"
-    with pytest.raises(OutputError, match="removed, moved or replaced while this process was running a sweep"):
-        run_sweep(TOW6, ["terrain.xt=0.6,0.7,0.8,0.9", SHORT], out_dir=out, executor=_Replacing(out), progress=False)
-    assert sorted(os.listdir(out)) == ["theirs.txt"]  # no manifest, no row, no plot in the new folder
+    with pytest.raises(OutputError, match="removed, moved or replaced while"):
+        run_sweep(
+            TOW6,
+            ["terrain.xt=0.6,0.7,0.8,0.9", SHORT],
+            out_dir=out,
+            executor=_Replacing(out),
+            progress=False,
+            save_cases=save,
+        )
+    assert sorted(os.listdir(out)) == ["theirs.txt"]  # no manifest, row, case folder or plot in the new folder
     moved = tmp_path / "moved"
     assert json.loads((moved / MANIFEST).read_text())["status"] == "running"  # never claims complete
     assert len(csv_rows(moved / "summary.csv")) == 1  # the row of the case before the move only

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import errno
 import os
+import secrets
 import stat
 from contextlib import contextmanager
 from pathlib import Path
@@ -36,6 +37,7 @@ __all__ = [
     "folder_lock",
     "try_folder_lock",
     "check_unlocked",
+    "lock_token_matches",
 ]
 
 #: errno values of a lock file that cannot be created (a read-only folder or file system)
@@ -73,12 +75,32 @@ def _holder(lock_path: Path) -> str:
     try:
         fd = os.open(lock_path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0))
         try:
-            text = os.read(fd, 32).decode("ascii", errors="replace").strip()
+            text = _first_word(os.read(fd, 64))
         finally:
             os.close(fd)
     except OSError:
         text = ""
     return f"process {text}" if text.isdigit() else "another process"
+
+
+def _first_word(data: bytes) -> str:
+    words = data.decode("ascii", errors="replace").split()
+    return words[0] if words else ""
+
+
+def lock_token_matches(folder, token: str) -> bool:
+    """Whether ``folder``'s lock file holds ``token`` (:attr:`FolderLease.token`): the folder is still
+    the one its holder locked.  Works where a worker cannot compare the folder's identity (another
+    machine of a Dask cluster on a shared file system)."""
+    try:
+        fd = os.open(Path(folder) / LOCK, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0))
+        try:
+            words = os.read(fd, 128).decode("ascii", errors="replace").split()
+        finally:
+            os.close(fd)
+    except OSError:
+        return False
+    return len(words) == 2 and words[1] == token
 
 
 def _busy(lp: Path) -> FolderLocked:
@@ -97,10 +119,12 @@ class FolderLease:
         The locked folder.
     path : Path
         Its lock file.
+    token : str
+        A random token written into the lock file after the PID (:func:`lock_token_matches`).
     """
 
-    def __init__(self, folder: Path, fd: int):
-        self.folder, self.path, self.fd = folder, folder / LOCK, fd
+    def __init__(self, folder: Path, fd: int, token: str):
+        self.folder, self.path, self.fd, self.token = folder, folder / LOCK, fd, token
         self._ident = _ident(os.stat(folder))
 
     def is_current(self) -> bool:
@@ -171,15 +195,16 @@ def try_folder_lock(folder, required: bool = False) -> FolderLease | None:
     """
     folder = Path(folder)
     lp = folder / LOCK
+    token = secrets.token_hex(8)
     try:
-        fd = _acquire(lp)
+        fd = _acquire(lp, token)
     except OSError as exc:  # FolderLocked is not an OSError: it passes unchanged
         if not required and exc.errno in _CANNOT_CREATE:
             check_unlocked(folder)
             return None
         raise OutputError(f"cannot lock the folder: {os_error_message(exc, lp)}") from None
     try:
-        return FolderLease(folder, fd)
+        return FolderLease(folder, fd, token)
     except OSError as exc:
         os.close(fd)
         raise OutputError(f"cannot lock the folder: {os_error_message(exc, folder)}") from None
@@ -210,7 +235,7 @@ def check_unlocked(folder) -> None:
         os.close(fd)  # drops the probe's flock too
 
 
-def _acquire(lp: Path) -> int:
+def _acquire(lp: Path, token: str) -> int:
     nofollow = getattr(os, "O_NOFOLLOW", 0)
     for _ in range(20):
         if fcntl is None:  # pragma: no cover - not POSIX
@@ -242,6 +267,6 @@ def _acquire(lp: Path) -> int:
             os.close(fd)
             raise OSError(errno.EINVAL, "not a regular file", str(lp))
         os.ftruncate(fd, 0)
-        os.write(fd, str(os.getpid()).encode())
+        os.write(fd, f"{os.getpid()} {token}".encode())
         return fd
     raise _busy(lp)

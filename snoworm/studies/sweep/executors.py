@@ -143,7 +143,9 @@ def _run_group(tasks, scs, fallback, metrics):
         try:
             row.update(metrics(mem.result))
             if task.save_dir:
-                row.update(save_case_series(mem.result, task.save_dir))  # an I/O failure stops the sweep
+                row.update(
+                    save_case_series(mem.result, task.save_dir, task.lock_token)
+                )  # an I/O failure stops the sweep
         except Exception:  # noqa: BLE001 - let the one-by-one path report the case's error
             row = fallback(task)
         row.setdefault("wall_time_s", wall)

@@ -232,7 +232,8 @@ def _run(plan, done, out, executor, own, opts: _Options, lease=None) -> SweepTab
     keep_series = opts.keep_series
     rows = dict(done)
     todo = [c for c in plan.cases if c.index not in done]
-    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar, lease), own, out, keep_series)
+    token = lease.token if lease is not None else None
+    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar, lease), own, out, (keep_series, token))
     table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys, out_dir=out)
     if lease is not None:
         lease.check("running a sweep in")
@@ -314,10 +315,11 @@ class _Recorder:
         self.bar.update(row["status"] != "ok")
 
 
-def _tasks(plan: SweepPlan, todo, out, keep_series):
+def _tasks(plan: SweepPlan, todo, out, keep_series, token=None):
     """The tasks of the cases still to run (:class:`SweepTask`, made one at a time).
 
-    ``keep_series``: False, or where the cases' series go ("folders" or "netcdf")."""
+    ``keep_series``: False, or where the cases' series go ("folders" or "netcdf"); ``token``: the
+    folder lock's (:attr:`~snoworm.infra.locks.FolderLease.token`), checked before a series is saved."""
     for c in todo:
         if c.index in plan.invalid:
             continue
@@ -332,16 +334,18 @@ def _tasks(plan: SweepPlan, todo, out, keep_series):
             base_dir=plan.base_dir,
             save_dir=save,
             allow_code=tuple(plan.allow_code),
+            lock_token=token if save else None,
         )
 
 
-def _execute(plan: SweepPlan, todo, executor, rec: _Recorder, own: bool, out, keep_series):
+def _execute(plan: SweepPlan, todo, executor, rec: _Recorder, own: bool, out, series):
     """Record the invalid cases, run the others on ``executor``, record each as it finishes; then
-    close the progress line, the executor (if the sweep made it) and ``summary.csv``."""
+    close the progress line, the executor (if the sweep made it) and ``summary.csv``.  ``series``:
+    (the series format or False, the lock's token or None), see :func:`_tasks`."""
     try:
         rec.open()
         rec.bar.show()
-        _run_cases(plan, todo, executor, rec, out, keep_series)
+        _run_cases(plan, todo, executor, rec, out, series)
     finally:
         rec.bar.close()
         if own:
@@ -349,13 +353,13 @@ def _execute(plan: SweepPlan, todo, executor, rec: _Recorder, own: bool, out, ke
         rec.close()
 
 
-def _run_cases(plan: SweepPlan, todo, executor, rec: _Recorder, out, keep_series):
+def _run_cases(plan: SweepPlan, todo, executor, rec: _Recorder, out, series):
     by_index = {c.index: c for c in plan.cases}
     try:
         for c in todo:
             if c.index in plan.invalid:
                 rec.record(c, {"status": "invalid", "error": plan.invalid[c.index], "wall_time_s": 0.0})
-        for result in executor.map_unordered(run_case, _tasks(plan, todo, out, keep_series)):
+        for result in executor.map_unordered(run_case, _tasks(plan, todo, out, *series)):
             rec.record(by_index[result["index"]], result)
     except (KeyboardInterrupt, ScenarioError, OutputError):
         raise
