@@ -3,6 +3,7 @@ refuse the folder, the next command completes the commit; never an old manifest 
 
 from __future__ import annotations
 
+import errno
 import json
 import multiprocessing
 import os
@@ -122,3 +123,32 @@ def test_a_crafted_journal_moves_nothing_from_outside_the_folder(tmp_path):
     with pytest.raises(OutputError, match="staging folder is not a staging folder of this folder"):
         check_output_folder(out)
     assert (outside / "secret.txt").read_text() == "keep" and not (out / "secret.txt").exists()
+
+
+def test_a_mount_point_out_is_committed_in_place_from_a_staging_folder_inside_it(tmp_path, monkeypatch):
+    """--out a mount point (simulated: renaming it is EBUSY, renaming into it from outside EXDEV):
+    every run exited 2 "Device or resource busy"; a staging folder beside it cannot reach it."""
+    out = tmp_path / "mnt"
+    out.mkdir()
+
+    def inside(p):
+        p = os.path.abspath(p)
+        return p.startswith(str(out) + os.sep)
+
+    def mount(real):
+        def rename(src, dst, *a, **kw):
+            if str(out) in (os.path.abspath(src), os.path.abspath(dst)):
+                raise OSError(errno.EBUSY, "Device or resource busy", str(src))
+            if inside(src) != inside(dst):
+                raise OSError(errno.EXDEV, "Invalid cross-device link", str(src))
+            return real(src, dst, *a, **kw)
+
+        return rename
+
+    monkeypatch.setattr(os, "rename", mount(os.rename))
+    monkeypatch.setattr(os, "replace", mount(os.replace))
+    _write(out, OLD)
+    _write(out, NEW)
+    assert _contents(out) == NEW and folder_state(out) == "snoworm"
+    assert sorted(os.listdir(tmp_path)) == ["mnt"]
+    assert sorted(os.listdir(out)) == sorted([*NEW, MANIFEST])  # no staging folder, probe or journal left

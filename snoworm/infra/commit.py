@@ -26,7 +26,7 @@ import shutil
 import stat
 from pathlib import Path
 
-from .locks import OutputError, try_folder_lock
+from .locks import OutputError, os_error_message, try_folder_lock
 from .manifest import (
     JOURNAL,
     MANIFEST,
@@ -123,9 +123,19 @@ def commit_in_place(stage: Path, target: Path):
 def _apply(target: Path, stage: Path, doc: dict):
     """Every step of a journaled commit (each idempotent), then the journal removed."""
     for entry in doc["remove"]:
-        st = lexists_inside(target, entry)
+        st = _lstat_inside(target, entry)
         if st is not None and (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
             os.unlink(target / entry)
+    for entry in doc["remove"]:  # the folders the removed files leave empty (never one holding anything)
+        parts = entry.split("/")[:-1]
+        for k in range(len(parts), 0, -1):
+            st = _lstat_inside(target, "/".join(parts[:k]))
+            if st is None or not stat.S_ISDIR(st.st_mode):
+                break
+            try:
+                os.rmdir(target.joinpath(*parts[:k]))
+            except OSError:
+                break
     for e in doc["entries"]:
         src, dst = stage / e, target / e
         if not os.path.lexists(src):
@@ -138,6 +148,14 @@ def _apply(target: Path, stage: Path, doc: dict):
     _sync_dir(target)  # every rename on disk before the journal goes
     shutil.rmtree(stage, ignore_errors=True)
     os.unlink(target / JOURNAL)
+
+
+def _lstat_inside(target: Path, entry: str):
+    """``lstat`` of ``target/entry`` reached without a symlink on the way (None if missing or not)."""
+    try:
+        return lexists_inside(target, entry)
+    except ManifestProblem:
+        return None
 
 
 def _journal_problem(target: Path, doc) -> str | None:
@@ -221,7 +239,13 @@ def finish_commit(target) -> bool:
             raise OutputError(_stuck(target, f"its staging folder {stage} is gone"))
         stage.mkdir()  # every entry moved: only the clean-up is left
     _check_in_place(stage, target, set(doc["listed"]), doc["entries"])
-    _apply(target, stage, doc)
+    try:
+        _apply(target, stage, doc)
+    except OSError as exc:
+        raise OutputError(
+            f"cannot complete the unfinished commit of {target}: {os_error_message(exc)}. Fix that and run "
+            "the command again, or delete the folder."
+        ) from None
     return True
 
 

@@ -22,6 +22,7 @@ path and the operating system's reason (the CLI: exit status 2).
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import shlex
@@ -236,18 +237,21 @@ def check_output_folder(path, overwrite: bool = False) -> str:
 
 # ------------------------------------------------------------------------------ output folders
 def _clean_stale(parent: Path, name: str):
-    """Remove staging folders of ``name`` left by killed processes (their PID is in the name)."""
-    try:
-        entries = os.listdir(parent)
-    except OSError:
-        return
-    for e in entries:
-        for tag in (_STAGE, _OLD):
-            prefix = f".{name}{tag}"
-            if e.startswith(prefix):
-                pid = e[len(prefix) :].split("-")[0]
-                if pid.isdigit() and not pid_alive(int(pid)) and not owns_stage(parent / name, parent / e):
-                    shutil.rmtree(parent / e, ignore_errors=True)
+    """Remove staging folders of ``name`` left by killed processes (their PID is in the name):
+    siblings of ``parent / name``, and those inside it; never one an unfinished commit needs."""
+    target = parent / name
+    places = [(parent, [f".{name}{_STAGE}", f".{name}{_OLD}"]), (target, [_STAGE])]
+    for folder, prefixes in places:
+        try:
+            entries = os.listdir(folder)
+        except OSError:
+            continue
+        for e in entries:
+            for prefix in prefixes:
+                if e.startswith(prefix):
+                    pid = e[len(prefix) :].split("-")[0]
+                    if pid.isdigit() and not pid_alive(int(pid)) and not owns_stage(target, folder / e):
+                        shutil.rmtree(folder / e, ignore_errors=True)
 
 
 def _inside_cwd(path: Path) -> bool:
@@ -260,30 +264,57 @@ def _inside_cwd(path: Path) -> bool:
 
 
 def _make_stage(target: Path):
-    """(staging folder, in_place): a sibling of ``target``, or inside it when the parent is not writable."""
+    """(staging folder, in_place): a sibling of ``target``; or inside it when the parent is not
+    writable or ``target`` is a mount point (a folder on another mount than its parent: a file
+    cannot be renamed into it from a sibling, nor the folder renamed as a whole)."""
     parent = target.parent
     parent.mkdir(parents=True, exist_ok=True)
     _clean_stale(parent, target.name)
-    try:
-        stage = Path(tempfile.mkdtemp(prefix=f".{target.name}{_STAGE}{os.getpid()}-", dir=parent))
-        in_place = False
-    except PermissionError:
-        if not target.is_dir():
-            raise
+    inside = target.is_dir() and os.path.ismount(target)
+    if not inside:
+        try:
+            stage = Path(tempfile.mkdtemp(prefix=f".{target.name}{_STAGE}{os.getpid()}-", dir=parent))
+        except PermissionError:
+            if not target.is_dir():
+                raise
+            inside = True
+        else:
+            if target.is_dir() and not _renames_into(stage, target):  # a bind mount ismount misses
+                shutil.rmtree(stage, ignore_errors=True)
+                inside = True
+    if inside:
         stage = Path(tempfile.mkdtemp(prefix=f"{_STAGE}{os.getpid()}-", dir=target))
-        in_place = True
     os.chmod(stage, file_mode(directory=True))
-    return stage, in_place
+    return stage, inside
+
+
+def _renames_into(stage: Path, target: Path) -> bool:
+    """Whether a file of ``stage`` can be renamed into ``target`` (False: another mount, EXDEV)."""
+    probe, dst = stage / "probe", target / f"{_STAGE}probe-{os.getpid()}"
+    probe.touch()
+    try:
+        os.rename(probe, dst)
+    except OSError as exc:
+        return exc.errno != errno.EXDEV  # any other failure shows at the commit, as before
+    os.unlink(dst)
+    return True
 
 
 def _commit_swap(stage: Path, target: Path):
-    """Replace ``target`` (missing, empty or an earlier snoworm folder) by ``stage`` as a whole."""
+    """Replace ``target`` (missing, empty or an earlier snoworm folder) by ``stage`` as a whole
+    (committed in place instead if ``target`` cannot be renamed: a mount point, EBUSY)."""
     if not target.exists():
         os.rename(stage, target)
         return
     old = Path(tempfile.mkdtemp(prefix=f".{target.name}{_OLD}{os.getpid()}-", dir=target.parent))
     os.rmdir(old)
-    os.rename(target, old)
+    try:
+        os.rename(target, old)
+    except OSError as exc:
+        if exc.errno != errno.EBUSY:
+            raise
+        commit_in_place(stage, target)  # nothing was moved yet
+        return
     try:
         os.rename(stage, target)
     except BaseException:
@@ -348,7 +379,7 @@ def output_folder(path, overwrite: bool = False, command: str | None = None):
             sync_files(stage)  # every staged file on disk before the folder appears
             held.take()  # a folder made meanwhile (a sweep started there): its lock decides
             state = check_output_folder(target, overwrite) if held.lease is None else _recheck(target, overwrite)
-            if in_place or state == "foreign" or target.is_symlink() or _inside_cwd(target):
+            if in_place or state == "foreign" or target.is_symlink() or _inside_cwd(target) or os.path.ismount(target):
                 commit_in_place(stage, target)
             else:
                 _commit_swap(stage, target)
