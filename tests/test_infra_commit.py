@@ -152,3 +152,15 @@ def test_a_mount_point_out_is_committed_in_place_from_a_staging_folder_inside_it
     assert _contents(out) == NEW and folder_state(out) == "snoworm"
     assert sorted(os.listdir(tmp_path)) == ["mnt"]
     assert sorted(os.listdir(out)) == sorted([*NEW, MANIFEST])  # no staging folder, probe or journal left
+
+
+def test_load_sweep_refuses_a_folder_with_an_unfinished_commit(linked):
+    from snoworm.studies.sweep import load_sweep, run_sweep
+    from tests.sweep_helpers import SHORT, TOW6
+
+    out, real = linked
+    run_sweep(TOW6, ["terrain.xt=0.7,0.9", SHORT], out_dir=out, plot=False, progress=False)
+    assert len(load_sweep(out)) == 2
+    _killed_at_move(1, _write, out, NEW)  # another command's commit into it, killed half-way
+    with pytest.raises(ResultFileError, match="unfinished commit"):
+        load_sweep(out)

@@ -170,7 +170,7 @@ def load_sweep(out_dir) -> SweepTable:
     ------
     snoworm.results.ResultFileError
         A file missing, not a regular file, malformed, or the two files disagreeing; the message
-        names the file.
+        names the file.  Or the folder holds an unfinished commit (:mod:`snoworm.infra.commit`).
     """
     out = Path(out_dir)
     spath, dpath = out / "summary.csv", out / "sweep.json"
