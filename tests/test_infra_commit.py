@@ -164,3 +164,11 @@ def test_load_sweep_refuses_a_folder_with_an_unfinished_commit(linked):
     _killed_at_move(1, _write, out, NEW)  # another command's commit into it, killed half-way
     with pytest.raises(ResultFileError, match="unfinished commit"):
         load_sweep(out)
+
+
+def test_a_journal_half_written_by_a_dead_process_is_cleaned_up(linked):
+    out, real = linked
+    _write(out, OLD)
+    (real / f"{JOURNAL}.999999999.tmp").write_text('{"stage": ')
+    _write(out, NEW)
+    assert sorted(os.listdir(real)) == sorted([*NEW, MANIFEST])

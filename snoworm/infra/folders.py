@@ -37,7 +37,16 @@ from .._version import __version__
 from .commit import commit_in_place, owns_stage, recover, unfinished_commit
 from .durable import STAGING as _STAGING, sync_files
 from .locks import FolderLocked, OutputError, check_unlocked, folder_lock, os_error_message, pid_alive, try_folder_lock
-from .manifest import LOCK, MANIFEST, STAGE as _STAGE, ManifestProblem, folder_files, listed_files, load_manifest
+from .manifest import (
+    JOURNAL,
+    LOCK,
+    MANIFEST,
+    STAGE as _STAGE,
+    ManifestProblem,
+    folder_files,
+    listed_files,
+    load_manifest,
+)
 
 __all__ = [
     "atomic_write_text",
@@ -240,7 +249,7 @@ def _clean_stale(parent: Path, name: str):
     """Remove staging folders of ``name`` left by killed processes (their PID is in the name):
     siblings of ``parent / name``, and those inside it; never one an unfinished commit needs."""
     target = parent / name
-    places = [(parent, [f".{name}{_STAGE}", f".{name}{_OLD}"]), (target, [_STAGE])]
+    places = [(parent, [f".{name}{_STAGE}", f".{name}{_OLD}"]), (target, [_STAGE, f"{JOURNAL}."])]
     for folder, prefixes in places:
         try:
             entries = os.listdir(folder)
@@ -249,9 +258,12 @@ def _clean_stale(parent: Path, name: str):
         for e in entries:
             for prefix in prefixes:
                 if e.startswith(prefix):
-                    pid = e[len(prefix) :].split("-")[0]
+                    pid = e[len(prefix) :].replace(".", "-").split("-")[0]
                     if pid.isdigit() and not pid_alive(int(pid)) and not owns_stage(target, folder / e):
-                        shutil.rmtree(folder / e, ignore_errors=True)
+                        if prefix.startswith(JOURNAL):  # a journal being written when its process died
+                            os.unlink(folder / e)
+                        else:
+                            shutil.rmtree(folder / e, ignore_errors=True)
 
 
 def _inside_cwd(path: Path) -> bool:
