@@ -285,12 +285,7 @@ class _Recorder:
 
     def record(self, c, result):
         if result.get("output_error"):  # the case's series could not be saved: stop, not recorded
-            n = len(self.rows)
-            raise OutputError(
-                f"cannot save the series of case {c.case_id}: {str(result['output_error']).rstrip('.')}. The sweep stopped; "
-                f"its {n} finished cases are kept in {self.path.parent if self.path else 'memory'} and case {c.case_id} is not recorded: "
-                "free space (or fix the folder) and re-run the same command to resume."
-            )
+            raise OutputError(self._unsaved(c, result["output_error"]))
         row = {"case_id": c.case_id, "case_key": c.key, **dict(zip(self.plan.keys, c.values))}
         row.update(status=result["status"], error=result["error"])
         for m in list(METRIC_COLUMNS)[:7] + ["energy_per_m_J", "immobilised"]:
@@ -313,6 +308,14 @@ class _Recorder:
                 ) from None
         self.rows[c.index] = row
         self.bar.update(row["status"] != "ok")
+
+    def _unsaved(self, c, why) -> str:
+        where = self.path.parent if self.path is not None else "memory"
+        return (
+            f"cannot save the series of case {c.case_id}: {str(why).rstrip('.')}. The sweep stopped; its "
+            f"{len(self.rows)} finished cases are kept in {where} and case {c.case_id} is not recorded: free "
+            "space (or fix the folder) and re-run the same command to resume."
+        )
 
 
 def _tasks(plan: SweepPlan, todo, out, keep_series, token=None):
