@@ -165,7 +165,7 @@ def validate(scenario, sets, allow_code):
     "--overwrite",
     is_flag=True,
     help="Replace another sweep in --out (its files are removed), or write into a non-empty folder "
-    "snoworm did not write.",
+    "snoworm did not write; never a folder another snoworm process is writing (exit 2).",
 )
 @click.option(
     "--restart",

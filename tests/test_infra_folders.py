@@ -217,8 +217,8 @@ def test_a_second_locker_is_refused_naming_the_pid_and_a_dead_holders_lock_is_ta
         p.kill()  # dies holding the lock
         p.join()
     assert (tmp_path / LOCK).exists()  # stale lock file left behind
-    with folder_lock(tmp_path) as lp:  # taken over
-        assert lp.read_text() == str(os.getpid())
+    with folder_lock(tmp_path) as lease:  # taken over
+        assert lease.path.read_text().split()[0] == str(os.getpid())
     assert not (tmp_path / LOCK).exists()
 
 

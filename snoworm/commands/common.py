@@ -170,7 +170,7 @@ overwrite_option = click.option(
     is_flag=True,
     help="Write into a non-empty --out folder that snoworm did not write (same-named "
     "files are replaced, other files kept). An earlier snoworm output folder is "
-    "always replaced as a whole.",
+    "always replaced as a whole; a folder another snoworm process is writing never (exit 2).",
 )
 
 

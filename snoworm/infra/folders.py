@@ -7,8 +7,13 @@
   and moved into place at the end, with a manifest (:data:`MANIFEST`: the files, the snoworm
   version, the command).  A failure at any point leaves no result files.  An earlier snoworm
   folder is replaced as a whole; a non-empty folder snoworm did not write is refused unless
-  ``overwrite`` (then same-named files are replaced and the others kept).
-* :func:`folder_lock`: one process at a time in a folder (a sweep appending rows); a lock left
+  ``overwrite`` (then same-named files are replaced and the others kept).  A folder that cannot
+  be renamed as a whole is committed entry by entry behind a journal (:mod:`snoworm.infra.commit`):
+  an interrupted commit is completed by the next command (:func:`check_output_folder`).
+* :func:`folder_lock` (:mod:`snoworm.infra.locks`): one process at a time in a folder.  A sweep
+  holds its folder's lock while it runs; :func:`output_folder` holds the lock of the folder it
+  replaces (from the start if it exists, else from the commit), so no command replaces or writes
+  into a folder another live process holds (:class:`FolderLocked`, exit status 2).  A lock left
   by a dead process is taken over.
 
 I/O failures (disk full, read-only, a path under a file) raise :class:`OutputError` naming the
@@ -28,15 +33,21 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
-try:
-    import fcntl
-except ImportError:  # pragma: no cover - not POSIX
-    fcntl = None
-
 from .._version import __version__
 from . import manifest as _manifest
+from .commit import commit_in_place, owns_stage, recover, unfinished_commit
 from .durable import STAGING as _STAGING, sync_files
-from .manifest import LOCK, MANIFEST, STAGE as _STAGE, ManifestProblem, folder_files, listed_files, load_manifest
+from .locks import FolderLocked, OutputError, check_unlocked, folder_lock, os_error_message, pid_alive, try_folder_lock
+from .manifest import (
+    JOURNAL,
+    LOCK,
+    MANIFEST,
+    STAGE as _STAGE,
+    ManifestProblem,
+    folder_files,
+    listed_files,
+    load_manifest,
+)
 
 __all__ = [
     "atomic_write_text",
@@ -59,22 +70,6 @@ __all__ = [
 ]
 
 _OLD = ".snoworm-old-"
-
-
-class OutputError(Exception):
-    """An output path cannot be used or written (bad ``--out``, disk full, read-only): bad input
-    or environment, never a bug (the CLI exits with status 2)."""
-
-
-class FolderLocked(OutputError):
-    """Another live process holds the folder's lock (:func:`folder_lock`)."""
-
-
-def os_error_message(exc: OSError, path=None) -> str:
-    """``<path>: <OS reason>`` of an OSError, e.g. ``out/a.csv: No space left on device``."""
-    where = exc.filename if exc.filename is not None else path
-    reason = exc.strerror or str(exc) or type(exc).__name__
-    return f"{where}: {reason}" if where is not None else reason
 
 
 def file_mode(directory: bool = False) -> int:
@@ -170,6 +165,8 @@ def folder_report(path) -> tuple:
     entries = [e for e in os.listdir(path) if e != LOCK and _STAGE not in e]
     if not entries:
         return "empty", None
+    if unfinished_commit(path):  # never acted on as a snoworm folder until completed (recover)
+        return "foreign", "it holds an unfinished commit"
     try:
         man = load_manifest(path)
         if man is None:
@@ -200,6 +197,10 @@ def earlier_output_note(path, resumes: bool = False) -> str | None:
     (a sweep) instead of replacing it."""
     man = read_manifest(path) if Path(path).is_dir() else None
     if man is None:
+        return None
+    try:
+        check_unlocked(path)
+    except FolderLocked:  # in use: the command refuses it, nothing is replaced or resumed
         return None
     command = " ".join(str(man.get("command") or "an earlier snoworm command").split())
     command = command if len(command) <= 120 else command[:117] + "..."
@@ -235,36 +236,36 @@ def check_output_folder(path, overwrite: bool = False) -> str:
             raise OutputError(f"{path}: {what}, not a folder. Give a folder path for --out.")
         if parent.exists():
             break
+    if path.is_dir():
+        recover(path)  # a commit in place interrupted between its renames: completed first
     state, why = folder_report(path)
     if state == "foreign" and not overwrite:
         raise OutputError(_refusal(path, why))
+    if state not in ("missing", "file"):
+        check_unlocked(path)  # a sweep (or any command) writing there now: never replaced under it
     return state
 
 
 # ------------------------------------------------------------------------------ output folders
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OSError):
-        return True
-    return True
-
-
 def _clean_stale(parent: Path, name: str):
-    """Remove staging folders of ``name`` left by killed processes (their PID is in the name)."""
-    try:
-        entries = os.listdir(parent)
-    except OSError:
-        return
-    for e in entries:
-        for tag in (_STAGE, _OLD):
-            prefix = f".{name}{tag}"
-            if e.startswith(prefix):
-                pid = e[len(prefix) :].split("-")[0]
-                if pid.isdigit() and not _pid_alive(int(pid)):
-                    shutil.rmtree(parent / e, ignore_errors=True)
+    """Remove staging folders of ``name`` left by killed processes (their PID is in the name):
+    siblings of ``parent / name``, and those inside it; never one an unfinished commit needs."""
+    target = parent / name
+    places = [(parent, [f".{name}{_STAGE}", f".{name}{_OLD}"]), (target, [_STAGE, f"{JOURNAL}."])]
+    for folder, prefixes in places:
+        try:
+            entries = os.listdir(folder)
+        except OSError:
+            continue
+        for e in entries:
+            for prefix in prefixes:
+                if e.startswith(prefix):
+                    pid = e[len(prefix) :].replace(".", "-").split("-")[0]
+                    if pid.isdigit() and not pid_alive(int(pid)) and not owns_stage(target, folder / e):
+                        if prefix.startswith(JOURNAL):  # a journal being written when its process died
+                            os.unlink(folder / e)
+                        else:
+                            shutil.rmtree(folder / e, ignore_errors=True)
 
 
 def _inside_cwd(path: Path) -> bool:
@@ -277,30 +278,57 @@ def _inside_cwd(path: Path) -> bool:
 
 
 def _make_stage(target: Path):
-    """(staging folder, in_place): a sibling of ``target``, or inside it when the parent is not writable."""
+    """(staging folder, in_place): a sibling of ``target``; or inside it when the parent is not
+    writable or ``target`` is a mount point (a folder on another mount than its parent: a file
+    cannot be renamed into it from a sibling, nor the folder renamed as a whole)."""
     parent = target.parent
     parent.mkdir(parents=True, exist_ok=True)
     _clean_stale(parent, target.name)
-    try:
-        stage = Path(tempfile.mkdtemp(prefix=f".{target.name}{_STAGE}{os.getpid()}-", dir=parent))
-        in_place = False
-    except PermissionError:
-        if not target.is_dir():
-            raise
+    inside = target.is_dir() and os.path.ismount(target)
+    if not inside:
+        try:
+            stage = Path(tempfile.mkdtemp(prefix=f".{target.name}{_STAGE}{os.getpid()}-", dir=parent))
+        except PermissionError:
+            if not target.is_dir():
+                raise
+            inside = True
+        else:
+            if target.is_dir() and not _renames_into(stage, target):  # a bind mount ismount misses
+                shutil.rmtree(stage, ignore_errors=True)
+                inside = True
+    if inside:
         stage = Path(tempfile.mkdtemp(prefix=f"{_STAGE}{os.getpid()}-", dir=target))
-        in_place = True
     os.chmod(stage, file_mode(directory=True))
-    return stage, in_place
+    return stage, inside
+
+
+def _renames_into(stage: Path, target: Path) -> bool:
+    """Whether a file of ``stage`` can be renamed into ``target`` (False: another mount, EXDEV)."""
+    probe, dst = stage / "probe", target / f"{_STAGE}probe-{os.getpid()}"
+    probe.touch()
+    try:
+        os.rename(probe, dst)
+    except OSError as exc:
+        return exc.errno != errno.EXDEV  # any other failure shows at the commit, as before
+    os.unlink(dst)
+    return True
 
 
 def _commit_swap(stage: Path, target: Path):
-    """Replace ``target`` (missing, empty or an earlier snoworm folder) by ``stage`` as a whole."""
+    """Replace ``target`` (missing, empty or an earlier snoworm folder) by ``stage`` as a whole
+    (committed in place instead if ``target`` cannot be renamed: a mount point, EBUSY)."""
     if not target.exists():
         os.rename(stage, target)
         return
     old = Path(tempfile.mkdtemp(prefix=f".{target.name}{_OLD}{os.getpid()}-", dir=target.parent))
     os.rmdir(old)
-    os.rename(target, old)
+    try:
+        os.rename(target, old)
+    except OSError as exc:
+        if exc.errno != errno.EBUSY:
+            raise
+        commit_in_place(stage, target)  # nothing was moved yet
+        return
     try:
         os.rename(stage, target)
     except BaseException:
@@ -321,45 +349,6 @@ def remove_listed(folder) -> list:
     for p in paths:
         os.unlink(p)
     return paths
-
-
-def _ours(path: Path, listed: set, root: Path) -> bool:
-    """Whether the folder ``path`` holds only files the manifest lists (so snoworm wrote it)."""
-    rels = [(path / f).relative_to(root).as_posix() for f in _files(path)]
-    return all(r in listed for r in rels)
-
-
-def _check_in_place(stage: Path, target: Path, listed: set):
-    """Refuse (before anything is touched) to replace a folder of ``target`` snoworm did not write."""
-    for e in os.listdir(stage):
-        dst = target / e
-        if dst.is_dir() and not dst.is_symlink() and not _ours(dst, listed, target):
-            raise OutputError(
-                f"{dst} is a folder snoworm did not write, and a result file of the same name "
-                f"would replace it; nothing was written. Move it away or give another --out."
-            )
-
-
-def _commit_in_place(stage: Path, target: Path):
-    """Move the staged entries into ``target`` one by one (files of an earlier, trusted manifest
-    removed first; a folder snoworm did not write is never removed)."""
-    target.mkdir(parents=True, exist_ok=True)
-    target = Path(os.path.realpath(target))
-    try:
-        man = load_manifest(target)
-        listed_files(target, man or {"files": []})
-        listed = set((man or {}).get("files", []))
-    except ManifestProblem:
-        listed = set()
-    _check_in_place(stage, target, listed)
-    if listed:
-        remove_listed(target)
-    for e in sorted(os.listdir(stage), key=lambda n: n == MANIFEST):  # the manifest last
-        dst = target / e
-        if dst.is_dir() and not dst.is_symlink():
-            shutil.rmtree(dst)
-        os.replace(stage / e, dst)
-    shutil.rmtree(stage, ignore_errors=True)
 
 
 @contextmanager
@@ -388,111 +377,70 @@ def output_folder(path, overwrite: bool = False, command: str | None = None):
     """
     check_output_folder(path, overwrite)
     target = Path(os.path.abspath(path))
-    try:
-        stage, in_place = _make_stage(target)
-    except OSError as exc:
-        raise OutputError(f"cannot write results: {os_error_message(exc, target)}") from None
-    token = _STAGING.set(os.path.abspath(stage))
-    try:
+    with _Held(target) as held:
+        held.take()  # an existing folder is held from the start: no sweep starts in it meanwhile
         try:
-            yield stage
-            write_manifest(stage, command)
-        finally:
-            _STAGING.reset(token)
-        sync_files(stage)  # every staged file on disk before the folder appears
-        state = check_output_folder(target, overwrite)  # again: it may have changed meanwhile
-        if in_place or state == "foreign" or target.is_symlink() or _inside_cwd(target):
-            _commit_in_place(stage, target)
-        else:
-            _commit_swap(stage, target)
-    except OSError as exc:
-        shutil.rmtree(stage, ignore_errors=True)
-        raise OutputError(
-            f"cannot write results: {os_error_message(exc, target)}; nothing was written to {target}."
-        ) from None
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        raise
+            stage, in_place = _make_stage(target)
+        except OSError as exc:
+            raise OutputError(f"cannot write results: {os_error_message(exc, target)}") from None
+        token = _STAGING.set(os.path.abspath(stage))
+        try:
+            try:
+                yield stage
+                write_manifest(stage, command)
+            finally:
+                _STAGING.reset(token)
+            sync_files(stage)  # every staged file on disk before the folder appears
+            held.take()  # a folder made meanwhile (a sweep started there): its lock decides
+            state = check_output_folder(target, overwrite) if held.lease is None else _recheck(target, overwrite)
+            if in_place or state == "foreign" or target.is_symlink() or _inside_cwd(target) or os.path.ismount(target):
+                commit_in_place(stage, target)
+            else:
+                _commit_swap(stage, target)
+        except OSError as exc:
+            if owns_stage(target, stage):  # a commit in place stopped half-way: completed by the next command
+                raise OutputError(
+                    f"cannot write results: {os_error_message(exc, target)}; the commit into {target} stopped "
+                    f"half-way. Run the command again with the same --out: it completes the commit first."
+                ) from None
+            shutil.rmtree(stage, ignore_errors=True)
+            raise OutputError(
+                f"cannot write results: {os_error_message(exc, target)}; nothing was written to {target}."
+            ) from None
+        except BaseException:
+            if not owns_stage(target, stage):
+                shutil.rmtree(stage, ignore_errors=True)
+            raise
+
+
+def _recheck(target: Path, overwrite: bool) -> str:
+    """:func:`check_output_folder` of a folder this process holds the lock of (its own lock not
+    counted as another's)."""
+    state, why = folder_report(target)
+    if state == "foreign" and not overwrite:
+        raise OutputError(_refusal(target, why))
+    return state
+
+
+class _Held:
+    """The lock of an output folder, taken (:meth:`take`) once the folder exists, released at the end."""
+
+    def __init__(self, target: Path):
+        self.target, self.lease = target, None
+
+    def take(self):
+        if self.lease is None and self.target.is_dir():
+            self.lease = try_folder_lock(self.target)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self.lease is not None:
+            self.lease.release()
 
 
 def relocate(paths, stage, target) -> list:
     """The final paths of files written under ``stage`` once it has become ``target``."""
     stage, target = Path(stage), Path(target)
     return [target / Path(p).relative_to(stage) for p in paths]
-
-
-# ------------------------------------------------------------------------------ folder locks
-def _holder(lock_path: Path) -> str:
-    try:
-        text = lock_path.read_text(encoding="utf-8").strip()
-    except OSError:
-        text = ""
-    return f"process {text}" if text else "another process"
-
-
-@contextmanager
-def folder_lock(folder):
-    """Hold ``folder``'s lock (:data:`LOCK`, with this process's PID) for the block.
-
-    A lock whose holder is dead is taken over (the kernel's ``flock`` ends with its process;
-    without ``fcntl`` a PID check decides).
-
-    Raises
-    ------
-    FolderLocked
-        Another live process holds it; the message names its PID.
-    """
-    folder = Path(folder)
-    lp = folder / LOCK
-    try:
-        fd = _acquire(lp)
-    except OSError as exc:  # FolderLocked is not an OSError: it passes unchanged
-        raise OutputError(f"cannot lock the folder: {os_error_message(exc, lp)}") from None
-    try:
-        yield lp
-    finally:
-        try:
-            os.unlink(lp)
-        except OSError:
-            pass
-        os.close(fd)
-
-
-def _busy(lp):
-    return FolderLocked(
-        f"{lp.parent} is in use by {_holder(lp)} (lock file {lp}): another snoworm run is "
-        "writing there. Wait for it to finish, or give another --out folder."
-    )
-
-
-def _acquire(lp: Path) -> int:
-    for _ in range(20):
-        if fcntl is None:  # pragma: no cover - not POSIX
-            try:
-                fd = os.open(lp, os.O_CREAT | os.O_EXCL | os.O_RDWR, 0o644)
-            except FileExistsError:
-                pid = _holder(lp).split()[-1]
-                if pid.isdigit() and not _pid_alive(int(pid)):
-                    os.unlink(lp)
-                    continue
-                raise _busy(lp) from None
-        else:
-            fd = os.open(lp, os.O_CREAT | os.O_RDWR, 0o644)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError as exc:
-                os.close(fd)
-                if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-                    raise _busy(lp) from None
-                raise
-            try:  # the file may have been unlinked by its releasing holder
-                same = os.path.samestat(os.fstat(fd), os.stat(lp))
-            except FileNotFoundError:
-                same = False
-            if not same:
-                os.close(fd)
-                continue
-        os.ftruncate(fd, 0)
-        os.write(fd, str(os.getpid()).encode())
-        return fd
-    raise _busy(lp)

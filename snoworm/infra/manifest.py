@@ -34,6 +34,7 @@ __all__ = [
     "MANIFEST",
     "LOCK",
     "STAGE",
+    "JOURNAL",
     "MAX_MANIFEST_BYTES",
     "MAX_ENTRY_CHARS",
     "ManifestProblem",
@@ -59,6 +60,8 @@ STAGE = ".snoworm-tmp-"
 #: Folder of a results folder holding copies of the files its run read (a route, a parameter-set
 #: file): the manifest records the SHA-256 of each (:func:`input_digests`, issue 30).
 INPUTS = "inputs"
+#: Name of the journal of a commit in place (:mod:`snoworm.infra.commit`; never listed).
+JOURNAL = ".snoworm-commit.json"
 #: Largest manifest read (bytes): a sweep of 100 000 saved cases lists about 600 000 files (~40 MB).
 MAX_MANIFEST_BYTES = 64 * 2**20
 #: Longest entry accepted (characters): PATH_MAX on Linux.
@@ -113,7 +116,7 @@ def entry_problem(entry) -> str | None:
     parts = entry.split("/")
     if any(part in ("", ".", "..") for part in parts):
         return f"entry {short(entry)} is not a plain relative path inside the folder (no '..', '.' or '//')"
-    if parts[0] in (MANIFEST, LOCK) or STAGE in parts[0]:
+    if parts[0] in (MANIFEST, LOCK) or STAGE in parts[0] or parts[0].startswith(JOURNAL):
         return f"entry {short(entry)} names snoworm's own bookkeeping file"
     return None
 
@@ -205,8 +208,8 @@ def listed_files(folder, manifest: dict) -> list:
 
 def folder_files(folder) -> list:
     """Relative paths (POSIX) of every entry under ``folder`` that is not a folder (files, symlinks
-    - to folders too -, FIFOs...) but the manifest, the lock and staging folders; symlinks are not
-    followed."""
+    - to folders too -, FIFOs...) but the manifest, the lock, a commit's journal and staging
+    folders; symlinks are not followed."""
     folder = Path(folder)
     out = []
     for root, dirs, names in os.walk(folder):
@@ -221,7 +224,7 @@ def folder_files(folder) -> list:
         dirs[:] = keep
         for n in names:
             rel = (Path(root) / n).relative_to(folder).as_posix()
-            if rel not in (MANIFEST, LOCK):
+            if rel not in (MANIFEST, LOCK) and not rel.startswith(JOURNAL):
                 out.append(rel)
     return sorted(out)
 

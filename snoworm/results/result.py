@@ -17,6 +17,7 @@ import numpy as np
 from .._version import __version__
 from ..config.scenario import dump_scenario, load_scenario
 from ..config.schema import ScenarioError, quote
+from ..infra.commit import unfinished_commit
 from ..infra.folders import atomic_write_text, output_folder, relocate
 from ..infra.manifest import ManifestProblem, read_small_file
 from ..model.quantities import output_series
@@ -401,9 +402,14 @@ def load_result(run_dir) -> Result:
     ResultFileError
         A file missing, unreadable (a FIFO, a device), malformed, with NaN values, or whose shape
         disagrees with the scenario or the other files; a copy in ``inputs/`` changed since the
-        run was written (or not recorded in the manifest); the message names the file.
+        run was written (or not recorded in the manifest); the message names the file.  Or the
+        folder holds an unfinished commit (a command interrupted while moving its files into
+        place, :mod:`snoworm.infra.commit`): its files may mix two runs.
     """
     d = Path(run_dir)
+    unfinished = unfinished_commit(d)
+    if unfinished:
+        raise ResultFileError(unfinished)
     missing = [f for f in ("segments.csv", "links.csv", "summary.json", "scenario.yaml") if not (d / f).is_file()]
     if missing:
         raise ResultFileError(f"{d} is not a snoworm run folder: {', '.join(missing)} missing")

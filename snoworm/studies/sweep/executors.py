@@ -18,8 +18,7 @@ import time
 from ...config.schema import ScenarioError, quote
 from ...infra.pool import ProcessExecutor
 from ...simulation.driver import batch_key, simulate_batch
-from .metrics import case_metrics
-from .series import save_series
+from .metrics import case_metrics, save_case_series
 
 __all__ = ["SweepExecutionError", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "BatchExecutor", "run_chunk"]
 
@@ -144,7 +143,9 @@ def _run_group(tasks, scs, fallback, metrics):
         try:
             row.update(metrics(mem.result))
             if task.save_dir:
-                save_series(mem.result, task.save_dir)
+                row.update(
+                    save_case_series(mem.result, task.save_dir, task.lock_token)
+                )  # an I/O failure stops the sweep
         except Exception:  # noqa: BLE001 - let the one-by-one path report the case's error
             row = fallback(task)
         row.setdefault("wall_time_s", wall)

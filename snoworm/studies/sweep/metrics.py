@@ -21,6 +21,8 @@ import numpy as np
 
 from ...config.scenario import Scenario, scenario_from_dict
 from ...config.schema import ScenarioError
+from ...infra.folders import OutputError, os_error_message
+from ...infra.locks import lock_token_matches
 from ...modes.codeload import allow_code
 from ...modes.controller import ControllerError
 from ...simulation.driver import SolverError, simulate
@@ -31,6 +33,7 @@ __all__ = [
     "case_metrics",
     "run_case",
     "one_line",
+    "save_case_series",
     "IMMOBILISED_SPEED_MPS",
     "IMMOBILISED_SIGN_FACTOR",
     "LATE_FRACTION",
@@ -124,6 +127,27 @@ def case_metrics(result) -> dict:
     }
 
 
+def save_case_series(result, save_dir, lock_token=None) -> dict:
+    """Save a case's series (:func:`~snoworm.studies.sweep.series.save_series`); an I/O failure (disk
+    full, read-only, a symlink in the way) is returned as ``{"output_error": message}``, never raised
+    and never a case status: the sweep stops on it (exit 2) without recording the case, so a
+    resume runs it again.  With ``lock_token`` (the sweep's :class:`~snoworm.infra.locks.FolderLease`
+    token) nothing is written unless the sweep's folder still holds that lock (it was not removed,
+    moved or replaced meanwhile).  Returns ``{}`` on success."""
+    folder = Path(save_dir).parent.parent  # <out>/cases/<case_id>[.npz]
+    if lock_token is not None and not lock_token_matches(folder, lock_token):
+        return {
+            "output_error": f"{folder} was removed, moved or replaced while the sweep ran (its lock file is "
+            "not this sweep's, or this worker does not see the folder); nothing was written there"
+        }
+    try:
+        save_series(result, save_dir)
+    except (OSError, OutputError) as exc:
+        msg = os_error_message(exc, save_dir) if isinstance(exc, OSError) else str(exc)
+        return {"output_error": one_line(msg)}
+    return {}
+
+
 def one_line(text: str) -> str:
     """``text`` on one line (line breaks become `` | ``), cut to :data:`MAX_ERROR_CHARS`."""
     text = " | ".join(s.strip() for s in str(text).splitlines() if s.strip())
@@ -154,6 +178,8 @@ class SweepTask:
     allow_code : tuple of str
         Resolved paths whose controller code may run besides the scenario's folder
         (``run_sweep(allow_code=...)``).
+    lock_token : str or None
+        The token of the sweep's folder lock: ``save_dir`` is written only while the folder holds it.
     """
 
     index: int
@@ -163,6 +189,7 @@ class SweepTask:
     base_dir: str | None = None
     save_dir: Path | None = None
     allow_code: tuple = ()
+    lock_token: str | None = None
 
     def validated(self) -> Scenario:
         """The case's scenario (``scenario``, or ``raw`` validated; ScenarioError if invalid)."""
@@ -187,7 +214,8 @@ def run_case(task: SweepTask) -> dict:
     -------
     dict
         ``index``, ``status``, ``error`` and, for ``ok``, the :func:`case_metrics` and
-        ``wall_time_s``.  Never raises for a failing case; the time series stay in the worker.
+        ``wall_time_s``; ``output_error`` if its series could not be saved (:func:`save_case_series`).
+        Never raises for a failing case; the time series stay in the worker.
     """
     wall0 = time.perf_counter()
     out = {"index": task.index, "status": "ok", "error": ""}
@@ -196,7 +224,7 @@ def run_case(task: SweepTask) -> dict:
             res = simulate(task.validated())
         out.update(case_metrics(res))
         if task.save_dir:
-            save_series(res, task.save_dir)
+            out.update(save_case_series(res, task.save_dir, task.lock_token))
         del res
     except ScenarioError as exc:
         out.update(status="invalid", error=one_line(exc))

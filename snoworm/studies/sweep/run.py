@@ -18,6 +18,7 @@ from pathlib import Path
 
 from ...config.scenario import apply_overrides
 from ...config.schema import ScenarioError
+from ...infra.commit import finish_commit
 from ...infra.folders import OutputError, check_output_folder, folder_lock, os_error_message, write_manifest
 from ...infra.progress import Progress
 from ...results.frames import require_xarray
@@ -146,7 +147,10 @@ def _on_executor(plan, out, executor, how, opts) -> SweepTable:
     try:
         return _in_folder(plan, out, executor, own, opts)
     except OSError as exc:  # writing sweep.json, the manifest or the plot
-        raise OutputError(f"cannot write the sweep's files: {os_error_message(exc, out)}") from None
+        raise OutputError(
+            f"cannot write the sweep's files: {os_error_message(exc, out)}. Its finished cases (if any) are "
+            "kept in summary.csv: free space (or fix the folder) and re-run the same command to resume."
+        ) from None
 
 
 def _new_output_folder(out_dir, overwrite):
@@ -193,11 +197,12 @@ class _Options:
 def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
     """Run the sweep with ``out`` (or None) locked and prepared."""
     with ExitStack() as stack:
-        done = {}
+        done, lease = {}, None
         if out is not None:
             try:
                 _mkdir(out)
-                stack.enter_context(folder_lock(out))
+                lease = stack.enter_context(folder_lock(out))
+                finish_commit(out)  # a commit in place interrupted between its renames: completed first
                 done = prepare_dir(
                     out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source, overwrite=opts.overwrite
                 )
@@ -206,8 +211,9 @@ def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
                 if own:
                     executor.close()
                 raise
-        table = _run(plan, done, out, executor, own, opts)
-        if out is not None:
+        table = _run(plan, done, out, executor, own, opts, lease)
+        if lease is not None:
+            lease.check("running a sweep in")  # the folder is still the one locked: else no manifest
             write_manifest(out, opts.command, status="complete")
         return table
 
@@ -219,13 +225,18 @@ def _mkdir(out: Path):
         raise OutputError(f"cannot write results: {os_error_message(exc, out)}") from None
 
 
-def _run(plan, done, out, executor, own, opts: _Options) -> SweepTable:
+def _run(plan, done, out, executor, own, opts: _Options, lease=None) -> SweepTable:
+    """Run the cases still to do, then write ``series.nc`` and the plot (``lease``: the folder's
+    lock, checked before each write: a folder replaced meanwhile gets nothing)."""
     bar = _Progress(len(plan.cases), len(done), sys.stderr, opts.progress is None or bool(opts.progress))
     keep_series = opts.keep_series
     rows = dict(done)
     todo = [c for c in plan.cases if c.index not in done]
-    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar), own, out, keep_series)
+    token = lease.token if lease is not None else None
+    _execute(plan, todo, executor, _Recorder(plan, rows, out, bar, lease), own, out, (keep_series, token))
     table = SweepTable(plan.columns, [rows[c.index] for c in plan.cases], plan.keys, out_dir=out)
+    if lease is not None:
+        lease.check("running a sweep in")
     if keep_series == "netcdf":
         combine_series(
             out,
@@ -257,8 +268,8 @@ class _Recorder:
     """Turns each case's result into a row: kept in ``rows``, appended to ``summary.csv`` (one
     ``write`` and ``fsync`` per case) and counted on the progress line."""
 
-    def __init__(self, plan: SweepPlan, rows: dict, out, bar):
-        self.plan, self.rows, self.bar = plan, rows, bar
+    def __init__(self, plan: SweepPlan, rows: dict, out, bar, lease=None):
+        self.plan, self.rows, self.bar, self.lease = plan, rows, bar, lease
         self.table = SweepTable(plan.columns, [], plan.keys)
         self.path = out / "summary.csv" if out is not None else None
         self.fd = None
@@ -273,6 +284,8 @@ class _Recorder:
             self.fd = None
 
     def record(self, c, result):
+        if result.get("output_error"):  # the case's series could not be saved: stop, not recorded
+            raise OutputError(self._unsaved(c, result["output_error"]))
         row = {"case_id": c.case_id, "case_key": c.key, **dict(zip(self.plan.keys, c.values))}
         row.update(status=result["status"], error=result["error"])
         for m in list(METRIC_COLUMNS)[:7] + ["energy_per_m_J", "immobilised"]:
@@ -281,6 +294,8 @@ class _Recorder:
         for j in range(self.plan.n_links):
             row[f"final_link_force_{j}_N"] = links[j] if j < len(links) else None
         row["wall_time_s"] = result.get("wall_time_s")
+        if self.lease is not None:
+            self.lease.check("running a sweep in")  # never a row into a file no longer in the folder
         if self.fd is not None:
             try:
                 os.write(self.fd, self.table.csv_line(row).encode("utf-8"))
@@ -294,11 +309,20 @@ class _Recorder:
         self.rows[c.index] = row
         self.bar.update(row["status"] != "ok")
 
+    def _unsaved(self, c, why) -> str:
+        where = self.path.parent if self.path is not None else "memory"
+        return (
+            f"cannot save the series of case {c.case_id}: {str(why).rstrip('.')}. The sweep stopped; its "
+            f"{len(self.rows)} finished cases are kept in {where} and case {c.case_id} is not recorded: free "
+            "space (or fix the folder) and re-run the same command to resume."
+        )
 
-def _tasks(plan: SweepPlan, todo, out, keep_series):
+
+def _tasks(plan: SweepPlan, todo, out, keep_series, token=None):
     """The tasks of the cases still to run (:class:`SweepTask`, made one at a time).
 
-    ``keep_series``: False, or where the cases' series go ("folders" or "netcdf")."""
+    ``keep_series``: False, or where the cases' series go ("folders" or "netcdf"); ``token``: the
+    folder lock's (:attr:`~snoworm.infra.locks.FolderLease.token`), checked before a series is saved."""
     for c in todo:
         if c.index in plan.invalid:
             continue
@@ -313,16 +337,18 @@ def _tasks(plan: SweepPlan, todo, out, keep_series):
             base_dir=plan.base_dir,
             save_dir=save,
             allow_code=tuple(plan.allow_code),
+            lock_token=token if save else None,
         )
 
 
-def _execute(plan: SweepPlan, todo, executor, rec: _Recorder, own: bool, out, keep_series):
+def _execute(plan: SweepPlan, todo, executor, rec: _Recorder, own: bool, out, series):
     """Record the invalid cases, run the others on ``executor``, record each as it finishes; then
-    close the progress line, the executor (if the sweep made it) and ``summary.csv``."""
+    close the progress line, the executor (if the sweep made it) and ``summary.csv``.  ``series``:
+    (the series format or False, the lock's token or None), see :func:`_tasks`."""
     try:
         rec.open()
         rec.bar.show()
-        _run_cases(plan, todo, executor, rec, out, keep_series)
+        _run_cases(plan, todo, executor, rec, out, series)
     finally:
         rec.bar.close()
         if own:
@@ -330,13 +356,13 @@ def _execute(plan: SweepPlan, todo, executor, rec: _Recorder, own: bool, out, ke
         rec.close()
 
 
-def _run_cases(plan: SweepPlan, todo, executor, rec: _Recorder, out, keep_series):
+def _run_cases(plan: SweepPlan, todo, executor, rec: _Recorder, out, series):
     by_index = {c.index: c for c in plan.cases}
     try:
         for c in todo:
             if c.index in plan.invalid:
                 rec.record(c, {"status": "invalid", "error": plan.invalid[c.index], "wall_time_s": 0.0})
-        for result in executor.map_unordered(run_case, _tasks(plan, todo, out, keep_series)):
+        for result in executor.map_unordered(run_case, _tasks(plan, todo, out, *series)):
             rec.record(by_index[result["index"]], result)
     except (KeyboardInterrupt, ScenarioError, OutputError):
         raise

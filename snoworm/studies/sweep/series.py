@@ -25,7 +25,9 @@ the netCDF3 files of earlier versions.
 from __future__ import annotations
 
 import dataclasses
+import errno
 import json
+import os
 import re
 import typing
 from pathlib import Path
@@ -248,8 +250,7 @@ def combine_series(out, axes, cases, zip_, columns, attrs) -> Path:
     )
     ds = xr.Dataset(variables, coords=coords, attrs={**attrs, **{f"version_{k}": v for k, v in versions().items()}})
     path = out / SERIES_FILE
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf", encoding={v: dict(COMPRESSION) for v in ds.data_vars})
+    write_netcdf(ds, path, {v: dict(COMPRESSION) for v in ds.data_vars})
     for c in cases:
         (out / "cases" / f"{c.case_id}.npz").unlink(missing_ok=True)
     try:
@@ -257,6 +258,44 @@ def combine_series(out, axes, cases, zip_, columns, attrs) -> Path:
     except OSError:
         pass
     return path
+
+
+def write_netcdf(ds, path, encoding) -> None:
+    """Write ``ds`` to ``path`` (netCDF4 via h5netcdf) atomically, so that a full disk is a plain
+    ``OSError`` and never a crash.
+
+    HDF5 failing a write (``ENOSPC``) leaves h5py's objects in a state whose clean-up crashed the
+    interpreter (segfault, exit 139).  So the file is built in memory (xarray >= 2025: ``to_netcdf()``
+    returns the bytes) and written with ``os.write``; with an older xarray, which writes netCDF4
+    only to a path, the free space is checked first against the uncompressed size (an upper bound).
+    """
+    try:
+        data = ds.to_netcdf(engine="h5netcdf", encoding=encoding)
+    except (ValueError, TypeError):  # an older xarray: only scipy (netCDF3) writes to memory
+        data = None
+    try:
+        _write_atomically(ds, path, encoding, data)
+    except OSError as exc:  # name the file, not the temporary one (or none)
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
+
+
+def _write_atomically(ds, path, encoding, data):
+    with atomic_path(path) as tmp:
+        if data is None:
+            _check_space(path.parent, ds.nbytes + 2**20)
+            ds.to_netcdf(tmp, engine="h5netcdf", encoding=encoding)
+            return
+        with open(tmp, "wb") as fh:
+            fh.write(memoryview(data))
+            fh.flush()
+            os.fsync(fh.fileno())
+
+
+def _check_space(folder: Path, need: int) -> None:
+    """Raise ``OSError(ENOSPC)`` naming ``folder`` if it has less than ``need`` bytes free."""
+    st = os.statvfs(folder)
+    if st.f_bavail * st.f_frsize < need:
+        raise OSError(errno.ENOSPC, f"No space left on device (series.nc needs up to {need} bytes)", str(folder))
 
 
 def load_series(path):

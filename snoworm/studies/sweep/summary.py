@@ -20,6 +20,7 @@ import yaml
 
 from ..._version import __version__
 from ...config.schema import ScenarioError, quote
+from ...infra.commit import unfinished_commit
 from ...infra.csvwriter import FULL, csv_line, csv_text, write_csv
 from ...infra.folders import MANIFEST, atomic_write_text, folder_state, remove_listed
 from ...infra.manifest import STAGE, ManifestProblem, read_small_file
@@ -169,10 +170,12 @@ def load_sweep(out_dir) -> SweepTable:
     ------
     snoworm.results.ResultFileError
         A file missing, not a regular file, malformed, or the two files disagreeing; the message
-        names the file.
+        names the file.  Or the folder holds an unfinished commit (:mod:`snoworm.infra.commit`).
     """
     out = Path(out_dir)
     spath, dpath = out / "summary.csv", out / "sweep.json"
+    if unfinished_commit(out):
+        raise ResultFileError(unfinished_commit(out))
     if not spath.is_file() or not dpath.is_file():
         raise ResultFileError(f"{out} is not a sweep's output directory (it needs sweep.json and summary.csv)")
     try:
