@@ -31,6 +31,7 @@ import numpy as np  # noqa: E402
 
 from benchmarks.baseline import baseline_section, compare_envs, export_tree  # noqa: E402
 from snoworm import Simulator, load_scenario, simulate  # noqa: E402
+from snoworm.model import floatkernel  # noqa: E402
 from snoworm.simulation.driver import assemble  # noqa: E402
 from snoworm.studies.sweep import run_sweep  # noqa: E402
 from tests.reference_quantities import compared, is_gait, quantities, scaled_error  # noqa: E402
@@ -192,6 +193,49 @@ def bench_scenarios(repeats, report):
         f"wall {wall:6.3f} s  nfev {res.stats['nfev']}  njev {res.stats['njev']}  -> VODE is "
         f"{wall / rows['inchworm6']['wall_s']:.2f}x faster in this run"
     )
+    return rows
+
+
+_FLOAT_LIMIT_CHILD = """
+import sys, time
+import snoworm
+from snoworm.model import floatkernel
+n, kernel, mode = int(sys.argv[1]), sys.argv[2], sys.argv[3]
+floatkernel.MAX_SEGMENTS = 10**6 if kernel == "float" else 0
+if mode == "inching":
+    ov = [("vehicle.segments", n), ("mode.gait", [list(range(p, n, 3)) for p in range(3)]), ("simulation.duration_s", 15.0)]
+    sc = snoworm.load_scenario("inchworm6", ov)
+else:
+    sc = snoworm.load_scenario("tow6_uniform", [("vehicle.segments", n), ("tow.force_N", 20.0 * n)])
+t0 = time.process_time()
+res = snoworm.simulate(sc)
+print(time.process_time() - t0, res.summary()["distance_m"])
+"""
+
+
+def bench_float_limit(report, repeats):
+    """Where the float kernel stops paying: whole runs (code generation included, each in a fresh
+    child process, CPU time) on the float kernel and on the NumPy kernel, alternating, best of
+    ``repeats``; rolling (tow6_uniform, 20 s) and inching (the six-segment gait's pattern, 15 s)."""
+    rows = {}
+    for n in (6, 8, 10, 12, 16, 24):
+        for mode in ("rolling", "inching"):
+            best = {"float": np.inf, "numpy": np.inf}
+            for _ in range(repeats):
+                for kernel in best:
+                    out = subprocess.run(
+                        [sys.executable, "-c", _FLOAT_LIMIT_CHILD, str(n), kernel, mode],
+                        capture_output=True,
+                        text=True,
+                        check=True,
+                        cwd=ROOT,
+                    )
+                    best[kernel] = min(best[kernel], float(out.stdout.split()[0]))
+            rows[f"{mode} N={n}"] = r = {**best, "gain": best["numpy"] / best["float"]}
+            report(
+                f"  {mode:8s} N = {n:2d}: float kernel {r['float']:6.2f} s, NumPy kernel {r['numpy']:6.2f} s CPU: gain {r['gain']:.2f}x"
+            )
+    report(f"  (snoworm.model.floatkernel.MAX_SEGMENTS = {floatkernel.MAX_SEGMENTS})")
     return rows
 
 
@@ -518,7 +562,18 @@ def verdict(key, value):
 
 
 #: the sections of a run, in order (``--only`` picks some)
-SECTIONS = ("scenarios", "scaling", "sweep", "baseline", "memory", "processes", "controllers", "startup", "rl")
+SECTIONS = (
+    "scenarios",
+    "scaling",
+    "floatlimit",
+    "sweep",
+    "baseline",
+    "memory",
+    "processes",
+    "controllers",
+    "startup",
+    "rl",
+)
 
 
 def _values(res) -> dict:
@@ -591,6 +646,11 @@ def main(argv=None):
             "scaling",
             "Cost growth with N (tow6_uniform with N segments, 33.3 N tow per segment, 20 s):",
             lambda: bench_scaling(report, repeats),
+        ),
+        (
+            "floatlimit",
+            "Where the float kernel stops paying (whole runs in fresh processes, CPU time):",
+            lambda: bench_float_limit(report, repeats),
         ),
         (
             "sweep",

@@ -54,9 +54,10 @@ from .symbolic import Expr, SymArray, SymTable, interp, slopes, source, symbols,
 
 __all__ = ["FloatKernel", "MAX_SEGMENTS", "STRUCTURAL_FIELDS", "kernel_flags", "structure_key"]
 
-#: Longest chain run on the float kernel: measured faster than the NumPy kernel up to N ~ 24
-#: (docs/performance.md); longer chains and stacked batches keep the vectorised kernel.
-MAX_SEGMENTS = 16
+#: Longest chain run on the float kernel: whole runs (code generation included) break even with
+#: the NumPy kernel at N ~ 10 and lose beyond (inching at N = 12: 0.8x; docs/performance.md,
+#: ``benchmarks/run.py --only floatlimit``); longer chains and stacked batches keep the vectorised kernel.
+MAX_SEGMENTS = 10
 
 #: Fields of :class:`~snoworm.model.inputs.Controls` the kernel branches on or indexes with; a
 #: generated function is specific to their values (the others are read at run time).
