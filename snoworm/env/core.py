@@ -176,13 +176,20 @@ class EnvCore:
     def physical_action(self, action, batch=None):
         """The command mapping of normalised actions (shape ``(n,)``, or ``(batch, n)``), clipped to [-1, 1].
 
-        Raises ValueError for a wrong shape (a scalar is not broadcast) or a non-finite value.
+        Raises ValueError for a wrong shape (a scalar is not broadcast), a complex or a non-finite value.
         """
         shape = self.single_action_space.shape if batch is None else (batch,) + self.single_action_space.shape
         try:
-            a = np.asarray(action, dtype=float)
+            a = np.asarray(action)
+            real = a.dtype.kind != "c"
+            a = a.astype(float) if real else a
         except (TypeError, ValueError):
             raise ValueError(f"action: expected numbers in [-1, 1] of shape {shape}, got {quote(action, 60)}") from None
+        if not real:
+            raise ValueError(
+                f"action: expected real numbers in [-1, 1], got complex values {quote(action, 60)}; "
+                "pass the real part (np.real) if that is what you mean"
+            )
         if a.shape != shape:
             raise ValueError(f"action: expected an array of shape {shape} in [-1, 1], got shape {a.shape}")
         if not np.all(np.isfinite(a)):

@@ -190,9 +190,16 @@ class CommandState:
                 raise ValueError(f"command key {key!r}: unknown; known keys: {', '.join(COMMAND_KEYS)}")
             size = sizes[COMMAND_KEYS[key]]
             try:
-                arr = np.asarray(value, bool if key == "wheel_lock" else float)
+                arr = np.asarray(value)
+                real = arr.dtype.kind != "c"
+                arr = arr.astype(bool if key == "wheel_lock" else float) if real else arr
             except (TypeError, ValueError):
                 raise ValueError(f"command key {key!r}: expected {size} numbers, got {value!r}") from None
+            if not real:
+                raise ValueError(
+                    f"command key {key!r}: expected {size} real numbers, got complex values {value!r}; "
+                    "pass the real part (np.real) if that is what you mean"
+                )
             if arr.shape != self._lead + (size,):
                 raise ValueError(
                     f"command key {key!r}: expected {size} values ({COMMAND_KEYS[key]}), "
