@@ -149,6 +149,7 @@ def test_errors_and_seeding(short6):
         ({"num_envs": 0}, "num_envs"),
         ({"max_episode_steps": 0}, "max_episode_steps"),
         ({"dt_s": -1.0}, "dt_s"),
+        ({"dt_s": 1e-9}, r"dt_s: must be a number of seconds >= 1e-06"),
     ):
         with pytest.raises(ValueError, match=msg):
             SnowormVectorEnv(**({"num_envs": 2, "scenario": short6} | kw))

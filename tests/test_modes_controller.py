@@ -76,7 +76,11 @@ def test_relative_path_resolved_from_scenario_folder_and_recorded(tmp_path, monk
         ({**_mode("Const"), "controller": "ctl/missing.py:Const"}, ["missing.py", "does not exist"]),
         ({**_mode("Const"), "controller": "ctl/mine.py"}, ["mode.controller", "ClassName"]),
         ({**_mode("Const"), "controller": "no_such_pkg_xyz.mod:Const"}, ["not found", "no_such_pkg_xyz"]),
-        ({**_mode("Const", v=1.0), "period_s": 0}, ["mode.period_s", "greater than 0"]),
+        ({**_mode("Const", v=1.0), "period_s": 0}, ["mode.period_s", "at least 1e-06 s"]),
+        # issue 30: a period far below any controller's (each period is an interval of the solve)
+        ({**_mode("Const", v=1.0), "period_s": 1e-9}, ["mode.period_s", "at least 1e-06 s"]),
+        # tow6_uniform: 20 s x 6 segments; 1e-4 s periods end on 1.2 million output samples
+        (_mode("Const", period=1e-4, v=1.0), ["mode.period_s", "200000 control periods", "150000 allowed"]),
     ],
 )
 def test_bad_controller_is_scenario_error(tmp_path, mode, words):
