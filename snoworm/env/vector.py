@@ -155,7 +155,7 @@ class SnowormVectorEnv(VectorEnv):
         self.stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "member_solves": 0, "solver_failures": 0}
         #: (members, interval solve) of each stack, kept over the periods: VODE on each (see :meth:`step`)
         self._stacks = [
-            (members, IntervalSolver(model, sc.simulation, "step", vode_stack=True, stats=self.stats))
+            (members, IntervalSolver(model, sc.simulation, "step", vode_stack=True, stats=self.stats, asked_steps=True))
             for members, model in _stacks(self.model, B)
         ]
         self._started = False

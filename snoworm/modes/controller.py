@@ -89,8 +89,8 @@ class ControllerConfig(ModeConfig):
 
     def check_scenario(self, scenario, path):
         """Each control period is an interval that ends on an output sample: the periods of the run
-        times the segments stay within :data:`~snoworm.config.sections.MAX_OUTPUT_SAMPLES` (memory; and
-        the solver's work limit allows each interval its own share, so the count must be bounded)."""
+        times the segments stay within :data:`~snoworm.config.sections.MAX_OUTPUT_SAMPLES` (memory;
+        such a run used to end in the solver's work limit as "too stiff", a misleading message)."""
         periods = math.ceil(scenario.simulation.duration_s / self.period_s - 1e-9)
         n = periods * scenario.vehicle.segments
         if n > MAX_OUTPUT_SAMPLES:
