@@ -248,3 +248,20 @@ def test_a_controller_chdir_does_not_outlive_the_run(tmp_path, monkeypatch):
     )
     simulate(sc)
     assert os.getcwd() == str(tmp_path)
+
+
+def test_short_control_periods_are_steps_asked_not_a_stiff_run(tmp_path, monkeypatch):
+    """Issue 30: as Simulator.step's short steps, a controller's short periods each cost a few
+    evaluations that no simulated second pays for (LSODA restarts at every period), and they ended the
+    run as "too stiff".  Its periods (bounded in number by the config) get the allowance of steps
+    asked; with a base of the work limit 10 x smaller, 1 500 periods of 0.2 ms must still run."""
+    from snoworm.simulation import guard
+
+    monkeypatch.setattr(guard, "WORK_BASE_NFEV", guard.WORK_BASE_NFEV // 10)
+    sc = load_scenario(
+        _write(tmp_path, GOOD, _mode("Const", period=2e-4, v=1.0), sim={"duration_s": 0.3, "method": "LSODA"})
+    )
+    res = simulate(sc)
+    assert res.stats["intervals"] == 1_500
+    assert res.stats["nfev"] > guard.WORK_BASE_NFEV + guard.work_rate(sc.simulation) * 0.3  # past the old limit
+    assert np.all(res.segments["x_m"][-1] > res.segments["x_m"][0])  # commanded from t = 0: it moved

@@ -90,7 +90,7 @@ class ControllerConfig(ModeConfig):
     def check_scenario(self, scenario, path):
         """Each control period is an interval that ends on an output sample: the periods of the run
         times the segments stay within :data:`~snoworm.config.sections.MAX_OUTPUT_SAMPLES` (memory;
-        such a run used to end in the solver's work limit as "too stiff", a misleading message)."""
+        and the work limit allows each period its own share, so their number must be bounded)."""
         periods = math.ceil(scenario.simulation.duration_s / self.period_s - 1e-9)
         n = periods * scenario.vehicle.segments
         if n > MAX_OUTPUT_SAMPLES:
@@ -191,6 +191,7 @@ class ControllerMode(Mode):
     name = "controller"
     config_class = ControllerConfig
     continue_solver = True  # short periods: VODE keeps its history across them
+    steps_asked = True  # fixed periods, at most MAX_OUTPUT_SAMPLES / segments of them (check_scenario)
 
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)

@@ -2,7 +2,7 @@
 
 Kept apart from the interval solve (:mod:`snoworm.simulation.interval`): :class:`WorkMeter` holds a
 run to :data:`WORK_BASE_NFEV` + :func:`work_rate` right-hand sides per simulated second (+
-:data:`WORK_NFEV_PER_INTERVAL` per step asked of a Simulator or an environment), and to
+:data:`WORK_NFEV_PER_INTERVAL` per step asked of a Simulator, an environment or a controller), and to
 ``simulation.max_wall_s``, read from the solver's own counters; :func:`guarded` turns the solver's
 own breakdowns into :class:`SolverError`; :func:`check_sane` checks a run's states afterwards.
 None of them changes a number of a run that stays within the limits.
@@ -40,13 +40,13 @@ WORK_BASE_NFEV = 20_000
 #: Shipped scenarios need under 600 per second; their rtol 1e-9 reference runs (allowed 10x)
 #: under 4 000 (traverse_patch 3 765, inchworm6 2 346).
 WORK_NFEV_PER_S = 5_000
-#: ... plus, for intervals asked from outside (:meth:`~snoworm.simulation.stepwise.Simulator.step`,
-#: an environment's step), this many per interval: each ends on its own time and restarts or
+#: ... plus, for steps asked (:meth:`~snoworm.simulation.stepwise.Simulator.step`, an environment's
+#: step, a controller's period: ``IntervalSolver(asked_steps=True)``), this many per interval: each ends on its own time and restarts or
 #: re-enters the solver, so many short steps need work that no simulated second pays for (tow6 and
 #: inchworm6 with commands changing, dt 1e-6 to 1e-4 s: 1-2 evaluations per step on VODE carried
 #: on, 5-7 restarted or on LSODA).  Without it, steps of 1e-4 s exhausted the limit at 0.75 s (issue
-#: 30).  A run's own intervals (gait phases, a supervisor's checks, a controller's periods) get none:
-#: a mode whose intervals shrink (events re-triggering, a tiny check interval) still meets the limit.
+#: 30).  A mode's other intervals (gait phases, a supervisor's checks) get none: a mode whose
+#: intervals shrink (events re-triggering, a tiny check interval) still meets the limit.
 WORK_NFEV_PER_INTERVAL = 100
 #: A run whose ground or wheel-rim speed exceeds this multiple of the fastest no-load wheel speed
 #: R_w * omega_nl (plus the fastest joint rate) has left the physics: a solver failure.

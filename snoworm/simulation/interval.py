@@ -111,7 +111,7 @@ class IntervalSolver:
     stats : dict, optional
         The counters to update (default: a new dict), e.g. a caller's own with more keys.
     asked_steps : bool
-        Each call of :meth:`solve` is a step asked from outside (a Simulator's, an environment's):
+        Each call of :meth:`solve` is a step asked (a Simulator's, an environment's, a controller's period):
         the work limit allows it :data:`~snoworm.simulation.guard.WORK_NFEV_PER_INTERVAL` more.
 
     Attributes
