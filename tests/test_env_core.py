@@ -63,3 +63,13 @@ def test_energy_is_the_trapezoid_of_the_power(core6):
 def test_an_action_that_is_not_numbers_is_refused_naming_the_action(core6, action):
     with pytest.raises(ValueError, match=r"^action: expected numbers in \[-1, 1\] of shape \(6,\)"):
         core6.physical_action(action)
+
+
+@pytest.mark.parametrize(
+    "action, batch",
+    [(np.full(6, 0.5 + 1j), None), ([0.5 + 1j] * 6, None), (np.full(6, 0.5 + 0j), None), (np.full((2, 6), 1j), 2)],
+)
+def test_a_complex_action_is_refused_naming_the_action(core6, action, batch):
+    """Issue 30: a complex NumPy action was cast to its real part (a ComplexWarning) and stepped."""
+    with pytest.raises(ValueError, match=r"^action: expected real numbers .* got complex values"):
+        core6.physical_action(action, batch=batch)

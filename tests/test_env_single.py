@@ -164,6 +164,7 @@ def test_bad_actions_and_options_are_refused(short6):
     for kw, msg in (
         ({"dt_s": float("nan")}, "dt_s"),
         ({"dt_s": -0.1}, "dt_s"),
+        ({"dt_s": 1e-9}, r"dt_s: must be a number of seconds >= 1e-06"),  # issue 30: below any step
         ({"dt_s": True}, "dt_s"),
         ({"energy_weight": -1.0}, "energy_weight"),
         ({"stall_time_s": 0.0}, "stall_time_s"),

@@ -149,6 +149,7 @@ def test_errors_and_seeding(short6):
         ({"num_envs": 0}, "num_envs"),
         ({"max_episode_steps": 0}, "max_episode_steps"),
         ({"dt_s": -1.0}, "dt_s"),
+        ({"dt_s": 1e-9}, r"dt_s: must be a number of seconds >= 1e-06"),
     ):
         with pytest.raises(ValueError, match=msg):
             SnowormVectorEnv(**({"num_envs": 2, "scenario": short6} | kw))
@@ -204,3 +205,50 @@ def test_a_held_command_carries_the_solver_on(short6):
             vec.step(a + (k % 2) * wiggle)
         work[label] = vec.stats["nfev"] - before
     assert work["held"] < work["changed"] / 2, work
+
+
+def test_num_envs_beyond_the_measured_range_is_refused(short6):
+    """Issue 30: any num_envs was taken; past the range whose cost per member was measured flat
+    (docs/performance.md) a ValueError names that range."""
+    from snoworm.env.vector import MAX_NUM_ENVS, STACK_MAX_STATES, stack_size
+
+    for bad in (MAX_NUM_ENVS + 1, 10**6):
+        with pytest.raises(ValueError, match=rf"^num_envs: must be a whole number from 1 to {MAX_NUM_ENVS}, got"):
+            SnowormVectorEnv(bad, short6)
+    vec = SnowormVectorEnv(MAX_NUM_ENVS, short6)  # the bound itself is taken: stacks of bounded size
+    sizes = [m.stop - m.start for m, _ in vec._stacks]
+    assert sum(sizes) == MAX_NUM_ENVS and max(sizes) <= stack_size(vec.model)
+    assert max(s.model.n_states for _, s in vec._stacks) <= STACK_MAX_STATES
+
+
+def test_the_work_per_member_does_not_grow_with_num_envs(short6, monkeypatch):
+    """Issue 30: B members were one stack, whose steps follow its most demanding member at tolerances
+    divided by sqrt(B), and past ~277 members of tow6 (10 000 states) VODE's BLAS calls started threads:
+    a period took 0.3 s for B = 64 and 67 s for B = 1 000.  Members now go in stacks of at most
+    STACK_MAX_MEMBERS: 4 stacks' worth of members (the actions of one stack repeated) cost exactly 4x
+    one stack's chain evaluations, and each member steps as in the one stack."""
+    from snoworm.dynamics import ChainModel
+    from snoworm.env.vector import STACK_MAX_MEMBERS
+
+    evaluations = [0]
+    real = ChainModel.evaluate
+
+    def counted(self, Y, *args, **kwargs):
+        evaluations[0] += int(np.prod(np.shape(Y)[:-2]))  # chains evaluated (stacks, Jacobian columns)
+        return real(self, Y, *args, **kwargs)
+
+    monkeypatch.setattr(ChainModel, "evaluate", counted)
+    actions = np.random.default_rng(3).uniform(-1, 1, (3, STACK_MAX_MEMBERS, 6)).astype(np.float32)
+    work, obs = {}, {}
+    for copies in (1, 4):
+        vec = SnowormVectorEnv(copies * STACK_MAX_MEMBERS, short6)
+        vec.reset(seed=0)
+        evaluations[0] = 0
+        obs[copies] = [vec.step(np.tile(a, (copies, 1)))[0] for a in actions]
+        work[copies] = evaluations[0] / (copies * STACK_MAX_MEMBERS)
+    assert work[4] == work[1], work
+    for one, four in zip(obs[1], obs[4]):
+        for k in range(4):
+            np.testing.assert_allclose(
+                four[k * STACK_MAX_MEMBERS : (k + 1) * STACK_MAX_MEMBERS], one, rtol=0, atol=1e-12
+            )

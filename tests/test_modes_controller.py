@@ -76,7 +76,11 @@ def test_relative_path_resolved_from_scenario_folder_and_recorded(tmp_path, monk
         ({**_mode("Const"), "controller": "ctl/missing.py:Const"}, ["missing.py", "does not exist"]),
         ({**_mode("Const"), "controller": "ctl/mine.py"}, ["mode.controller", "ClassName"]),
         ({**_mode("Const"), "controller": "no_such_pkg_xyz.mod:Const"}, ["not found", "no_such_pkg_xyz"]),
-        ({**_mode("Const", v=1.0), "period_s": 0}, ["mode.period_s", "greater than 0"]),
+        ({**_mode("Const", v=1.0), "period_s": 0}, ["mode.period_s", "at least 1e-06 s"]),
+        # issue 30: a period far below any controller's (each period is an interval of the solve)
+        ({**_mode("Const", v=1.0), "period_s": 1e-9}, ["mode.period_s", "at least 1e-06 s"]),
+        # tow6_uniform: 20 s x 6 segments; 1e-4 s periods end on 1.2 million output samples
+        (_mode("Const", period=1e-4, v=1.0), ["mode.period_s", "200000 control periods", "150000 allowed"]),
     ],
 )
 def test_bad_controller_is_scenario_error(tmp_path, mode, words):
@@ -244,3 +248,20 @@ def test_a_controller_chdir_does_not_outlive_the_run(tmp_path, monkeypatch):
     )
     simulate(sc)
     assert os.getcwd() == str(tmp_path)
+
+
+def test_short_control_periods_are_steps_asked_not_a_stiff_run(tmp_path, monkeypatch):
+    """Issue 30: as Simulator.step's short steps, a controller's short periods each cost a few
+    evaluations that no simulated second pays for (LSODA restarts at every period), and they ended the
+    run as "too stiff".  Its periods (bounded in number by the config) get the allowance of steps
+    asked; with a base of the work limit 10 x smaller, 1 500 periods of 0.2 ms must still run."""
+    from snoworm.simulation import guard
+
+    monkeypatch.setattr(guard, "WORK_BASE_NFEV", guard.WORK_BASE_NFEV // 10)
+    sc = load_scenario(
+        _write(tmp_path, GOOD, _mode("Const", period=2e-4, v=1.0), sim={"duration_s": 0.3, "method": "LSODA"})
+    )
+    res = simulate(sc)
+    assert res.stats["intervals"] == 1_500
+    assert res.stats["nfev"] > guard.WORK_BASE_NFEV + guard.work_rate(sc.simulation) * 0.3  # past the old limit
+    assert np.all(res.segments["x_m"][-1] > res.segments["x_m"][0])  # commanded from t = 0: it moved

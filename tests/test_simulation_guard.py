@@ -92,3 +92,49 @@ def test_progress_within_a_long_interval(monkeypatch):
     assert res.stats["intervals"] <= 3 and len(within) >= 5
     assert all(T == 20.0 for _, T in calls) and calls[-1][0] == 20.0
     assert all(b >= a for a, b in zip(within, within[1:]))
+
+
+@pytest.mark.parametrize("method", ["LSODA", "VODE"])
+def test_many_short_steps_are_not_a_stiff_run(scenario_path, method, monkeypatch):
+    """Issue 30: Simulator.step with dt 1e-4 s failed with "too stiff" at 0.75 s: every step costs a
+    few evaluations that no simulated second pays for, and they exhausted the base of the limit.  The
+    limit allows WORK_NFEV_PER_INTERVAL per step asked; with a base 10 x smaller (which 0.3 s of such
+    steps exhaust, as 0.75 s exhausted the real one) 3 000 steps of 1e-4 s must still go through."""
+    from snoworm.simulation.stepwise import Simulator
+
+    monkeypatch.setattr(guard, "WORK_BASE_NFEV", WORK_BASE_NFEV // 10)
+    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.method", method)])
+    sim = Simulator(sc, record=False)
+    for k in range(3_000):
+        sim.step({"wheel_speed_mps": [1.8 if (k // 100) % 2 else 1.0] * 6}, 1e-4)
+    assert sim.t_s == pytest.approx(0.3, abs=1e-9)
+    nfev = sim._solver.stats["nfev"]
+    assert nfev > WORK_BASE_NFEV // 10 + work_rate(sc.simulation) * 0.3  # past the old limit
+    assert nfev < 0.2 * 3_000 * guard.WORK_NFEV_PER_INTERVAL  # the allowance per step is ample
+    assert sim.observation().x_m[0] > 0.0
+
+
+def test_a_stiff_run_of_many_steps_is_still_stopped(scenario_path, monkeypatch):
+    """The allowance per interval does not hide a stiff system: steps of 1e-3 s that each need ~1e4
+    evaluations (max_step_s 1e-7 s) end within the first few steps."""
+    from snoworm.simulation.stepwise import Simulator
+
+    monkeypatch.setattr(guard, "WORK_BASE_NFEV", 2_000)
+    sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.max_step_s", 1e-7)])
+    sim = Simulator(sc, record=False)
+    with pytest.raises(SolverError, match=r"work limit: .* \+ 100 per step, 1 steps\)"):
+        for _ in range(10):
+            sim.step({"wheel_speed_mps": [1.8] * 6}, 1e-3)
+    assert sim.t_s == 0.0
+
+
+def test_a_run_s_own_intervals_get_no_allowance(scenario_path, monkeypatch):
+    """A mode's intervals are not steps asked: a supervisor re-checking every 1e-4 s still meets the
+    work limit as before (with an allowance per interval, such a run went on for minutes)."""
+    monkeypatch.setattr(guard, "WORK_BASE_NFEV", 2_000)
+    sc = load_scenario(
+        scenario_path("traverse_patch"),
+        [("mode.check_interval_s", 1e-4), ("mode.stuck_window_s", 1.0), ("mode.start_time_s", 0.0)],
+    )
+    with pytest.raises(SolverError, match=r"work limit: .* per simulated second\)\. The system is too stiff"):
+        simulate(sc)

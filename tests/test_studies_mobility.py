@@ -260,3 +260,29 @@ def test_several_gaits_one_curve_each(scenario_path):
         parse_gait("[[0], 1]")
     with pytest.raises(ScenarioError, match="gait"):
         mobility_map(sc, [0.4], [0.0], wheel_speed_mps=1.8, inch_duration_s=1.0, gaits=["no_such_gait"])
+
+
+def test_a_map_over_the_sweep_bound_is_refused_before_any_work(scenario_path, tmp_path, monkeypatch):
+    """Issue 30: the cell count (X_t x grades x tows) was not bounded; 100 000 X_t values ran ~40 min.
+    Over the sweep's bound, exit 2 naming the options and the bound, with no cell computed and no folder."""
+    from snoworm.config.schema import ScenarioError
+    from snoworm.studies import mobility
+    from snoworm.studies.sweep.spec import MAX_CASES
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("a cell was computed")
+
+    monkeypatch.setattr(mobility, "_rolling_rows", no_work)
+    monkeypatch.setattr(mobility, "fill_inching", no_work)
+    out = tmp_path / "map"
+    args = ["mobility-map", str(scenario_path("traverse_patch")), "--out", str(out), "--no-plot"]
+    r = CliRunner().invoke(main, args + ["--xt", f"0.2:1.0:{MAX_CASES // 2 + 1}", "--tow", "0,100"])
+    assert r.exit_code == 2, r.output
+    for words in ("--xt", "--grade", "--tow", f"{MAX_CASES + 2} cells", str(MAX_CASES)):
+        assert words in r.output
+    assert not out.exists()
+    r = CliRunner().invoke(main, args + ["--xt", "0.2:1.0:400", "--grade", "0:10:300"])  # 120 000 cells
+    assert r.exit_code == 2 and "120000 cells (400 X_t x 300 grades x 1 tows)" in r.output
+    with pytest.raises(ScenarioError, match=f"over the {MAX_CASES} allowed"):
+        mobility_map(load_scenario(scenario_path("traverse_patch")), [0.5] * 1001, [0.0] * 100, wheel_speed_mps=1.8)
+    assert str(MAX_CASES) in CliRunner().invoke(main, ["mobility-map", "--help"]).output

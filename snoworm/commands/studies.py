@@ -239,7 +239,8 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot
     drawbar); inching by short simulations of the inchworm gait of the scenario's supervisor or
     inchworm mode, in the cells that do not roll (every cell with --every-cell), bisected over the
     grades.  Writes --out/mobility_map.csv and --out/mobility_map.png (with several --grade values
-    also --out/gradeability.png).  Progress of the inching runs goes to stderr.
+    also --out/gradeability.png).  At most 100000 cells (X_t x grades x tows, the bound of one
+    sweep).  Progress of the inching runs goes to stderr.
     """
     from ..studies.mobility import run_mobility_map  # lazy: start-up
 

@@ -38,6 +38,8 @@ package could register without being imported.
   (:meth:`snoworm.simulation.stepwise.Simulator.step`'s ``restart``): with random actions at dt 0.1 s,
   tow6 needs 104 right-hand-side evaluations per step, against 124 with VODE's history always
   carried on and 168 on LSODA (docs/controllers.md).
+* **Copies**: both environments pickle and deep-copy (mid-episode too, VODE's history included):
+  a copy steps on to the same observations as the original.
 * **Memory**: an episode keeps only the last step (``Simulator(record=False)``); ``record=True``
   keeps every step for ``env.sim.result()``.  (On ``method="LSODA"`` memory grows anyway: scipy
   1.17.1's LSODA keeps the work arrays of every solver it creates, ~9 kB per step here.)

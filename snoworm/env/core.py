@@ -11,6 +11,7 @@ from gymnasium import spaces
 from ..config.scenario import Scenario, load_scenario
 from ..config.schema import quote
 from ..modes.command import Observation, observed_fields
+from ..simulation.stepwise import DT_MIN_S
 
 __all__ = [
     "ENV_ID",
@@ -88,7 +89,7 @@ class EnvCore:
         The scenario (a shipped name such as ``"tow6_uniform"``, or a YAML path); its mode gives
         only the initial state.
     dt_s : float
-        How long each action is held [s], > 0.
+        How long each action is held [s], at least :data:`~snoworm.simulation.stepwise.DT_MIN_S` (1 us).
     action_keys : sequence of str
         Command keys that make up the action (not both keys of a pair such as
         ``wheel_speed_mps`` and ``wheel_torque_Nm``).
@@ -108,7 +109,7 @@ class EnvCore:
         stall_time_s=2.0,
     ):
         self.scenario = _resolve(scenario)
-        self.dt_s = _number("dt_s", dt_s, "a positive number of seconds", lambda v: v > 0)
+        self.dt_s = _number("dt_s", dt_s, f"a number of seconds >= {DT_MIN_S:g}", lambda v: v >= DT_MIN_S)
         self.energy_weight = _number("energy_weight", energy_weight, "a finite number >= 0", lambda v: v >= 0)
         self.stall_speed_mps = _number(
             "stall_speed_mps", stall_speed_mps, "a finite speed >= 0 [m/s]", lambda v: v >= 0
@@ -176,13 +177,20 @@ class EnvCore:
     def physical_action(self, action, batch=None):
         """The command mapping of normalised actions (shape ``(n,)``, or ``(batch, n)``), clipped to [-1, 1].
 
-        Raises ValueError for a wrong shape (a scalar is not broadcast) or a non-finite value.
+        Raises ValueError for a wrong shape (a scalar is not broadcast), a complex or a non-finite value.
         """
         shape = self.single_action_space.shape if batch is None else (batch,) + self.single_action_space.shape
         try:
-            a = np.asarray(action, dtype=float)
+            a = np.asarray(action)
+            real = a.dtype.kind != "c"
+            a = a.astype(float) if real else a
         except (TypeError, ValueError):
             raise ValueError(f"action: expected numbers in [-1, 1] of shape {shape}, got {quote(action, 60)}") from None
+        if not real:
+            raise ValueError(
+                f"action: expected real numbers in [-1, 1], got complex values {quote(action, 60)}; "
+                "pass the real part (np.real) if that is what you mean"
+            )
         if a.shape != shape:
             raise ValueError(f"action: expected an array of shape {shape} in [-1, 1], got shape {a.shape}")
         if not np.all(np.isfinite(a)):

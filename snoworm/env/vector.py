@@ -1,4 +1,4 @@
-"""The native Gymnasium vector environment: B copies of a chain stepped as ONE stacked solve.
+"""The native Gymnasium vector environment: B copies of a chain stepped as a few stacked solves.
 
 ::
 
@@ -11,12 +11,18 @@ The members share the scenario and the options of :class:`snoworm.env.single.Sno
 action map, observation normalisation, default reward, termination and truncation: one
 :class:`~snoworm.env.core.EnvCore`).  A control period has no gait events, so every member's interval
 ends at the same time: the B chains are stacked (:meth:`ChainModel.stack`, the kernel with one
-more leading axis) and integrated over the period by the driver's interval solve
-(:class:`snoworm.simulation.interval.IntervalSolver`), on VODE with its tolerances divided by
-sqrt(B), restarted at a period whose command changed and carried on while every member holds its
-command (as the single environment): VODE's error test is a weighted RMS norm over the whole
-stack, and with those tolerances a stack that passes it has every member within the RMS norm it
-has alone.
+more leading axis) in stacks of at most :data:`STACK_MAX_MEMBERS` (64) members and
+:data:`STACK_MAX_STATES` states, of sizes that differ by at most one, and each stack is integrated
+over the period by the driver's interval solve (:class:`snoworm.simulation.interval.IntervalSolver`),
+on VODE with its tolerances divided by sqrt(size), restarted at a period whose command changed and
+carried on while every member holds its command (as the single environment): VODE's error test is
+a weighted RMS norm over the whole stack, and with those tolerances a stack that passes it has
+every member within the RMS norm it has alone.  One stack of all B members cost more per member as
+B grew (its steps follow its most demanding member at tighter tolerances, and past 10 000 states
+VODE's BLAS calls start threads: 67 s a period for B = 1 000 against 0.3 s for 64); with stacks
+the cost per member stays at its floor (~3 ms of CPU for tow6 from B = 64 to 1 024,
+``benchmarks/vector_scaling.py``).  ``num_envs`` is at most :data:`MAX_NUM_ENVS` (1 024), the range
+measured.
 (LSODA, which a batched sweep uses for its max-norm test, took ~585 evaluations a period for
 B = 64 against VODE's ~290, and scipy 1.17.1's LSODA keeps ~90 kB of every solver it creates:
 memory would grow with every period.)  The model does not depend on time, so members at
@@ -26,8 +32,8 @@ different times of their episodes share one period.
   member whose episode terminated or was truncated in a step is reset in the next ``step`` call,
   which returns its first observation with reward 0, not terminated, not truncated, and ignores its
   action.  ``reset(options={"reset_mask": mask})`` resets only the masked members.
-* **Per-member status**: when the stacked solve fails, each member's period is solved alone from
-  the same start; a member that fails alone (or whose speed leaves the physics,
+* **Per-member status**: when a stack's solve fails, each of its members' period is solved alone
+  from the same start; a member that fails alone (or whose speed leaves the physics,
   :data:`snoworm.simulation.guard.SPEED_SANITY_FACTOR`) keeps its start state, gets reward 0 and
   ``truncated`` true, ``info["solver_failure"]`` true and the message in ``info["solver_error"]``,
   and is reset at the next step; the other members go on.
@@ -45,6 +51,7 @@ from gymnasium.error import ResetNeeded
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from ..config.schema import quote
 from ..dynamics import ChainModel
 from ..model.quantities import output_series
 from ..modes.command import CommandState
@@ -53,7 +60,20 @@ from ..simulation.guard import SPEED_SANITY_FACTOR, SolverError
 from ..simulation.interval import IntervalSolver, output_grid
 from .core import EnvCore, table_fields
 
-__all__ = ["SnowormVectorEnv"]
+__all__ = ["SnowormVectorEnv", "MAX_NUM_ENVS", "STACK_MAX_MEMBERS", "STACK_MAX_STATES", "stack_size"]
+
+#: Most members of one stacked solve.  A stack steps at the pace of its most demanding member with
+#: VODE's tolerances divided by sqrt(size), so its evaluations per period grow with its size (tow6,
+#: random actions: 193 for 1 member, 317 for 64, 481 for 256, 662 for 1 000) while the kernel's cost
+#: per member falls until ~64 members: stacks of this size keep the cost per member flat in B.
+STACK_MAX_MEMBERS = 64
+#: Most states of one stacked solve: VODE's level-1 BLAS calls on the whole state vector (OpenBLAS's
+#: daxpy) start threads past 10 000 elements, which cost 3-10x a period on a loaded machine (tow6:
+#: 0.9 s for B = 270, 10.5 s for B = 300).
+STACK_MAX_STATES = 8192
+#: Most members of a vector environment: the range over which the cost per member was measured flat
+#: (docs/performance.md, "Vector environment"); more are refused (run several environments instead).
+MAX_NUM_ENVS = 1024
 
 
 class SnowormVectorEnv(VectorEnv):
@@ -62,15 +82,15 @@ class SnowormVectorEnv(VectorEnv):
     Parameters
     ----------
     num_envs : int
-        Number of members B (>= 1).
+        Number of members B, 1 to :data:`MAX_NUM_ENVS` (ValueError beyond).
     scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s
         As :class:`snoworm.env.single.SnowormEnv`.
     max_episode_steps : int, optional
         Truncate an episode after this many steps if that comes before ``simulation.duration_s``.
     method : str or None
-        Solver of the stacked periods: ``"VODE"`` (default; its tolerances divided by sqrt(B),
-        restarted at every period), another ``simulation.method`` (a stack of several members
-        then runs on LSODA, as a batched sweep), or None: the scenario's.
+        Solver of the stacked periods: ``"VODE"`` (default; its tolerances divided by the square
+        root of the stack's size), another ``simulation.method`` (a stack of several members then
+        runs on LSODA, as a batched sweep), or None: the scenario's.
     render_mode : None
         No rendering.
     """
@@ -90,8 +110,16 @@ class SnowormVectorEnv(VectorEnv):
         method="VODE",
         render_mode=None,
     ):
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
-            raise ValueError(f"num_envs: must be a whole number >= 1, got {num_envs!r}")
+        if (
+            isinstance(num_envs, bool)
+            or not isinstance(num_envs, (int, np.integer))
+            or not 1 <= num_envs <= MAX_NUM_ENVS
+        ):
+            raise ValueError(
+                f"num_envs: must be a whole number from 1 to {MAX_NUM_ENVS}, got {quote(num_envs, 60)}: "
+                f"1 to {MAX_NUM_ENVS} members is the range measured to step at a flat cost per member "
+                "(docs/performance.md); for more, run several vector environments (e.g. one per process)"
+            )
         if render_mode is not None:
             raise ValueError(f"render_mode: the environment does not render; got {render_mode!r}, use None")
         self.core = core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s)
@@ -115,7 +143,6 @@ class SnowormVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, B)
         self.observation_space = batch_space(self.single_observation_space, B)
         self.model = core.model
-        self.stacked = ChainModel.stack([self.model] * B) if B > 1 else self.model
         self._y0 = np.asarray(assemble(core.scenario).mode.initial_state(), float)
         seg, lk = output_series(self.model, self._y0[None, :], CommandState(self.model).controls)
         fields0 = table_fields(seg, lk)
@@ -126,8 +153,11 @@ class SnowormVectorEnv(VectorEnv):
         )
         self._grid = np.asarray(output_grid(0.0, core.dt_s, core.scenario.simulation.output_dt_s, include_start=True))
         self.stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "member_solves": 0, "solver_failures": 0}
-        #: the interval solve of the stack, kept over the periods: VODE on the stack (see :meth:`step`)
-        self._solver = IntervalSolver(self.stacked, sc.simulation, "step", vode_stack=True, stats=self.stats)
+        #: (members, interval solve) of each stack, kept over the periods: VODE on each (see :meth:`step`)
+        self._stacks = [
+            (members, IntervalSolver(model, sc.simulation, "step", vode_stack=True, stats=self.stats, asked_steps=True))
+            for members, model in _stacks(self.model, B)
+        ]
         self._started = False
 
     # ------------------------------------------------------------------ reset
@@ -177,7 +207,9 @@ class SnowormVectorEnv(VectorEnv):
         held = self._command is not None and all(np.array_equal(command[k], self._command[k]) for k in command)
         # VODE: restarted at every period, but carried on while every member holds its command (a
         # member reset in between changes the state, and the stepper then restarts by itself)
-        self._solver.carry_history, self._command = held, command
+        for _, solver in self._stacks:
+            solver.carry_history = held
+        self._command = command
         ctl = self._cmd.apply(command)
         restart = self._autoreset.copy()
         if restart.any():  # NEXT_STEP autoreset: these members start again; their action is ignored
@@ -224,42 +256,48 @@ class SnowormVectorEnv(VectorEnv):
         return info
 
     def _solve(self, ctl):
-        """One period of the stack: ``(ts, ys (n_t, B, n_states), failed (B,), errors {b: message})``.
+        """One period of every stack: ``(ts, ys (n_t, B, n_states), failed (B,), errors {b: message})``.
 
-        Members are solved alone (and failures isolated) only if the stacked solve fails."""
+        The members of a stack are solved alone (and failures isolated) only if its stacked solve fails."""
         B, n_s = self.num_envs, self._y0.size
         t0 = self._T
         t_eval = t0 + self._grid
-        try:
-            ts, ys, _, _, _ = self._solver.solve(ctl, t0, t0 + self.dt_s, self._y.reshape(-1), (), t_eval, "step")
-            ys = ys.reshape(ts.size, B, n_s)
-            bad = self._insane(ys)
-            if not bad.any():
-                return ts, ys, bad, {}
-        except SolverError:
-            pass
-        return self._solve_members(ctl, t_eval)
-
-    def _solve_members(self, ctl, t_eval):
-        """Each member's period alone (the fallback of :meth:`_solve`)."""
-        B = self.num_envs
-        sim, t0 = self.scenario.simulation, self._T
-        ys = np.repeat(self._y[None, :, :], t_eval.size, axis=0)
+        ys = np.empty((t_eval.size, B, n_s))
         failed, errors = np.zeros(B, bool), {}
-        for b in range(B):
+        for members, solver in self._stacks:
+            part = ctl if len(self._stacks) == 1 else _members(ctl, members)
+            y0 = self._y[members].reshape(-1)
+            try:
+                ts, yk, _, _, _ = solver.solve(part, t0, t0 + self.dt_s, y0, (), t_eval, "step")
+                if ts.size == t_eval.size:
+                    yk = yk.reshape(ts.size, -1, n_s)
+                    ys[:, members] = yk
+                    if not self._insane(yk).any():
+                        continue
+            except SolverError:
+                pass
+            self._solve_members(ctl, t_eval, members, ys, failed, errors)
+        return t_eval, ys, failed, errors
+
+    def _solve_members(self, ctl, t_eval, members, ys, failed, errors):
+        """Each member of the stack ``members`` (a slice) alone into ``ys``, ``failed`` and ``errors``
+        (the fallback of :meth:`_solve`)."""
+        sim, t0 = self.scenario.simulation, self._T
+        for b in range(members.start, members.stop):
             self.stats["member_solves"] += 1
+            ys[:, b] = self._y[b]
             try:
                 alone = IntervalSolver(self.model, sim, "step", stats=self.stats)
                 tb, yb, _, _, _ = alone.solve(_member(ctl, b), t0, t0 + self.dt_s, self._y[b], (), t_eval, "step")
             except SolverError as exc:
                 failed[b], errors[b] = True, str(exc)
+                self.stats["solver_failures"] += 1
                 continue
             if tb.size != t_eval.size or self._insane(yb[:, None, :])[0]:
                 failed[b], errors[b] = True, "the member's state left the physics (non-finite or runaway speed)"
+                self.stats["solver_failures"] += 1
                 continue
             ys[:, b, :] = yb
-        self.stats["solver_failures"] += int(failed.sum())
-        return t_eval, ys, failed, errors
 
     def _insane(self, ys):
         """Per member: a non-finite state or a speed beyond the sanity limit in ``ys`` (n_t, B, n_states)."""
@@ -273,3 +311,31 @@ class SnowormVectorEnv(VectorEnv):
 def _member(ctl, b):
     """Member ``b``'s controls out of stacked controls (arrays with a batch axis have two dimensions)."""
     return replace(ctl, **{k: getattr(ctl, k)[b] for k in ctl.__dataclass_fields__ if np.ndim(getattr(ctl, k)) == 2})
+
+
+def _members(ctl, members):
+    """The controls of the members ``members`` (a slice) out of stacked controls."""
+    return replace(
+        ctl, **{k: getattr(ctl, k)[members] for k in ctl.__dataclass_fields__ if np.ndim(getattr(ctl, k)) == 2}
+    )
+
+
+def stack_size(model) -> int:
+    """Most members of ``model`` in one stacked solve: :data:`STACK_MAX_MEMBERS`, fewer if their
+    states would pass :data:`STACK_MAX_STATES`, at least 1."""
+    return max(1, min(STACK_MAX_MEMBERS, STACK_MAX_STATES // model.n_states))
+
+
+def _stacks(model, num_envs):
+    """``[(members, stacked model)]``: ``num_envs`` members in the fewest stacks of at most
+    :func:`stack_size` members, of sizes that differ by at most one (one stacked model per size)."""
+    count = -(-num_envs // stack_size(model))
+    q, r = divmod(num_envs, count)
+    sizes = [q + 1] * r + [q] * (count - r)
+    models, out, start = {}, [], 0
+    for k in sizes:
+        if k not in models:
+            models[k] = ChainModel.stack([model] * k) if k > 1 else model
+        out.append((slice(start, start + k), models[k]))
+        start += k
+    return out

@@ -60,6 +60,11 @@ class Mode:
         that meet at an interval's end time (``simulation.method: VODE`` only; default False:
         it restarts at every interval start).  Worth it where intervals are short control
         periods, as in the ``controller`` mode.
+    steps_asked : bool
+        Whether the intervals are steps the scenario asks for at fixed times (a controller's
+        periods, bounded in number by its config): the work limit then allows each
+        :data:`~snoworm.simulation.guard.WORK_NFEV_PER_INTERVAL` more, as a Simulator's steps.
+        Default False: intervals that a mode's events or checks shorten must meet the limit alone.
 
     Parameters
     ----------
@@ -84,6 +89,7 @@ class Mode:
     name = ""
     config_class = ModeConfig
     continue_solver = False
+    steps_asked = False
 
     def __init__(self, cfg, scenario, model):
         self.cfg = cfg

@@ -114,6 +114,10 @@ class Observation:
     def __setattr__(self, name, value):
         raise AttributeError(f"Observation is read-only (cannot set {name!r})")
 
+    def __reduce__(self):
+        """Pickle and copy (an environment holding an Observation is then picklable and deep-copyable)."""
+        return (_rebuilt_observation, (self._t, self._vals, self._src))
+
     def __repr__(self):
         return "Observation(" + ", ".join(f"{k}={getattr(self, k)!r}" for k in self.FIELDS) + ")"
 
@@ -130,6 +134,15 @@ def observe(model, y, ctl, t) -> Observation:
     """The :class:`Observation` of flat state ``y`` at time ``t`` reached under controls ``ctl``
     (computed from a copy of ``y`` when first read)."""
     return Observation._of_state(model, y, ctl, t)
+
+
+def _rebuilt_observation(t, vals, src) -> Observation:
+    """An :class:`Observation` from its pickled parts (:meth:`Observation.__reduce__`)."""
+    obs = Observation.__new__(Observation)
+    object.__setattr__(obs, "_t", float(t))
+    object.__setattr__(obs, "_vals", None if vals is None else {k: _frozen(v) for k, v in vals.items()})
+    object.__setattr__(obs, "_src", src)
+    return obs
 
 
 def _frozen(a):
@@ -190,9 +203,16 @@ class CommandState:
                 raise ValueError(f"command key {key!r}: unknown; known keys: {', '.join(COMMAND_KEYS)}")
             size = sizes[COMMAND_KEYS[key]]
             try:
-                arr = np.asarray(value, bool if key == "wheel_lock" else float)
+                arr = np.asarray(value)
+                real = arr.dtype.kind != "c"
+                arr = arr.astype(bool if key == "wheel_lock" else float) if real else arr
             except (TypeError, ValueError):
                 raise ValueError(f"command key {key!r}: expected {size} numbers, got {value!r}") from None
+            if not real:
+                raise ValueError(
+                    f"command key {key!r}: expected {size} real numbers, got complex values {value!r}; "
+                    "pass the real part (np.real) if that is what you mean"
+                )
             if arr.shape != self._lead + (size,):
                 raise ValueError(
                     f"command key {key!r}: expected {size} values ({COMMAND_KEYS[key]}), "

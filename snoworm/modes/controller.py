@@ -17,6 +17,7 @@ A controller that raises, or returns a bad command, stops the run with :class:`C
 
 from __future__ import annotations
 
+import math
 import os
 import time
 import traceback
@@ -27,6 +28,7 @@ from typing import Any
 
 from ..config.mode_registry import ModeConfig
 from ..config.schema import ScenarioError, field, quote
+from ..config.sections import MAX_OUTPUT_SAMPLES
 from .base import Interval, Mode, register_mode
 from .codeload import (
     allow_code as allow_code_ctx,
@@ -58,6 +60,10 @@ class ControllerError(RuntimeError):
     """A user's controller raised, or returned a bad command, during a run (CLI exit status 1)."""
 
 
+#: Shortest control period [s], as :data:`snoworm.simulation.stepwise.DT_MIN_S` for a step.
+PERIOD_MIN_S = 1e-6
+
+
 @dataclass(frozen=True)
 class ControllerConfig(ModeConfig):
     """``mode: {type: controller, controller: ..., period_s: ..., params: {...}}``."""
@@ -66,7 +72,7 @@ class ControllerConfig(ModeConfig):
     controller: str = field(
         doc="the controller class: 'file.py:ClassName' (relative to the scenario file) or 'package.module:ClassName'"
     )
-    period_s: float = field(gt=0, le=1e5, unit="s", doc="control period: the command is held this long")
+    period_s: float = field(ge=PERIOD_MIN_S, le=1e5, unit="s", doc="control period: the command is held this long")
     params: dict[str, Any] = field(default_factory=dict, doc="parameters handed to the controller's constructor")
 
     @classmethod
@@ -80,6 +86,20 @@ class ControllerConfig(ModeConfig):
 
     def _check(self, path):
         check_reference(self.controller, f"{path}.controller")  # static: nothing imported, nothing run
+
+    def check_scenario(self, scenario, path):
+        """Each control period is an interval that ends on an output sample: the periods of the run
+        times the segments stay within :data:`~snoworm.config.sections.MAX_OUTPUT_SAMPLES` (memory;
+        and the work limit allows each period its own share, so their number must be bounded)."""
+        periods = math.ceil(scenario.simulation.duration_s / self.period_s - 1e-9)
+        n = periods * scenario.vehicle.segments
+        if n > MAX_OUTPUT_SAMPLES:
+            raise ScenarioError(
+                f"{path}.period_s: {scenario.simulation.duration_s:g} s in periods of {self.period_s:g} s are "
+                f"{periods} control periods, each ending on an output sample: {n} samples (periods x "
+                f"segments), over the {MAX_OUTPUT_SAMPLES} allowed (memory). Raise period_s or shorten "
+                "simulation.duration_s."
+            )
 
 
 def code_root(scenario) -> str | None:
@@ -171,6 +191,7 @@ class ControllerMode(Mode):
     name = "controller"
     config_class = ControllerConfig
     continue_solver = True  # short periods: VODE keeps its history across them
+    steps_asked = True  # fixed periods, at most MAX_OUTPUT_SAMPLES / segments of them (check_scenario)
 
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)

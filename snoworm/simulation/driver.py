@@ -72,7 +72,12 @@ def _integrate(model, modes, sim, name, progress=None):
     y = np.concatenate([md.initial_state() for md in modes])
     pieces, phases = [[] for _ in range(B)], []
     solver = IntervalSolver(
-        model, sim, name, carry_history=all(getattr(md, "continue_solver", False) for md in modes), progress=progress
+        model,
+        sim,
+        name,
+        carry_history=all(getattr(md, "continue_solver", False) for md in modes),
+        progress=progress,
+        asked_steps=all(getattr(md, "steps_asked", False) for md in modes),
     )
     stats, stuck = solver.stats, 0
     while t < T - 1e-12:

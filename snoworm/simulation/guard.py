@@ -1,7 +1,8 @@
 """The guard around every solve: work limit, wall-time limit, solver breakdowns, sane states (issue 15).
 
 Kept apart from the interval solve (:mod:`snoworm.simulation.interval`): :class:`WorkMeter` holds a
-run to :data:`WORK_BASE_NFEV` + :func:`work_rate` right-hand sides per simulated second and to
+run to :data:`WORK_BASE_NFEV` + :func:`work_rate` right-hand sides per simulated second (+
+:data:`WORK_NFEV_PER_INTERVAL` per step asked of a Simulator, an environment or a controller), and to
 ``simulation.max_wall_s``, read from the solver's own counters; :func:`guarded` turns the solver's
 own breakdowns into :class:`SolverError`; :func:`check_sane` checks a run's states afterwards.
 None of them changes a number of a run that stays within the limits.
@@ -18,6 +19,7 @@ __all__ = [
     "SolverError",
     "WORK_BASE_NFEV",
     "WORK_NFEV_PER_S",
+    "WORK_NFEV_PER_INTERVAL",
     "SPEED_SANITY_FACTOR",
     "work_rate",
     "WorkMeter",
@@ -38,6 +40,14 @@ WORK_BASE_NFEV = 20_000
 #: Shipped scenarios need under 600 per second; their rtol 1e-9 reference runs (allowed 10x)
 #: under 4 000 (traverse_patch 3 765, inchworm6 2 346).
 WORK_NFEV_PER_S = 5_000
+#: ... plus, for steps asked (:meth:`~snoworm.simulation.stepwise.Simulator.step`, an environment's
+#: step, a controller's period: ``IntervalSolver(asked_steps=True)``), this many per interval: each ends on its own time and restarts or
+#: re-enters the solver, so many short steps need work that no simulated second pays for (tow6 and
+#: inchworm6 with commands changing, dt 1e-6 to 1e-4 s: 1-2 evaluations per step on VODE carried
+#: on, 5-7 restarted or on LSODA).  Without it, steps of 1e-4 s exhausted the limit at 0.75 s (issue
+#: 30).  A mode's other intervals (gait phases, a supervisor's checks) get none: a mode whose
+#: intervals shrink (events re-triggering, a tiny check interval) still meets the limit.
+WORK_NFEV_PER_INTERVAL = 100
 #: A run whose ground or wheel-rim speed exceeds this multiple of the fastest no-load wheel speed
 #: R_w * omega_nl (plus the fastest joint rate) has left the physics: a solver failure.
 SPEED_SANITY_FACTOR = 5.0
@@ -56,34 +66,46 @@ PROGRESS_EVERY_S = 0.5
 class WorkMeter:
     """The work and wall-time limits of one run, read from the solver's own counters.
 
-    :class:`~snoworm.simulation.interval.IntervalSolver` calls :meth:`check` after every VODE step
-    with VODE's own count of right-hand sides, and counts the calls of the ``solve_ivp`` methods
-    in the one function it hands them (:meth:`counted`).  The limit is :data:`WORK_BASE_NFEV` +
-    :func:`work_rate` per simulated second from the time of the first interval, and
+    :class:`~snoworm.simulation.interval.IntervalSolver` calls :meth:`start` at every interval and
+    :meth:`check` after every VODE step with VODE's own count of right-hand sides, and counts the
+    calls of the ``solve_ivp`` methods in the one function it hands them (:meth:`counted`).  The
+    limit is :data:`WORK_BASE_NFEV` + :func:`work_rate` per simulated second from the time of the
+    first interval, + ``per_interval`` per interval started (:meth:`limit`), and
     ``simulation.max_wall_s`` of wall time from the meter's creation.  ``progress(t_s, duration_s)``
     hears of the time reached within long intervals, every :data:`PROGRESS_EVERY_S` of wall time.
     """
 
-    def __init__(self, sim, name, progress=None):
+    def __init__(self, sim, name, progress=None, per_interval=0):
         self.name, self.rate, self.max_wall_s = name, work_rate(sim), sim.max_wall_s
+        #: right-hand sides allowed per interval started (:data:`WORK_NFEV_PER_INTERVAL` for steps asked)
+        self.per_interval = per_interval
         self.duration_s = sim.duration_s
         self.t0 = None
+        #: intervals started (:meth:`start`)
+        self.intervals = 0
         self.wall0 = self._shown = time.perf_counter()
         self.progress = progress
 
     def start(self, t):
-        """Count simulated time from ``t`` (the first interval's start; later calls keep it)."""
+        """An interval starts at ``t``: counted; simulated time counts from the first one's start."""
         if self.t0 is None:
             self.t0 = float(t)
+        self.intervals += 1
+
+    def limit(self, t) -> float:
+        """Right-hand sides allowed by time ``t`` (in the current interval)."""
+        return WORK_BASE_NFEV + self.rate * (t - self.t0) + self.per_interval * self.intervals
 
     def check(self, nfev, t):
         """Raise :class:`SolverError` if ``nfev`` right-hand sides by time ``t`` exceed the limits."""
-        if nfev > WORK_BASE_NFEV + self.rate * (t - self.t0):
+        if nfev > self.limit(t):
             raise SolverError(
                 f"work limit: {nfev} right-hand-side evaluations by t = {t:.6g} s of {self.name!r} "
-                f"(limit {WORK_BASE_NFEV} + {self.rate:.0f} per simulated second). The system is too stiff or "
-                "too fast to integrate: lower the large gains, stiffnesses, forces or speeds of the scenario, or "
-                "raise simulation.max_step_s / atol_scale if they are tiny."
+                f"(limit {WORK_BASE_NFEV} + {self.rate:.0f} per simulated second"
+                + (f" + {self.per_interval} per step, {self.intervals} steps" if self.per_interval else "")
+                + "). The system is too stiff or too fast to integrate: "
+                "lower the large gains, stiffnesses, forces or speeds of the scenario, or raise "
+                "simulation.max_step_s / atol_scale if they are tiny."
             )
         if self.max_wall_s is not None:
             wall = time.perf_counter() - self.wall0
@@ -103,7 +125,7 @@ class WorkMeter:
         calls, t_max = [nfev0], [self.t0]
         check, rate, t0 = self.check, self.rate, self.t0
         wall = self.max_wall_s is not None or self.progress is not None
-        base = WORK_BASE_NFEV
+        base = WORK_BASE_NFEV + self.per_interval * self.intervals
 
         def f(t, y, *args):
             n = calls[0] = calls[0] + 1

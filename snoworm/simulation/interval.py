@@ -19,7 +19,7 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .guard import SolverError, WorkMeter, guarded
+from .guard import WORK_NFEV_PER_INTERVAL, SolverError, WorkMeter, guarded
 from .vode import VodeStepper
 
 __all__ = ["ATOL", "IntervalSolver", "atol_per_field", "output_grid", "solver_options"]
@@ -110,6 +110,9 @@ class IntervalSolver:
         without it a stack skips VODE for LSODA (max norm).
     stats : dict, optional
         The counters to update (default: a new dict), e.g. a caller's own with more keys.
+    asked_steps : bool
+        Each call of :meth:`solve` is a step asked (a Simulator's, an environment's, a controller's period):
+        the work limit allows it :data:`~snoworm.simulation.guard.WORK_NFEV_PER_INTERVAL` more.
 
     Attributes
     ----------
@@ -120,11 +123,21 @@ class IntervalSolver:
         The run's work and wall-time limits, counted from the first interval's start.
     """
 
-    def __init__(self, model, sim, name="", carry_history=False, progress=None, vode_stack=False, stats=None):
+    def __init__(
+        self,
+        model,
+        sim,
+        name="",
+        carry_history=False,
+        progress=None,
+        vode_stack=False,
+        stats=None,
+        asked_steps=False,
+    ):
         self.model, self.sim, self.name = model, sim, name
         self.carry_history, self.vode_stack = bool(carry_history), bool(vode_stack)
         self.stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0} if stats is None else stats
-        self.meter = WorkMeter(sim, name, progress)
+        self.meter = WorkMeter(sim, name, progress, WORK_NFEV_PER_INTERVAL if asked_steps else 0)
         self._options = {}
         self._stepper = None
 

@@ -73,7 +73,9 @@ class Simulator:
         self.commands = CommandState(self.model)
         self._pieces, self._phases, self._samples = [], [], 0
         # VODE (simulation.method) carries its history across steps; the solver owns the counters
-        self._solver = IntervalSolver(self.model, self.scenario.simulation, "step", carry_history=True)
+        self._solver = IntervalSolver(
+            self.model, self.scenario.simulation, "step", carry_history=True, asked_steps=True
+        )
         self._stats = self._solver.stats
         self._stats["wall_time_s"] = 0.0
         self.last_step = None

@@ -57,7 +57,7 @@ from ..infra.folders import check_output_folder, output_folder, relocate
 from ..modes import SupervisorConfig
 from .gradeability import grade_text, gradeability
 from .inching import InchingRuns, fill_inching, gait_label
-from .sweep.spec import RANGE, parse_spec
+from .sweep.spec import MAX_CASES, RANGE, parse_spec
 
 __all__ = [
     "parse_grid",
@@ -69,6 +69,7 @@ __all__ = [
     "rolling_speed_of",
     "gradeability",
     "REGIONS",
+    "check_cell_count",
 ]
 
 #: Region labels of the map, in plotting order.
@@ -184,6 +185,22 @@ def _classify(rows, inching):
         )
 
 
+def check_cell_count(n_xt: int, n_grade: int, n_tow: int) -> int:
+    """The map's cell count ``n_xt * n_grade * n_tow``; ScenarioError if over ``MAX_CASES``.
+
+    :data:`~snoworm.studies.sweep.spec.MAX_CASES` is the bound of one sweep (each cell is a steady state and possibly an inching run, and a row of
+    ``mobility_map.csv``), checked before any cell is computed.
+    """
+    n = n_xt * n_grade * n_tow
+    if n > MAX_CASES:
+        raise ScenarioError(
+            f"--xt x --grade x --tow: the map has {n} cells ({n_xt} X_t x {n_grade} grades x {n_tow} tows), "
+            f"over the {MAX_CASES} allowed in one map (as in one sweep); use fewer values or split the map "
+            "into several maps."
+        )
+    return n
+
+
 def _checked_grid(xts, tows, grades) -> dict:
     """``xts``, ``tows`` and ``grades`` as lists of floats, each value checked against the domain of
     the scenario field it stands for (``--xt``, ``--tow``, ``--grade``)."""
@@ -238,6 +255,9 @@ def mobility_map(
 ) -> dict:
     """Mobility map of a scenario's vehicle over ``xts`` x ``grades`` x ``tows``.
 
+    At most :data:`~snoworm.studies.sweep.spec.MAX_CASES` cells (:func:`check_cell_count`: a
+    ScenarioError before any cell is computed).
+
     Parameters
     ----------
     sc : Scenario
@@ -277,6 +297,7 @@ def mobility_map(
         ``wall_time_s``, and the settings.
     """
     wall0 = time.perf_counter()
+    check_cell_count(len(xts), len(grades), len(tows))
     grid = _checked_grid(xts, tows, grades)
     v = check_field(SupervisorConfig, "rolling_speed_mps", wheel_speed_mps, "--rolling-speed")
     if inching:
@@ -357,6 +378,7 @@ def run_mobility_map(
     v = rolling_speed_of(sc) if rolling_speed_mps is None else float(rolling_speed_mps)
     xts, tows = parse_grid(xt_spec, "--xt"), parse_list(tow_spec, "--tow")
     grades = parse_grid(grade_spec, "--grade")
+    check_cell_count(len(xts), len(grades), len(tows))
     check_output_folder(out_dir, overwrite)
     res = mobility_map(
         sc,
