@@ -186,7 +186,8 @@ def _walk_model(model, leaf):
       (``"table"``: an X_t or elevation table, a constant profile's value) are **parameters**:
       the generated code reads them at run time, so models that differ in them share it;
     * integers, flags, strings, ``None``, non-float arrays, the types of the dataclasses walked
-      (with their methods: the trace calls them) and objects that state their own key
+      (with their methods: the trace calls them), functions set on the model (by identity: a
+      test's monkeypatch) and objects that state their own key
       (``__kernel_key__``, e.g. the state layout) are **static**: ``static`` lists them with their
       path, and the generated code is shared only by models whose static parts are all equal.
 
@@ -214,6 +215,9 @@ def _walk_model(model, leaf):
         if is_dataclass(v) and not isinstance(v, type):
             static.append((path, type(v), _methods(type(v))))
             return replace(v, **{f.name: conv(getattr(v, f.name), f"{path}.{f.name}") for f in dc_fields(v)})
+        if isinstance(v, (types.FunctionType, types.MethodType)):  # a method set on the model: by identity
+            static.append((path, v))
+            return v
         key = getattr(v, "__kernel_key__", None)
         if key is not None:
             static.append((path, type(v), key()))
