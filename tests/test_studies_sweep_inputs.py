@@ -96,7 +96,8 @@ def test_referenced_files_finds_parameter_sets_model_files_controllers_and_swept
     )
     found = referenced_files(raw, axes, tmp_path)
     names = sorted(p.rsplit("/", 1)[-1] for p in found)
-    assert names == ["a.yaml", "b.yaml", "c.py", "controller_helpers.py", "m.yaml", "ps.yaml"]
+    # a module controller: its source and its package's __init__.py (both run when it is imported)
+    assert names == ["__init__.py", "a.yaml", "b.yaml", "c.py", "controller_helpers.py", "m.yaml", "ps.yaml"]
     h = input_hashes(raw, axes, tmp_path)
     (tmp_path / "m.yaml").write_text("x: 2\n")
     assert changed_inputs(h, input_hashes(raw, axes, tmp_path)) == [str((tmp_path / "m.yaml").resolve())]

@@ -220,11 +220,25 @@ figure_size_option = click.option(
 )
 
 
+def _check_allowed(ctx, param, value):
+    """Refuse an empty ``--allow-code ''`` (it would allow the whole working folder's code)."""
+    for p in value:
+        if not p.strip():
+            raise click.BadParameter(
+                "an empty path would allow the code of the whole working folder. Name the file or folder "
+                "whose controller code may run (e.g. --allow-code ./controllers).",
+                ctx=ctx,
+                param=param,
+            )
+    return value
+
+
 allow_code_option = click.option(
     "--allow-code",
     "allow_code",
     multiple=True,
     type=click.Path(),
+    callback=_check_allowed,
     metavar="PATH",
     help="Let controller code under PATH (a file or folder) run although it lies outside the scenario's folder "
     "(repeatable). A scenario with a controller is a program: see docs/controllers.md.",
