@@ -28,7 +28,7 @@ from ...results.result import ResultFileError, read_back
 from .figures import plot_table
 from .inputs import changed_inputs
 from .metrics import METRIC_COLUMNS
-from .series import SERIES_FILE, load_series
+from .series import SERIES_FILE, expected_dims, load_series
 from .spec import parse_scalar
 
 __all__ = ["SweepTable", "summary_columns", "read_summary", "prepare_dir", "load_sweep"]
@@ -124,7 +124,7 @@ class SweepTable:
                 f"no {SERIES_FILE} in {self.out_dir}: run the sweep with --save-cases "
                 "--series netcdf (series='netcdf') to keep every case's series in one file"
             )
-        return load_series(path)
+        return load_series(path, getattr(self, "series_dims", None))
 
     def plot(self, metric=None, *, size=None, ax=None, fig=None):
         """The sweep's standard figure (:func:`snoworm.studies.sweep.figures.plot_table`): ``metric``
@@ -183,6 +183,8 @@ def load_sweep(out_dir) -> SweepTable:
         keys = [a["key"] for a in definition.get("axes", [])] or None
         if keys is not None and not all(isinstance(k, str) for k in keys):
             raise TypeError("axis keys are not text")
+        axes = [(a["key"], len(a["values"])) for a in definition.get("axes", [])]
+        dims = expected_dims(axes, bool(definition.get("zip"))) if axes else None
     except ResultFileError:
         raise
     except (ValueError, RecursionError, AttributeError, TypeError, KeyError):
@@ -192,6 +194,7 @@ def load_sweep(out_dir) -> SweepTable:
         raise ResultFileError(f"{spath}: its columns {quote(header)} are not those of the sweep in {dpath}")
     rows, twice = _first_of_each_case(rows)
     table = SweepTable(header, rows, keys or _keys_from_header(header), out_dir=out)
+    table.series_dims = dims  # the swept dimensions series.nc must have (checked when it is read)
     table.dropped = dropped + len(twice)
     if dropped:
         warnings.warn(
