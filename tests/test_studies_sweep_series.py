@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -213,3 +214,35 @@ def test_a_series_nc_of_another_sweep_shape_is_refused(nc_sweep, tmp_path):
     (d / "series.nc").write_bytes((other / "series.nc").read_bytes())
     with pytest.raises(ResultFileError, match=r"series\.nc: its swept dimensions .*terrain_xt.: 3.* not the sweep's"):
         load_sweep(d).series()
+
+
+def test_a_resume_adding_series_netcdf_runs_the_cases_without_series_again(tmp_path, caplog):
+    """A sweep run without --series netcdf, resumed with it, left its finished cases without series
+    in series.nc (ok = 0), silently; they are run again now, with a warning naming them."""
+    sets = ["terrain.xt=0.7,0.9", "simulation.duration_s=1"]
+    out = tmp_path / "s"
+    first = run_sweep(TOW6, sets, out_dir=out, plot=False, progress=False)
+    lines = (out / "summary.csv").read_text().splitlines(keepends=True)
+    (out / "summary.csv").write_text("".join(lines[:2]))  # interrupted after case 0
+    with caplog.at_level("WARNING", logger="snoworm"):
+        table = run_sweep(TOW6, sets, out_dir=out, **NC)
+    assert (
+        re.search(r"1 finished case\(s\) \(0+\) have no saved time series", caplog.text) and "run again" in caplog.text
+    )
+    ds = table.series()
+    assert ds["ok"].values.all() and np.isfinite(ds["x_m"].values).all()
+    assert comparable(table) == comparable(first)
+    assert len((out / "summary.csv").read_text().splitlines()) == 3  # no repeated line for case 0
+    again = run_sweep(TOW6, sets, out_dir=out, **NC)  # every case has its series: nothing re-runs
+    xr.testing.assert_identical(again.series(), ds)
+
+
+def test_a_resume_adding_save_cases_runs_the_cases_without_a_folder_again(tmp_path):
+    sets = ["terrain.xt=0.7,0.9", "simulation.duration_s=1"]
+    out = tmp_path / "s"
+    run_sweep(TOW6, sets, out_dir=out, plot=False, progress=False)
+    lines = (out / "summary.csv").read_text().splitlines(keepends=True)
+    (out / "summary.csv").write_text("".join(lines[:2]))
+    table = run_sweep(TOW6, sets, out_dir=out, plot=False, progress=False, save_cases=True)
+    assert sorted(p.name for p in (out / "cases").iterdir()) == [r["case_id"] for r in table.rows]
+    assert len((out / "summary.csv").read_text().splitlines()) == 3

@@ -49,6 +49,7 @@ __all__ = [
     "combine_series",
     "load_series",
     "read_series",
+    "cases_with_series",
     "expected_dims",
     "MAX_SERIES_BYTES",
     "dim_names",
@@ -316,13 +317,14 @@ def _check_layout(ds, size: int, expected) -> str | None:
     return None
 
 
-def read_series(path, expected=None):
+def read_series(path, expected=None, only=None):
     """A sweep's ``series.nc`` as an :class:`xarray.Dataset`, loaded into memory and the file closed.
 
     Opened as the other readers open a user's file: a regular file (a FIFO or a device is refused
     unopened, never waited on) of at most :data:`MAX_SERIES_BYTES`; its dimensions are checked
     (``expected``: the swept dimensions' sizes, :func:`expected_dims`; at most ``MAX_SEGMENTS``
     segments) and its arrays' size against what the file can hold before a value is read.
+    ``only``: the names of the variables to load (default: all).
 
     Raises
     ------
@@ -347,12 +349,25 @@ def read_series(path, expected=None):
             with xr.open_dataset(fh, engine=_engine(fh)) as ds:
                 problem = _check_layout(ds, st.st_size, expected)
                 if problem is None:
-                    return ds.load()
+                    return (ds[list(only)] if only else ds).load()
         except ResultFileError:
             raise
         except Exception as exc:  # noqa: BLE001 - h5py/h5netcdf/scipy/xarray on a tampered file: bad input
             problem = f"not a netCDF file snoworm wrote ({type(exc).__name__}: {quote(str(exc), 160)})"
     raise ResultFileError(f"{where}: {problem}")
+
+
+def cases_with_series(out, cases, keep_series, expected=None) -> set:
+    """The indices of ``cases`` whose time series ``out`` holds already: in ``series.nc`` or as a
+    ``cases/<case_id>.npz`` (``netcdf``), or as a ``cases/<case_id>/`` folder (``folders``)."""
+    out = Path(out)
+    if keep_series == "netcdf":
+        have = set()
+        if os.path.lexists(out / SERIES_FILE):
+            ok = np.asarray(read_series(out / SERIES_FILE, expected, only=("ok",))["ok"].values).reshape(-1)
+            have = {i for i in range(min(ok.size, len(cases))) if ok[i] == 1}
+        return have | {c.index for c in cases if (out / "cases" / f"{c.case_id}.npz").is_file()}
+    return {c.index for c in cases if (out / "cases" / c.case_id).is_dir()}
 
 
 def load_series(path, expected=None):
