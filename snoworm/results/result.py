@@ -264,7 +264,14 @@ class Result:
         ------
         snoworm.infra.folders.OutputError
             Unusable ``out_dir`` or an I/O failure (nothing is written then).
+        ValueError
+            A ``figure_size`` that is not column, page, 'WxH' or a (width, height) pair (checked
+            before anything is written).
         """
+        if plot and figure_size is not None:
+            from ..plotting.style import parse_size  # lazy: matplotlib, only when plotting
+
+            parse_size(figure_size)
         with output_folder(out_dir, overwrite, command) as stage:
             paths = [
                 atomic_write_text(stage / "segments.csv", self.segments_csv()),
