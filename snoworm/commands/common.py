@@ -13,6 +13,7 @@ from __future__ import annotations
 import functools
 import logging
 import os
+import re
 import shlex
 import signal
 import sys
@@ -59,8 +60,6 @@ MAX_WORD_CHARS = 240
 def bounded(msg) -> str:
     """``msg`` with every run of over :data:`MAX_WORD_CHARS` non-blank characters (a 4 kB path
     echoed once or three times) cut in its middle (``...[N characters]...``), its ends kept."""
-    import re
-
     from ..config.schema import short_path  # lazy: start-up
 
     return re.sub(rf"\S{{{MAX_WORD_CHARS + 1},}}", lambda m: short_path(m.group(0), MAX_WORD_CHARS), str(msg))

@@ -269,9 +269,9 @@ class Result:
             before anything is written).
         """
         if plot and figure_size is not None:
-            from ..plotting.style import parse_size  # lazy: matplotlib, only when plotting
+            from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; only when plotting
 
-            parse_size(figure_size)
+            plotting.parse_size(figure_size)
         with output_folder(out_dir, overwrite, command) as stage:
             paths = [
                 atomic_write_text(stage / "segments.csv", self.segments_csv()),
