@@ -28,6 +28,7 @@ from snoworm.config.schema import ScenarioError
 from snoworm.infra import folders
 from snoworm.infra.folders import OutputError
 from snoworm.modes.controller import ControllerError
+from snoworm.results.result import ResultFileError
 from snoworm.simulation.guard import SolverError
 
 
@@ -60,6 +61,7 @@ def _cli(exc=None, seen=None):
         (KeyboardInterrupt(), 130, "interrupted; nothing half-written"),
         (Terminated(), 143, "interrupted; nothing half-written"),
         (ZeroDivisionError("boom"), EXIT_SOLVER, "internal error (ZeroDivisionError: boom). This is a bug"),
+        (ResultFileError("d/series.nc: not a netCDF file"), EXIT_INPUT, "Error: d/series.nc: not a netCDF file\n"),
     ],
 )
 def test_each_failure_is_one_message_and_its_exit_status(monkeypatch, exc, code, text):
@@ -134,3 +136,19 @@ def test_echo_scenarios_and_echo_written(capsys):
     assert [ln.split()[0] for ln in lines] == list(shipped_scenarios())
     echo_written("report", ["a", "b"], "out/x")
     assert capsys.readouterr().out == "report\nwrote 2 files to out/x\n"
+
+
+def test_long_paths_are_cut_in_messages_and_an_unusable_out_is_exit_2(tmp_path, monkeypatch):
+    """Issue 30: a 3.7 kB path was echoed whole (twice in some messages: ~10 kB), and a path
+    over the system's limits (ENAMETOOLONG) was an internal error."""
+    from snoworm.cli import main
+
+    monkeypatch.delenv("SNOWORM_DEBUG", raising=False)
+    deep = str(tmp_path.joinpath(*["d" * 250] * 14))
+    r = CliRunner().invoke(_cli(ScenarioError(f"{deep}/x.yaml: missing; {deep}/y.yaml too")), ["cmd", "--out", "o"])
+    assert r.exit_code == EXIT_INPUT and len(deep) > 3500 and len(r.stderr) < 1200, len(r.stderr)
+    assert "x.yaml: missing" in r.stderr and "characters]" in r.stderr
+    too_long = "/".join(["d" * 200] * 40)  # 8 kB: over PATH_MAX
+    for args in (["validate", too_long], ["run", "tow6_uniform", "--out", too_long, "--no-plot"]):
+        r = CliRunner().invoke(main, args)
+        assert r.exit_code == EXIT_INPUT and "internal error" not in r.output and len(r.output) < 1200, r.output[:300]

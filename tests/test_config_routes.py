@@ -96,3 +96,63 @@ def test_a_route_that_is_a_fifo_is_refused_at_once(tmp_path):
     os.mkfifo(p)
     with pytest.raises(ScenarioError, match=r"terrain\.route: .*r\.csv: the route file is not a regular file"):
         read_route(p)
+
+
+# ------------------------------------------------------------------ issue 30: route files a spreadsheet or a hostile folder gives
+ROUTE = "distance_m,elevation_m,xt\n0,0,0.9\n50,5,0.6\n"
+
+
+def _scenario_with_route(tmp_path, route):
+    import yaml
+
+    raw = {
+        "name": "r",
+        "vehicle": {"parameter_set": "frostyboy", "segments": 2, "links": {"type": "fixed"}},
+        "terrain": {"route": route},
+        "tow": {"force_N": 0},
+        "mode": {"type": "uniform", "speed_mps": 1.0, "start_time_s": 0},
+        "simulation": {"duration_s": 1},
+    }
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(raw))
+    return tmp_path / "s.yaml"
+
+
+def test_a_route_with_a_utf8_byte_order_mark_reads_as_without(tmp_path):
+    """A spreadsheet's 'CSV UTF-8' starts with a BOM: it was read as part of the first column's
+    name ("the header lacks distance_m")."""
+    p = tmp_path / "bom.csv"
+    p.write_bytes(b"\xef\xbb\xbf" + ROUTE.encode())
+    r = read_route(p)
+    assert (r.distance_m, r.elevation_m, r.xt) == ((0.0, 50.0), (0.0, 5.0), (0.9, 0.6))
+
+
+@pytest.mark.parametrize(
+    "make, fragment",
+    [
+        (lambda d: _write(d, "distance_m,elevation_m,xt\n0,0," + "8" * 140_000 + "\n50,5,0.6\n").name, "line 2"),
+        (lambda d: os.symlink("loop.csv", d / "loop.csv") or "loop.csv", "symbolic link loop"),
+        (lambda d: "a\x00b.csv", "NUL byte"),
+    ],
+    ids=["cell-over-128-kB", "symlink-loop", "nul-byte"],
+)
+def test_hostile_route_paths_and_cells_are_exit_2_not_internal_errors(tmp_path, make, fragment):
+    from click.testing import CliRunner
+
+    from snoworm.cli import main
+
+    p = _scenario_with_route(tmp_path, make(tmp_path))
+    with pytest.raises(ScenarioError, match=fragment) as e:
+        load_scenario(p)
+    assert "terrain.route" in str(e.value) and len(str(e.value)) < 600
+    r = CliRunner().invoke(main, ["validate", str(p)])
+    assert r.exit_code == 2 and "internal error" not in r.output and fragment in r.output, r.output
+
+
+def test_a_long_route_path_is_shortened_in_messages(tmp_path):
+    deep = tmp_path.joinpath(*["d" * 250] * 14)
+    deep.mkdir(parents=True)
+    p = deep / "missing.csv"
+    with pytest.raises(ScenarioError) as e:
+        read_route(p)
+    msg = str(e.value)
+    assert len(str(p)) > 3500 and len(msg) < 500 and "missing.csv" in msg and "characters]" in msg

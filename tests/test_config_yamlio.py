@@ -12,6 +12,7 @@ from hypothesis import given, settings, strategies as st
 from snoworm.config import yamlio
 from snoworm.config.schema import ScenarioError
 from snoworm.config.yamlio import MAX_BYTES, MAX_DEPTH, load_yaml_text, quote, read_yaml
+from tests.conftest import SCENARIOS
 
 # Time bounds below are hang guards (pure-Python PyYAML on a slow CI machine), not benchmarks.
 HANG_GUARD_S = 5.0
@@ -179,8 +180,23 @@ def test_aliases_within_the_budget_are_fine():
 def test_node_budget_counts_plain_nodes_too(monkeypatch):
     monkeypatch.setattr(yamlio, "MAX_NODES", 1000)  # the real 100 000 takes ~3 s of pure-Python parsing
     assert load_yaml_text("[" + ",".join(["1"] * 998) + "]", "in.yaml") == [1] * 998
-    assert "too many aliases / nodes" in load_error("[" + ",".join(["1"] * 1000) + "]")
+    plain = load_error("[" + ",".join(["1"] * 1000) + "]")
+    assert "too long for a list written inline" in plain and "alias" not in plain  # no alias in it
     assert "too many aliases / nodes" in load_error(billion_laughs(levels=3, fan=10))  # 1111 expanded nodes
+
+
+def test_a_100000_point_elevation_table_points_to_route_files_not_to_an_alias_bomb(tmp_path):
+    """Issue 30: a long inline elevation table was called 'a YAML alias bomb?'."""
+    from click.testing import CliRunner
+
+    from snoworm.cli import main
+
+    raw = yaml.safe_load((SCENARIOS / "tow6_uniform.yaml").read_text())
+    raw["terrain"]["elevation"] = [[float(i), 0.0] for i in range(100_000)]
+    (tmp_path / "long.yaml").write_text(yaml.safe_dump(raw, default_flow_style=True))
+    r = CliRunner().invoke(main, ["validate", str(tmp_path / "long.yaml")])
+    assert r.exit_code == 2 and "alias" not in r.output, r.output
+    assert "too long for a list written inline" in r.output and "terrain.route" in r.output
 
 
 @pytest.mark.parametrize("text", ["&a [*a]\n", "x: &a {y: [1, *a]}\n"])

@@ -11,6 +11,8 @@ reproducible).
 Issue 24 adds three derandomised fuzzers (``SNOWORM_FUZZ_TRUST_EXAMPLES``, default 25 each): hostile
 manifests never touch a file outside the output folder, controller references never run code
 when read, and mutated run folders load consistently or raise ResultFileError naming the file.
+Issue 30 adds tampered sweep ``series.nc`` files (bytes overwritten, truncated, dimensions and
+variables rewritten): read back and resumed, each loads or raises one ResultFileError naming it.
 
 Then the categories of the issue, one representative set each: the former hangs, the former
 internal errors, the 1e300 solver breakdowns, the command options, and YAML abuse.  The former
@@ -528,3 +530,84 @@ def test_fuzzed_result_folders_load_or_raise_one_error(tmp_path_factory, good_ru
     n = res.scenario.vehicle.segments
     assert res.segments["x_m"].shape == (res.t.size, n) and res.links["force_N"].shape == (res.t.size, n - 1)
     assert all(np.all(np.isfinite(v)) for v in (*res.segments.values(), *res.links.values(), res.t))
+
+
+@pytest.fixture(scope="module")
+def good_series(tmp_path_factory):
+    from snoworm import run_sweep
+
+    d = tmp_path_factory.mktemp("nc") / "s"
+    run_sweep(
+        SCENARIOS / "tow6_uniform.yaml",
+        ["terrain.xt=0.7,0.9", "simulation.duration_s=0.5"],
+        out_dir=d,
+        plot=False,
+        progress=False,
+        series="netcdf",
+    )
+    return d
+
+
+def _tamper_series(path, how, pos, value):
+    """Rewrite ``path`` (a series.nc): bytes overwritten or cut, or the dataset rewritten with a
+    dimension resized, a variable dropped or retyped, or its values replaced."""
+    import xarray as xr
+
+    data = path.read_bytes()
+    k = min(int(pos * len(data)), len(data) - 1)
+    if how == "bytes":
+        path.write_bytes(data[:k] + bytes([value % 256]) * 16 + data[k + 16 :])
+    elif how == "truncate":
+        path.write_bytes(data[:k])
+        return
+    else:
+        with xr.open_dataset(path, engine="h5netcdf") as ds:
+            ds = ds.load()
+        names = sorted(ds.data_vars)
+        name = names[min(int(pos * len(names)), len(names) - 1)]
+        if how == "drop":
+            ds = ds.drop_vars(name)
+        elif how == "values":
+            ds[name] = ds[name].copy(data=np.full(ds[name].shape, value).astype(ds[name].dtype))  # wraps
+        elif how == "retype":
+            ds[name] = ds[name].astype(str)
+        else:  # "resize": the time axis cut or grown by a few samples (a huge one: test_studies_sweep_series)
+            step = max(min(value, 50), -5)
+            ds = ds.isel(time=slice(0, max(ds.sizes["time"] + step, 1))) if step < 0 else ds.pad(time=(0, step))
+        path.unlink()
+        ds.to_netcdf(path, engine="h5netcdf")
+
+
+@settings(
+    max_examples=TRUST_EXAMPLES,
+    deadline=None,
+    derandomize=not os.environ.get("SNOWORM_FUZZ_RANDOM"),
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
+@given(
+    how=st.sampled_from(["bytes", "truncate", "drop", "values", "retype", "resize"]),
+    pos=st.floats(0, 1),
+    value=st.sampled_from([-(2**31), -5, -1, 0, 1, 3, 255, 2**31 - 1]),
+)
+def test_fuzzed_series_nc_loads_or_raises_one_error(tmp_path_factory, good_series, how, pos, value):
+    import shutil
+
+    from snoworm import load_sweep
+    from snoworm.results.result import ResultFileError
+    from snoworm.studies.sweep.series import _from_old
+
+    d = tmp_path_factory.mktemp("t") / "s"
+    shutil.copytree(good_series, d)
+    _tamper_series(d / "series.nc", how, pos, value)
+    try:
+        ds = load_sweep(d).series()
+    except ResultFileError as exc:
+        assert "series.nc" in str(exc) and len(str(exc)) < 1000
+    else:
+        assert ds.sizes["terrain_xt"] == 2 and ds["x_m"].ndim == 4
+    try:  # what a resume reads: the cases' arrays, trimmed of their padding
+        old = _from_old(d / "series.nc", 2, {"terrain_xt": 2, "simulation_duration_s": 1})
+    except ResultFileError as exc:
+        assert "series.nc" in str(exc)
+    else:
+        assert all(a["t_s"].ndim == 1 and a["segments/x_m"].shape[0] == a["t_s"].size for a in old.values())

@@ -202,7 +202,8 @@ def test_trust_problem_and_allow_code_nest(tmp_path):
         assert trust_problem(f"{f}:C", tmp_path / "b") is None
         assert trust_problem(f"{f}:C", None) is None
     assert "load_result" in trust_problem(f"{f}:C", None)
-    assert trust_problem("tests.controller_helpers:Uniform", None) is None  # an installed module: no file rule
+    assert trust_problem("yaml:YAMLObject", None) is None  # installed code (site-packages): no file rule
+    assert trust_problem("snoworm.modes.uniform:UniformMode", None) is None  # snoworm itself
 
 
 def test_shipped_example_controllers_still_validate_and_run_from_their_folder(tmp_path):
@@ -272,3 +273,127 @@ def test_a_module_of_an_editable_install_is_found_without_importing_it(tmp_path,
     assert "edctl_pkg" not in sys.modules
     with pytest.raises(ScenarioError, match="edctl_pkg.nope"):
         find_module_source("edctl_pkg.nope", "s.yaml")
+
+
+# ------------------------------------------------------------------ issue 30: module references, bytecode, --allow-code ''
+def _fresh_cli(*args, cwd, extra_path=None):
+    """``python -m snoworm ARGS`` in a fresh process run from ``cwd`` (this worktree's snoworm)."""
+    import subprocess
+
+    root = str(SCENARIOS.parent)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([root] + ([str(extra_path)] if extra_path else []))}
+    return subprocess.run(
+        [sys.executable, "-m", "snoworm", *[str(a) for a in args]],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def test_a_module_in_the_working_folder_runs_only_when_allowed(tmp_path, marker):
+    """`python -m snoworm` (and PYTHONPATH=., python -c, a notebook) puts the working folder on the
+    path: a scenario naming `ctl:Ctl` ran the working folder's ctl.py without --allow-code."""
+    _controller(tmp_path / "work" / "ctl.py", marker)
+    p = _scenario(tmp_path / "proj", "ctl:Ctl")
+    r = _fresh_cli("run", p, "--out", tmp_path / "o", "--no-plot", cwd=tmp_path / "work")
+    assert r.returncode == 2, r.stderr
+    assert "not installed code" in r.stderr and "--allow-code" in r.stderr and str(tmp_path / "work") in r.stderr
+    assert "Traceback" not in r.stderr and not _ran(marker) and not (tmp_path / "o").exists()
+    r = _fresh_cli("run", p, "--out", tmp_path / "o2", "--no-plot", cwd=tmp_path, extra_path=tmp_path / "work")
+    assert r.returncode == 2 and not _ran(marker), r.stderr  # PYTHONPATH: the same rule
+    r = _fresh_cli("run", p, "--out", tmp_path / "o", "--no-plot", "--allow-code", ".", cwd=tmp_path / "work")
+    assert r.returncode == 0, r.stderr
+    assert _ran(marker)
+
+
+def test_a_module_named_by_a_read_back_result_never_runs_unless_allowed(tmp_path, marker, monkeypatch):
+    _controller(tmp_path / "work" / "ctl.py", marker)
+    monkeypatch.syspath_prepend(str(tmp_path / "work"))  # a notebook in that folder
+    sc = load_scenario(_scenario(tmp_path / "proj", "ctl:Ctl"))
+    with pytest.raises(ScenarioError, match="not installed code.*outside the scenario's folder"):
+        simulate(sc)
+    assert not _ran(marker)
+    simulate(sc, allow_code=[tmp_path / "work"]).write(tmp_path / "run", plot=False)
+    assert _ran(marker)
+    marker.unlink()
+    marker.with_name(marker.name + ".init").unlink()
+    sys.modules.pop("ctl", None)
+    back = load_result(tmp_path / "run")
+    with pytest.raises(ScenarioError, match="load_result"):
+        simulate(back.scenario)
+    assert not _ran(marker)
+    # in a scenario's own folder tree a module follows the file rule: it may run
+    _controller(tmp_path / "proj" / "ctl2.py", marker)
+    monkeypatch.syspath_prepend(str(tmp_path / "proj"))
+    assert trust_problem("ctl2:Ctl", tmp_path / "proj") is None
+    assert "load_result" in trust_problem("ctl2:Ctl", None)
+
+
+def _plant_bytecode(source_py, evil_source):
+    """A ``__pycache__`` file beside ``source_py`` holding ``evil_source`` compiled, stamped with
+    the .py's mtime and size: Python's import would run it instead of the .py."""
+    import importlib._bootstrap_external as be
+    import importlib.util
+
+    st = os.stat(source_py)
+    code = compile(textwrap.dedent(evil_source), str(source_py), "exec")
+    pyc = importlib.util.cache_from_source(str(source_py))
+    os.makedirs(os.path.dirname(pyc), exist_ok=True)
+    with open(pyc, "wb") as fh:
+        fh.write(be._code_to_timestamp_pyc(code, int(st.st_mtime), st.st_size))
+    return pyc
+
+
+GOOD_CTL = """
+class Ctl:
+    def __init__(self, params, scenario):
+        pass
+    def __call__(self, obs):
+        return {"wheel_speed_mps": [0.2] * len(obs.x_m)}
+"""
+
+
+def test_cached_bytecode_never_runs_instead_of_the_checked_source(tmp_path, marker, monkeypatch):
+    """A crafted __pycache__/ctl.cpython-3XY.pyc with the .py's mtime and size ran instead of the
+    harmless source that was checked and hashed; a module's package __init__ the same."""
+    (tmp_path / "proj").mkdir()
+    src = tmp_path / "proj" / "ctl.py"
+    src.write_text(GOOD_CTL)
+    _plant_bytecode(src, EVIL.format(marker=str(marker)))
+    res = simulate(load_scenario(_scenario(tmp_path / "proj", "ctl.py:Ctl")))
+    assert res.mode_summary["controller_calls"] > 0 and not _ran(marker)
+    # a module that is not installed code: its package's __init__ and its own source, from the bytes
+    pkg = tmp_path / "proj" / "cpkg30"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "mod.py").write_text(GOOD_CTL)
+    _plant_bytecode(pkg / "__init__.py", f"import pathlib\npathlib.Path({str(marker)!r}).write_text('init')\n")
+    _plant_bytecode(pkg / "mod.py", EVIL.format(marker=str(marker)))
+    monkeypatch.syspath_prepend(str(tmp_path / "proj"))
+    for m in ("cpkg30", "cpkg30.mod"):
+        monkeypatch.delitem(sys.modules, m, raising=False)
+    res = simulate(load_scenario(_scenario(tmp_path / "proj", "cpkg30.mod:Ctl")))
+    assert res.mode_summary["controller_calls"] > 0 and not _ran(marker)
+    assert sys.modules["cpkg30.mod"].__file__ == str(pkg / "mod.py")
+
+
+def test_an_empty_allow_code_path_is_exit_2_not_the_whole_working_folder(tmp_path, marker, monkeypatch):
+    _controller(tmp_path / "elsewhere" / "ctl.py", marker)
+    p = _scenario(tmp_path / "proj", "../elsewhere/ctl.py:Ctl")
+    monkeypatch.chdir(tmp_path)  # '' resolved to the working folder, holding elsewhere/
+    for cmd in (
+        ["run", p, "--out", tmp_path / "o", "--no-plot"],
+        ["validate", p],
+        ["sweep", p, "--out", tmp_path / "s"],
+    ):
+        r = cli(*cmd, "--allow-code", "")
+        assert r.exit_code == 2, r.output
+        assert "empty path" in r.output and "Traceback" not in r.output
+    assert not _ran(marker) and not (tmp_path / "o").exists()
+    with pytest.raises(ScenarioError, match="empty path"):
+        simulate(load_scenario(p), allow_code=[""])
+    with pytest.raises(ScenarioError, match="empty path"):
+        run_sweep(p, ["terrain.xt=0.8"], out_dir=tmp_path / "s2", progress=False, plot=False, allow_code=[""])
+    assert not _ran(marker)

@@ -166,6 +166,26 @@ def test_the_readability_check_can_fail():
     assert "'far outside' sticks out" in found
 
 
+@pytest.mark.parametrize(
+    "size", [True, False, 3.5, (3.5,), (1, 2, 3), [True, True], ("3", "2"), b"3x2", {"w": 3}, [None, 2]]
+)
+def test_a_figure_size_that_is_not_a_size_is_a_value_error_naming_the_rule(size):
+    """Issue 30: Result.write(figure_size=True) was a TypeError ('bool' object is not iterable)."""
+    from snoworm.plotting.style import parse_size
+
+    with pytest.raises(ValueError, match=r"figure size .*expected column, page, 'WxH'"):
+        parse_size(size)
+
+
+def test_result_write_checks_the_figure_size_before_writing(tmp_path):
+    from snoworm import load_scenario, simulate
+
+    res = simulate(load_scenario("tow6_uniform", ["simulation.duration_s=0.2"]))
+    with pytest.raises(ValueError, match="figure size True"):
+        res.write(tmp_path / "o", figure_size=True)
+    assert not (tmp_path / "o").exists()
+
+
 # ---------------------------------------------------------------------------- pyplot's global state
 import json  # noqa: E402
 import os  # noqa: E402

@@ -127,3 +127,22 @@ def test_cli_terrain_curves(tmp_path):
     assert arr.shape == (2 * 1001, 5)
     np.testing.assert_allclose(arr[:, 4], arr[:, 2] - arr[:, 3], atol=1e-3)
     assert (out / "terrain_curves.png").stat().st_size > 1000
+
+
+def test_terrain_curves_points_are_bounded_before_allocating(tmp_path):
+    """Issue 30: --points 1000000000 allocated 7.45 GiB (a MemoryError, an internal error)."""
+    from snoworm.config.schema import ScenarioError
+
+    r = CliRunner().invoke(
+        main, ["terrain-curves", "--xt", "1", "--points", "1000000000", "--out", str(tmp_path / "o")]
+    )
+    assert r.exit_code == 2 and "internal error" not in r.output and "--points" in r.output, r.output
+    assert not (tmp_path / "o").exists()
+    seg, tp = gt.vehicle_model("frostyboy", None)
+    assert gt.MAX_CURVE_POINTS == 100_001
+    for bad in (10**9, 2, 2.5, True):
+        with pytest.raises(ScenarioError, match="--points: expected a whole number of slip values from 3 to 100001"):
+            gt.terrain_curves([1.0], seg, tp, bad)
+    with pytest.raises(ScenarioError, match="over the 2000000 allowed"):
+        gt.terrain_curves([1.0] * 21, seg, tp, 100_001)
+    assert gt.terrain_curves([1.0], seg, tp, gt.MAX_CURVE_POINTS).slip.size == gt.MAX_CURVE_POINTS

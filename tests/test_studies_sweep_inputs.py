@@ -96,8 +96,55 @@ def test_referenced_files_finds_parameter_sets_model_files_controllers_and_swept
     )
     found = referenced_files(raw, axes, tmp_path)
     names = sorted(p.rsplit("/", 1)[-1] for p in found)
-    assert names == ["a.yaml", "b.yaml", "c.py", "controller_helpers.py", "m.yaml", "ps.yaml"]
+    # a module controller: its source and its package's __init__.py (both run when it is imported)
+    assert names == ["__init__.py", "a.yaml", "b.yaml", "c.py", "controller_helpers.py", "m.yaml", "ps.yaml"]
     h = input_hashes(raw, axes, tmp_path)
     (tmp_path / "m.yaml").write_text("x: 2\n")
     assert changed_inputs(h, input_hashes(raw, axes, tmp_path)) == [str((tmp_path / "m.yaml").resolve())]
-    assert inputs.FILE_SUFFIXES
+
+
+WEIGHTS_CTL = """
+    import numpy as np
+
+    class Ctl:
+        def __init__(self, params, scenario):
+            self.v = float(np.load(params["weights"])["v"])
+        def __call__(self, obs):
+            return {"wheel_speed_mps": [self.v] * len(obs.x_m)}
+"""
+
+
+def test_a_changed_file_named_by_a_controller_param_refuses_the_resume_whatever_its_suffix(tmp_path, monkeypatch):
+    """Issue 30: ``mode.params: {weights: w.npz}`` -- a file the controller reads, named by a value
+    with a suffix the resume key ignored -- changed between two runs of a sweep: the resume mixed
+    rows of the two weights.  Every file a value names is hashed now."""
+    import numpy as np
+
+    monkeypatch.chdir(tmp_path)  # the controller opens the value as given: from the working folder
+    (tmp_path / "ctl.py").write_text(textwrap.dedent(WEIGHTS_CTL))
+    np.savez(tmp_path / "w.npz", v=0.5)
+    raw = yaml.safe_load((SCENARIOS / "tow6_uniform.yaml").read_text())
+    raw["mode"] = {"type": "controller", "controller": "ctl.py:Ctl", "period_s": 0.1, "params": {"weights": "w.npz"}}
+    raw["simulation"]["duration_s"] = 1.0
+    p = tmp_path / "s.yaml"
+    p.write_text(yaml.safe_dump(raw))
+    out = tmp_path / "out"
+    run_sweep(p, ["terrain.xt=0.8,0.9"], out_dir=out, progress=False, plot=False)
+    inputs_now = json.loads((out / "sweep.json").read_text())["definition"]["inputs"]
+    assert str((tmp_path / "w.npz").resolve()) in inputs_now
+    np.savez(tmp_path / "w.npz", v=1.5)  # other weights
+    with pytest.raises(ScenarioError, match="w.npz. changed since it ran"):
+        run_sweep(p, ["terrain.xt=0.8,0.9"], out_dir=out, progress=False, plot=False)
+
+
+def test_a_file_over_the_hash_bound_is_keyed_by_size_and_time(tmp_path, monkeypatch):
+    monkeypatch.setattr(inputs, "MAX_HASHED_BYTES", 10)
+    (tmp_path / "big.bin").write_bytes(b"x" * 11)
+    (tmp_path / "small.bin").write_bytes(b"x" * 10)
+    h = input_hashes({"a": "big.bin", "b": "small.bin"}, [], tmp_path)
+    big, small = h[str(tmp_path / "big.bin")], h[str(tmp_path / "small.bin")]
+    assert big.startswith("size 11 bytes") and len(small) == 64
+    (tmp_path / "big.bin").write_bytes(b"y" * 12)
+    assert changed_inputs(h, input_hashes({"a": "big.bin", "b": "small.bin"}, [], tmp_path)) == [
+        str(tmp_path / "big.bin")
+    ]

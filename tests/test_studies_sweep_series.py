@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -13,6 +16,7 @@ from snoworm.studies.sweep import run_sweep
 from tests.sweep_helpers import TOW6, comparable
 
 SETS = ["terrain.xt=0.7,0.9", "tow.force_N=0,200", "simulation.duration_s=1.5"]
+NC = dict(plot=False, progress=False, series="netcdf")
 
 
 def _direct(xt, tow):
@@ -127,5 +131,118 @@ def test_netcdf4_with_units_on_every_variable_and_coordinate(tmp_path):
 def test_netcdf3_of_earlier_versions_still_loads(tmp_path):
     from snoworm.studies.sweep.series import load_series
 
-    xr.Dataset({"v_mps": ("time", np.arange(3.0))}).to_netcdf(tmp_path / "old.nc", engine="scipy")
-    assert load_series(tmp_path / "old.nc")["v_mps"].values.tolist() == [0.0, 1.0, 2.0]
+    run_sweep(TOW6, ["terrain.xt=0.7,0.9", "simulation.duration_s=1"], out_dir=tmp_path / "s", **NC)
+    new = load_series(tmp_path / "s" / "series.nc")
+    new.to_netcdf(tmp_path / "old.nc", engine="scipy")  # netCDF3, as earlier versions wrote it
+    old = load_series(tmp_path / "old.nc")
+    assert old["v_mps"].shape == new["v_mps"].shape == (2, 1, 21, 6)
+    np.testing.assert_array_equal(old["v_mps"].values, new["v_mps"].values)
+
+
+# ------------------------------------------------------------------ issue 30: series.nc read as a hostile file
+@pytest.fixture(scope="module")
+def nc_sweep(tmp_path_factory):
+    out = tmp_path_factory.mktemp("nc") / "s"
+    run_sweep(TOW6, ["terrain.xt=0.7,0.9", "simulation.duration_s=1"], out_dir=out, **NC)
+    return out
+
+
+def _copy(src, tmp_path):
+    import shutil
+
+    shutil.copytree(src, tmp_path / "s")
+    return tmp_path / "s"
+
+
+def test_a_fifo_series_nc_is_refused_at_once_by_a_reader_and_a_resume(nc_sweep, tmp_path):
+    """A FIFO at series.nc hung load_sweep(d).series() and a resume (open() waits for a writer)."""
+    import os
+    import subprocess
+    import sys
+
+    d = _copy(nc_sweep, tmp_path)
+    (d / "series.nc").unlink()
+    os.mkfifo(d / "series.nc")
+    lines = (d / "summary.csv").read_text().splitlines(keepends=True)
+    (d / "summary.csv").write_text("".join(lines[:2]))  # an interrupted sweep: one case to run
+    code = f"""
+import snoworm
+from snoworm.results.result import ResultFileError
+try:
+    snoworm.load_sweep({str(d)!r}).series()
+except ResultFileError as exc:
+    print("READ", exc)
+try:
+    snoworm.run_sweep({TOW6!r}, ["terrain.xt=0.7,0.9", "simulation.duration_s=1"], out_dir={str(d)!r},
+                      plot=False, progress=False, series="netcdf")
+except ResultFileError as exc:
+    print("RESUME", exc)
+"""
+    root = str(Path(__file__).resolve().parents[1])
+    r = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "PYTHONPATH": root},
+    )
+    assert r.returncode == 0, r.stderr
+    assert "READ" in r.stdout and "RESUME" in r.stdout and r.stdout.count("not a regular file") == 2, r.stdout
+
+
+def test_a_huge_dimension_in_series_nc_is_refused_before_allocating(nc_sweep, tmp_path):
+    """A tampered series.nc declaring a 10**12-sample time axis (chunks never written: a tiny
+    file) made xarray allocate terabytes (a MemoryError)."""
+    import h5netcdf
+
+    d = _copy(nc_sweep, tmp_path)
+    with h5netcdf.File(d / "series.nc", "w") as f:
+        f.dimensions = {"terrain_xt": 2, "simulation_duration_s": 1, "time": 10**12, "segment": 6, "link": 5}
+        for name, dims in (("ok", ()), ("n_time", ()), ("n_segments", ()), ("t_s", ("time",))):
+            f.create_variable(name, ("terrain_xt", "simulation_duration_s", *dims), "f8", chunks=True)
+        f.create_variable("x_m", ("terrain_xt", "simulation_duration_s", "time", "segment"), "f8", chunks=True)
+        f.create_variable("force_N", ("terrain_xt", "simulation_duration_s", "time", "link"), "f8", chunks=True)
+    assert (d / "series.nc").stat().st_size < 100_000
+    with pytest.raises(ResultFileError, match=r"series\.nc: its arrays would take .* more than a"):
+        load_sweep(d).series()
+
+
+def test_a_series_nc_of_another_sweep_shape_is_refused(nc_sweep, tmp_path):
+    d = _copy(nc_sweep, tmp_path)
+    other = tmp_path / "o"
+    run_sweep(TOW6, ["terrain.xt=0.6,0.7,0.9", "simulation.duration_s=1"], out_dir=other, **NC)
+    (d / "series.nc").write_bytes((other / "series.nc").read_bytes())
+    with pytest.raises(ResultFileError, match=r"series\.nc: its swept dimensions .*terrain_xt.: 3.* not the sweep's"):
+        load_sweep(d).series()
+
+
+def test_a_resume_adding_series_netcdf_runs_the_cases_without_series_again(tmp_path, caplog):
+    """A sweep run without --series netcdf, resumed with it, left its finished cases without series
+    in series.nc (ok = 0), silently; they are run again now, with a warning naming them."""
+    sets = ["terrain.xt=0.7,0.9", "simulation.duration_s=1"]
+    out = tmp_path / "s"
+    first = run_sweep(TOW6, sets, out_dir=out, plot=False, progress=False)
+    lines = (out / "summary.csv").read_text().splitlines(keepends=True)
+    (out / "summary.csv").write_text("".join(lines[:2]))  # interrupted after case 0
+    with caplog.at_level("WARNING", logger="snoworm"):
+        table = run_sweep(TOW6, sets, out_dir=out, **NC)
+    assert (
+        re.search(r"1 finished case\(s\) \(0+\) have no saved time series", caplog.text) and "run again" in caplog.text
+    )
+    ds = table.series()
+    assert ds["ok"].values.all() and np.isfinite(ds["x_m"].values).all()
+    assert comparable(table) == comparable(first)
+    assert len((out / "summary.csv").read_text().splitlines()) == 3  # no repeated line for case 0
+    again = run_sweep(TOW6, sets, out_dir=out, **NC)  # every case has its series: nothing re-runs
+    xr.testing.assert_identical(again.series(), ds)
+
+
+def test_a_resume_adding_save_cases_runs_the_cases_without_a_folder_again(tmp_path):
+    sets = ["terrain.xt=0.7,0.9", "simulation.duration_s=1"]
+    out = tmp_path / "s"
+    run_sweep(TOW6, sets, out_dir=out, plot=False, progress=False)
+    lines = (out / "summary.csv").read_text().splitlines(keepends=True)
+    (out / "summary.csv").write_text("".join(lines[:2]))
+    table = run_sweep(TOW6, sets, out_dir=out, plot=False, progress=False, save_cases=True)
+    assert sorted(p.name for p in (out / "cases").iterdir()) == [r["case_id"] for r in table.rows]
+    assert len((out / "summary.csv").read_text().splitlines()) == 3

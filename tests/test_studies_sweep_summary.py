@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 
 import numpy as np
 import pytest
@@ -157,3 +158,28 @@ def test_a_non_finite_metric_drops_its_line_with_a_warning(sweep_dir, tmp_path, 
         table = load_sweep(d)
     assert table.dropped == 1 and len(table) == len(lines) - 2  # the header and the tampered line
     assert all(np.isfinite(r["distance_m"]) for r in table.rows)
+
+
+# ------------------------------------------------------------------ issue 30
+def test_an_8_gb_sparse_summary_csv_is_one_result_file_error_and_exit_2(sweep_dir, tmp_path):
+    """An 8 GB summary.csv (a sparse file) was read whole: a MemoryError, an internal error."""
+    from snoworm.results.result import ResultFileError
+    from snoworm.studies.sweep.summary import MAX_SUMMARY_BYTES
+
+    d = _copy(sweep_dir, tmp_path)
+    os.truncate(d / "summary.csv", 8 * 2**30)
+    assert MAX_SUMMARY_BYTES < 8 * 2**30
+    with pytest.raises(ResultFileError, match=r"summary\.csv is 8589934592 bytes, more than the"):
+        load_sweep(d)
+    r = CliRunner().invoke(main, ["sweep", TOW6, "--set", "terrain.xt=0.7,0.9", "--set", SHORT, "--out", str(d)])
+    assert r.exit_code == 2 and "internal error" not in r.output and "summary.csv" in r.output, r.output[-500:]
+
+
+def test_load_sweep_keeps_the_first_line_of_a_repeated_case_and_says_so(sweep_dir, tmp_path):
+    d = _copy(sweep_dir, tmp_path)
+    lines = (d / "summary.csv").read_text().splitlines(keepends=True)
+    (d / "summary.csv").write_text("".join(lines + lines[1:2] + lines[1:2]))  # case 0 three times
+    with pytest.warns(UserWarning, match=r"2 line\(s\) repeat a case already listed \(0+, 0+\); the first"):
+        table = load_sweep(d)
+    assert len(table) == 2 and [r["case_id"] for r in table.rows] == sorted({r["case_id"] for r in table.rows})
+    assert table.dropped == 2

@@ -13,6 +13,7 @@ from __future__ import annotations
 import functools
 import logging
 import os
+import re
 import shlex
 import signal
 import sys
@@ -22,6 +23,7 @@ import click
 __all__ = [
     "EXIT_SOLVER",
     "EXIT_INPUT",
+    "bounded",
     "fail",
     "Terminated",
     "handle_errors",
@@ -51,9 +53,21 @@ EXIT_SOLVER = 1
 EXIT_INPUT = 2
 
 
+#: A run of non-blank characters longer than this in a message (a path, a value) is cut in its middle.
+MAX_WORD_CHARS = 240
+
+
+def bounded(msg) -> str:
+    """``msg`` with every run of over :data:`MAX_WORD_CHARS` non-blank characters (a 4 kB path
+    echoed once or three times) cut in its middle (``...[N characters]...``), its ends kept."""
+    from ..config.schema import short_path  # lazy: start-up
+
+    return re.sub(rf"\S{{{MAX_WORD_CHARS + 1},}}", lambda m: short_path(m.group(0), MAX_WORD_CHARS), str(msg))
+
+
 def fail(msg, code):
-    """Print ``Error: msg`` to stderr and exit with status ``code``."""
-    click.echo(f"Error: {msg}", err=True)
+    """Print ``Error: msg`` to stderr (long words cut, :func:`bounded`) and exit with status ``code``."""
+    click.echo(f"Error: {bounded(msg)}", err=True)
     sys.exit(code)
 
 
@@ -82,12 +96,13 @@ def handle_errors(fn):
         from ..config.schema import ScenarioError  # lazy: start-up
         from ..infra.folders import OutputError  # lazy: start-up
         from ..modes.controller import ControllerError  # lazy: start-up
+        from ..results.result import ResultFileError  # lazy: start-up
         from ..simulation.guard import SolverError  # lazy: start-up
 
         old = _catch_sigterm()
         try:
             return fn(*a, **kw)
-        except (ScenarioError, OutputError) as exc:
+        except (ScenarioError, OutputError, ResultFileError) as exc:  # bad input, a folder not as written
             fail(str(exc), EXIT_INPUT)
         except SolverError as exc:
             fail(f"solver failure: {exc}", EXIT_SOLVER)
@@ -144,9 +159,16 @@ def _check_out(ctx, param, value):
         )
     from ..infra.folders import earlier_output_note  # lazy: start-up
 
-    note = earlier_output_note(value, resumes=ctx.command.name == "sweep") if value is not None else None
+    try:
+        note = earlier_output_note(value, resumes=ctx.command.name == "sweep") if value is not None else None
+    except (OSError, ValueError) as exc:  # a name too long, a NUL byte
+        raise click.BadParameter(
+            bounded(
+                f"{value} cannot be used as a folder ({getattr(exc, 'strerror', None) or exc}). Give e.g. --out results/."
+            )
+        ) from None
     if note:  # re-running into the same --out: say so, in one line
-        click.echo(note, err=True)
+        click.echo(bounded(note), err=True)
     return value
 
 
@@ -220,11 +242,25 @@ figure_size_option = click.option(
 )
 
 
+def _check_allowed(ctx, param, value):
+    """Refuse an empty ``--allow-code ''`` (it would allow the whole working folder's code)."""
+    for p in value:
+        if not p.strip():
+            raise click.BadParameter(
+                "an empty path would allow the code of the whole working folder. Name the file or folder "
+                "whose controller code may run (e.g. --allow-code ./controllers).",
+                ctx=ctx,
+                param=param,
+            )
+    return value
+
+
 allow_code_option = click.option(
     "--allow-code",
     "allow_code",
     multiple=True,
     type=click.Path(),
+    callback=_check_allowed,
     metavar="PATH",
     help="Let controller code under PATH (a file or folder) run although it lies outside the scenario's folder "
     "(repeatable). A scenario with a controller is a program: see docs/controllers.md.",
@@ -238,7 +274,7 @@ def code_check(sc, allow_code, verb=None):
 
         notice = code_notice(sc, allow_code)
         if verb:
-            click.echo(f"snoworm: {verb} {notice}", err=True)
+            click.echo(bounded(f"snoworm: {verb} {notice}"), err=True)
 
 
 def configure_logging(verbose: bool):

@@ -84,7 +84,7 @@ def groundtruth(data_path, out_dir, parameter_set_name, model_file, no_plot, plo
 @click.option(
     "--points",
     "n_points",
-    type=click.IntRange(min=3),
+    type=click.IntRange(min=3, max=100_001),  # groundtruth.MAX_CURVE_POINTS (not imported: start-up)
     default=1001,
     show_default=True,
     help="Number of slip values on [0, 1].",

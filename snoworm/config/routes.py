@@ -15,13 +15,14 @@ exit status 2 at the command line): finite numbers, strictly increasing distance
 from __future__ import annotations
 
 import csv
+import errno
 import math
 from dataclasses import dataclass, field as dc_field
 from pathlib import Path
 
 from ..infra.files import FileProblem, read_regular_file
 from ..slope import MAX_GRADE_DEG, ElevationProfile
-from .schema import Config, ScenarioError, field
+from .schema import Config, ScenarioError, field, quote, short_path
 
 __all__ = [
     "check_grade_inputs",
@@ -125,8 +126,23 @@ def resolve_route(terrain_raw: dict, base_dir) -> dict:
     route = terrain_raw.get("route")
     if isinstance(route, str) and route:
         p = Path(route)
-        return {**terrain_raw, "route": str((p if p.is_absolute() else Path(base_dir) / p).resolve())}
+        try:
+            return {**terrain_raw, "route": str((p if p.is_absolute() else Path(base_dir) / p).resolve())}
+        except (OSError, RuntimeError, ValueError) as exc:  # a symlink loop, a NUL byte, a name too long
+            raise ScenarioError(
+                f"terrain.route: {quote(route, 200)} cannot be used as a path ({_why(exc)}); "
+                "give a CSV route file relative to the scenario's folder."
+            ) from None
     return terrain_raw
+
+
+def _why(exc) -> str:
+    """What is wrong with a path, from the exception a path operation raised."""
+    if isinstance(exc, ValueError):
+        return "it holds a NUL byte" if "null" in str(exc) else quote(str(exc), 100)
+    if isinstance(exc, RuntimeError) or getattr(exc, "errno", None) == errno.ELOOP:
+        return "a symbolic link loop"
+    return getattr(exc, "strerror", None) or quote(str(exc), 100)
 
 
 def check_elevation_table(pairs, where: str) -> None:
@@ -186,6 +202,31 @@ def _number(text, where):
     return v
 
 
+#: Longest cell of a route file (characters): csv's own field limit, stated here.
+MAX_ROUTE_CELL = 131_072
+
+
+def _csv_rows(text: str, where: str) -> list:
+    """(line number, cells) of the rows of a route file's text that are not empty or comments."""
+    rows, reader = [], csv.reader(text.splitlines())
+    while True:
+        try:
+            r = next(reader)
+        except StopIteration:
+            return rows
+        except csv.Error as exc:  # a cell over the field limit, a NUL byte
+            detail = (
+                f"a cell is longer than {MAX_ROUTE_CELL} characters"
+                if "field larger" in str(exc)
+                else quote(str(exc), 100)
+            )
+            raise ScenarioError(
+                f"{where}, line {reader.line_num}: not a CSV row ({detail}); a route file holds short numbers."
+            ) from None
+        if r and not r[0].lstrip().startswith("#"):
+            rows.append((reader.line_num, r))
+
+
 def read_route(path) -> Route:
     """Read a route CSV: a header with ``distance_m``, ``elevation_m`` and ``xt`` (other columns ignored),
     then one row per survey point; lines starting with ``#`` are comments (e.g. the provenance).
@@ -199,19 +240,22 @@ def read_route(path) -> Route:
         ``terrain.route: FILE, line L, column C (name): ...``.
     """
     p = Path(path)
-    where = f"terrain.route: {p}"
+    where = f"terrain.route: {short_path(p)}"
     try:
         data = read_regular_file(p, MAX_ROUTE_BYTES)
-        text = data.decode("utf-8")
+        # utf-8-sig: a spreadsheet's UTF-8 byte-order mark is not part of the first column's name
+        text = data.decode("utf-8-sig")
     except FileNotFoundError:
         raise ScenarioError(
             f"{where}: no such file; give a CSV route file relative to the scenario's folder."
         ) from None
     except FileProblem as exc:
         raise ScenarioError(f"{where}: the route file is {exc}; give a CSV file.") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"{where}: cannot read it ({exc.__class__.__name__}: {exc}).") from None
-    rows = [(n, r) for n, r in enumerate(csv.reader(text.splitlines()), 1) if r and not r[0].lstrip().startswith("#")]
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{where}: not UTF-8 text (byte {exc.start}); save the route as UTF-8 CSV.") from None
+    except (OSError, RuntimeError, ValueError) as exc:
+        raise ScenarioError(f"{where}: cannot read it ({_why(exc)}).") from None
+    rows = _csv_rows(text, where)
     if not rows:
         raise ScenarioError(f"{where}: empty; expected a header {','.join(ROUTE_COLUMNS)} and rows of numbers.")
     hline, header = rows[0]

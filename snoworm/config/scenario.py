@@ -22,7 +22,7 @@ from . import yamlio
 from .mode_registry import MODES, ModeConfig, build_mode_config
 from .params import PARAMETER_SETS, parameter_entries, read_model_file, source_notes
 from .routes import check_vehicle_on_grade, resolve_route
-from .schema import Config, ScenarioError, build, dump, field, internal, quote, short_key, suggest
+from .schema import Config, ScenarioError, build, dump, field, internal, quote, short_key, short_path, suggest
 from .sections import (
     MAX_OUTPUT_SAMPLES,
     LinkConfig,
@@ -397,8 +397,14 @@ def scenario_path(name_or_path) -> Path:
     (reading it then reports the missing file, with the shipped names).
     """
     path = Path(name_or_path)
-    if path.exists():
-        return path
+    try:
+        if path.exists():
+            return path
+    except (OSError, ValueError) as exc:  # a name too long, a NUL byte
+        raise ScenarioError(
+            f"{short_path(path)}: cannot be used as a scenario path ({getattr(exc, 'strerror', None) or exc}). "
+            "Give a scenario file or a shipped scenario's name."
+        ) from None
     text = str(name_or_path)
     name = text[:-5] if text.endswith(".yaml") else text
     if "/" not in text and "\\" not in text:
@@ -414,7 +420,7 @@ def read_scenario_yaml(name_or_path):
     try:
         return read_yaml(path), path
     except ScenarioError as exc:
-        if path.exists():
+        if os.path.lexists(path):
             raise
         names = ", ".join(shipped_scenarios())
         raise ScenarioError(

@@ -20,6 +20,7 @@ import functools
 import math
 import numbers
 import operator
+import os
 import reprlib
 import types
 import typing
@@ -36,6 +37,7 @@ __all__ = [
     "dump",
     "suggest",
     "quote",
+    "short_path",
     "short_key",
     "check_field",
     "domain_text",
@@ -136,6 +138,16 @@ def suggest(word: str, options) -> str:
     if not close:
         return ""
     return " Did you mean " + " or ".join(repr(c) for c in close) + "?"
+
+
+def short_path(path, limit: int = 200) -> str:
+    """``path`` as text for a message, cut in its middle to about ``limit`` characters (its head
+    and its file name kept): a 4 kB path is not echoed whole, once or several times."""
+    text = os.fspath(path) if isinstance(path, os.PathLike) else str(path)
+    if len(text) <= limit:
+        return text
+    tail = max(limit * 2 // 3, 1)
+    return f"{text[: limit - tail]}...[{len(text) - limit} characters]...{text[-tail:]}"
 
 
 def quote(value, limit: int = 100) -> str:

@@ -35,6 +35,11 @@ MAX_INT_CHARS = 4300  #: longest int text: Python's decimal limit (sexagesimal 1
 
 _SYNTAX_HINT = "Fix the syntax (indentation, colons, quotes)."
 _BOMB = f"more than {MAX_NODES} values after expanding aliases: too many aliases / nodes (a YAML alias bomb?)."
+_LONG = (
+    f"more than {MAX_NODES} values: too long for a list written inline (a table of tens of thousands of "
+    "points?). Give a long elevation or X_t table as a route file: terrain.route: FILE.csv with the columns "
+    "distance_m,elevation_m,xt (docs/model.md section 7)."
+)
 _DEEP = f"nested more than {MAX_DEPTH} levels deep (counting aliases); a scenario needs only a few levels."
 _SKIP_KEY_TAGS = ("tag:yaml.org,2002:merge", "tag:yaml.org,2002:value")  # '<<' and '=' keys
 
@@ -64,7 +69,8 @@ class _Loader(yaml.SafeLoader):
         self._composed, self._depth = self._composed + 1, self._depth + nested
         try:
             if self._composed > MAX_NODES or self._depth > MAX_DEPTH:
-                raise _error(self.source, event.start_mark, _BOMB if self._composed > MAX_NODES else _DEEP)
+                # composing counts an alias once: past the budget here, the text itself is that long
+                raise _error(self.source, event.start_mark, _LONG if self._composed > MAX_NODES else _DEEP)
             return super().compose_node(parent, index)
         finally:
             self._depth -= nested

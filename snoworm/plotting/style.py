@@ -33,7 +33,7 @@ import numpy as np
 from matplotlib._pylab_helpers import Gcf
 from matplotlib.figure import Figure
 
-from ..config.schema import split_unit
+from ..config.schema import quote, split_unit
 from ..infra.folders import atomic_path
 
 __all__ = [
@@ -100,7 +100,15 @@ def parse_size(size):
         if not m:
             raise ValueError(f"figure size {size!r}: expected column, page or WxH in inches (e.g. 3.5x2.5)")
         size = (float(m.group(1)), float(m.group(2)))
-    w, h = (float(v) for v in size)
+    try:
+        if isinstance(size, (bool, bytes, dict)) or any(isinstance(v, (bool, str, bytes)) for v in size):
+            raise TypeError("not a pair of numbers")
+        w, h = (float(v) for v in size)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(
+            f"figure size {quote(size, 60)}: expected column, page, 'WxH' in inches (e.g. '3.5x2.5') or a "
+            "(width, height) pair of numbers in inches"
+        ) from None
     if not (1.0 <= w <= 40.0 and 1.0 <= h <= 40.0):
         raise ValueError(f"figure size {w:g}x{h:g} in: width and height must lie in 1..40 inches")
     return (w, h)

@@ -268,7 +268,14 @@ class Result:
         ------
         snoworm.infra.folders.OutputError
             Unusable ``out_dir`` or an I/O failure (nothing is written then).
+        ValueError
+            A ``figure_size`` that is not column, page, 'WxH' or a (width, height) pair (checked
+            before anything is written).
         """
+        if plot and figure_size is not None:
+            from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; only when plotting
+
+            plotting.parse_size(figure_size)
         with output_folder(out_dir, overwrite, command) as stage:
             copies = copy_inputs(self.scenario, stage)  # the folder holds what the run read
             paths = [

@@ -26,7 +26,7 @@ from scipy.optimize import brentq
 from .. import steady, terrain
 from ..config.params import PARAMETER_SETS, parameter_set, read_model_file
 from ..config.scenario import SegmentConfig, TerrainConfig, TerrainModelConfig
-from ..config.schema import ScenarioError, build, check_field, dump, suggest
+from ..config.schema import ScenarioError, build, check_field, dump, quote, suggest
 from ..infra.csvwriter import csv_text, write_csv
 from ..infra.folders import output_folder, relocate
 from ..results.copies import write_copies
@@ -278,6 +278,11 @@ def _net_per_wheel_N(i, X, F_n, tp):
     return terrain.traction_force(i, F_n, X, tp) - terrain.resistance_force(np.inf, F_n, X, tp)
 
 
+#: Most slip values of the terrain curves (``--points``) and most rows (X_t values x slip values).
+MAX_CURVE_POINTS = 100_001
+MAX_CURVE_ROWS = 2_000_000
+
+
 def terrain_curves(xts, seg, tp: TerrainParams, n_points: int = 1001) -> TerrainCurves:
     """Tractive, resistive and net longitudinal force per wheel against slip (paper Figure 3).
 
@@ -296,6 +301,20 @@ def terrain_curves(xts, seg, tp: TerrainParams, n_points: int = 1001) -> Terrain
     """
     if len(list(xts)) == 0:
         raise ScenarioError("--xt: give one or more terrain coefficients X_t in (0, 1].")
+    if (
+        isinstance(n_points, bool)
+        or not isinstance(n_points, (int, np.integer))
+        or not 3 <= n_points <= MAX_CURVE_POINTS
+    ):
+        raise ScenarioError(
+            f"--points: expected a whole number of slip values from 3 to {MAX_CURVE_POINTS} (a slip step of "
+            f"1e-5 resolves every curve), got {quote(n_points, 40)}."
+        )
+    if len(list(xts)) * n_points > MAX_CURVE_ROWS:
+        raise ScenarioError(
+            f"--points: {len(list(xts))} X_t values x {n_points} slip values give "
+            f"{len(list(xts)) * n_points} rows, over the {MAX_CURVE_ROWS} allowed; use fewer --points or --xt."
+        )
     xt = np.asarray([check_field(TerrainConfig, "xt", x, "--xt") for x in xts], float)
     _, F_n, _ = steady.segment_geometry(seg)
     i = np.linspace(0.0, 1.0, int(n_points))

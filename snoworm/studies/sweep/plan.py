@@ -11,14 +11,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from dataclasses import dataclass, field as dc_field
 
 from ..._version import __version__
 from ...config.scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
 from ...config.schema import ScenarioError, short_key
 from ...infra.csvwriter import canonical_json
-from ...modes.codeload import allow_code as allowed_code
+from ...modes.codeload import allow_code as allowed_code, allowed_paths
 from ...modes.controller import trust_problem_of
 from .cases import build_cases
 from .inputs import input_hashes
@@ -92,7 +91,7 @@ def plan_sweep(scenario, sets, zip_, save_cases, out_dir, jobs, keep=False, allo
     ``keep``: the cases run in this process or its own worker pool; keep their validated
     scenarios (up to :data:`KEEP_VALIDATED_MAX` cases) for the tasks.  ``allow_code``: see
     ``run_sweep`` (a controller that may not run refuses the whole sweep here)."""
-    allow = [os.path.realpath(os.path.expanduser(str(p))) for p in (allow_code or ())]
+    allow = list(allowed_paths(allow_code))  # ScenarioError for an empty path
     with allowed_code(allow):
         plan = _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep)
     plan.allow_code = allow

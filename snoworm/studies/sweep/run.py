@@ -10,6 +10,7 @@ by case id (and a plot).
 from __future__ import annotations
 
 import json
+import logging
 import os
 import sys
 from contextlib import ExitStack
@@ -27,7 +28,7 @@ from .executors import BatchExecutor, DaskExecutor, ProcessExecutor, SerialExecu
 from .figures import write_plot
 from .metrics import METRIC_COLUMNS, SweepTask, case_metrics, one_line, run_case
 from .plan import SweepPlan, plan_sweep
-from .series import SERIES_FORMATS, case_series_path, combine_series
+from .series import SERIES_FORMATS, case_series_path, cases_with_series, combine_series, expected_dims
 from .summary import SweepTable, prepare_dir
 
 __all__ = ["run_sweep"]
@@ -206,6 +207,7 @@ def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
                 done = prepare_dir(
                     out, plan.definition, plan.columns, plan.cases, plan.axes, plan.source, overwrite=opts.overwrite
                 )
+                done = _rerun_without_series(plan, done, out, opts)
                 write_manifest(out, opts.command, status="running")
             except BaseException:
                 if own:
@@ -216,6 +218,29 @@ def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
             lease.check("running a sweep in")  # the folder is still the one locked: else no manifest
             write_manifest(out, opts.command, status="complete")
         return table
+
+
+def _rerun_without_series(plan, done, out, opts: _Options) -> dict:
+    """``done`` without the finished ``ok`` cases whose time series are missing when this sweep
+    keeps them (a resume adding ``--series netcdf`` or ``--save-cases``): those cases run again
+    (their rows removed from ``summary.csv`` first), and a warning says how many."""
+    if not opts.keep_series or not done:
+        return done
+    have = cases_with_series(out, plan.cases, opts.keep_series, expected_dims(plan.axes, opts.zip_))
+    missing = [i for i, r in done.items() if r.get("status") == "ok" and i not in have]
+    if not missing:
+        return done
+    keep = {i: r for i, r in done.items() if i not in missing}
+    SweepTable(plan.columns, list(keep.values()), plan.keys).to_csv(out / "summary.csv")
+    ids = ", ".join(plan.cases[i].case_id for i in sorted(missing)[:5]) + (", ..." if len(missing) > 5 else "")
+    logging.getLogger("snoworm").warning(
+        "%s: %d finished case(s) (%s) have no saved time series (the sweep ran without keeping them); "
+        "they are run again so that every case has its series.",
+        out,
+        len(missing),
+        ids,
+    )
+    return keep
 
 
 def _mkdir(out: Path):

@@ -29,15 +29,18 @@ import errno
 import json
 import os
 import re
+import stat
 import typing
 from pathlib import Path
 
 import numpy as np
 
 from ...config.scenario import Scenario
-from ...config.schema import split_unit
+from ...config.schema import quote, short_path, split_unit
+from ...config.sections import MAX_SEGMENTS
 from ...infra.folders import OutputError, atomic_path
 from ...results.frames import long_name_of, require_xarray, units_of, versions
+from ...results.result import ResultFileError
 
 __all__ = [
     "SERIES_FORMATS",
@@ -46,6 +49,10 @@ __all__ = [
     "case_series_path",
     "combine_series",
     "load_series",
+    "read_series",
+    "cases_with_series",
+    "expected_dims",
+    "MAX_SERIES_BYTES",
     "dim_names",
     "key_attrs",
     "COMPRESSION",
@@ -98,12 +105,6 @@ def key_attrs(key) -> dict:
     return {"units": unit or suffix_unit or "1", "long_name": doc or words, "key": key}
 
 
-def _engine(path) -> str:
-    """``scipy`` for a netCDF3 file (``CDF`` magic, earlier versions), ``h5netcdf`` otherwise."""
-    with open(path, "rb") as fh:
-        return "scipy" if fh.read(3) == b"CDF" else "h5netcdf"
-
-
 def case_series_path(out: Path, case_id: str, series: str) -> str:
     """Where a case's series go: ``cases/<case_id>/`` (folders) or ``cases/<case_id>.npz`` (netcdf)."""
     return str(out / "cases" / (case_id + (".npz" if series == "netcdf" else "")))
@@ -129,31 +130,38 @@ def save_series(result, save_dir) -> None:
         np.savez(fh, **arrays)
 
 
-def _from_old(path: Path, n_cases: int) -> dict:
-    """Case index -> arrays of the cases already in an earlier ``series.nc`` (padding trimmed)."""
-    xr = require_xarray()
-    out = {}
-    with xr.open_dataset(path, engine=_engine(path)) as ds:
-        ds = ds.load()
+def _from_old(path: Path, n_cases: int, expected=None) -> dict:
+    """Case index -> arrays of the cases already in an earlier ``series.nc`` (padding trimmed);
+    ResultFileError naming the file if it is not as a sweep writes it (:func:`read_series`)."""
+    ds = read_series(path, expected)
+    try:
 
-    def flat(v):
-        return np.asarray(ds[v].values).reshape((n_cases,) + ds[v].shape[ds["ok"].ndim :])
+        def flat(v):
+            return np.asarray(ds[v].values).reshape((n_cases,) + ds[v].shape[ds["ok"].ndim :])
 
-    ok, nt, ns = flat("ok"), flat("n_time"), flat("n_segments")
-    names = [v for v in ds.data_vars if "time" in ds[v].dims and v != "t_s"]
-    for i in np.nonzero(ok)[0]:
-        a = {"t_s": flat("t_s")[i, : nt[i]]}
-        for v in names:
-            kind = "segments" if "segment" in ds[v].dims else "links"
-            a[f"{kind}/{ds[v].attrs['column']}"] = flat(v)[i, : nt[i], : ns[i] - (kind == "links")]
-        out[int(i)] = a
+        ok, nt, ns = flat("ok"), flat("n_time"), flat("n_segments")
+        T, S = ds.sizes["time"], ds.sizes["segment"]
+        if not (np.isin(ok, (0, 1)).all() and ((nt >= 0) & (nt <= T)).all() and ((ns >= 1) & (ns <= S)).all()):
+            raise ValueError(f"ok, n_time or n_segments outside 0/1, 0..{T}, 1..{S}")
+        names = [v for v in ds.data_vars if "time" in ds[v].dims and v != "t_s"]
+        out = {}
+        for i in np.nonzero(ok)[0]:
+            a = {"t_s": flat("t_s")[i, : nt[i]]}
+            for v in names:
+                kind = "segments" if "segment" in ds[v].dims else "links"
+                a[f"{kind}/{ds[v].attrs['column']}"] = flat(v)[i, : nt[i], : ns[i] - (kind == "links")]
+            out[int(i)] = a
+        if out and any("segments/x_m" not in a for a in out.values()):
+            raise ValueError("no x_m variable")
+    except (KeyError, ValueError, TypeError, IndexError) as exc:
+        raise ResultFileError(f"{short_path(path)}: not a series file snoworm wrote ({quote(str(exc), 160)})") from None
     return out
 
 
-def _gather(out: Path, cases) -> dict:
+def _gather(out: Path, cases, expected=None) -> dict:
     """Case index -> arrays, from the ``.npz`` files and an earlier ``series.nc``."""
     old = out / SERIES_FILE
-    per_case = _from_old(old, len(cases)) if old.exists() else {}
+    per_case = _from_old(old, len(cases), expected) if os.path.lexists(old) else {}
     for c in cases:
         f = out / "cases" / f"{c.case_id}.npz"
         if f.exists():
@@ -198,7 +206,7 @@ def combine_series(out, axes, cases, zip_, columns, attrs) -> Path:
     xr = require_xarray()
     out = Path(out)
     n = len(cases)
-    per_case = _gather(out, cases)
+    per_case = _gather(out, cases, expected_dims(axes, zip_))
     t, data, nt, ns = _stack(per_case, n, columns)
     names = dim_names([a.key for a in axes])
     if zip_:
@@ -298,9 +306,109 @@ def _check_space(folder: Path, need: int) -> None:
         raise OSError(errno.ENOSPC, f"No space left on device (series.nc needs up to {need} bytes)", str(folder))
 
 
-def load_series(path):
-    """The ``series.nc`` of a sweep as an :class:`xarray.Dataset` (loaded into memory, file closed;
-    netCDF4 via h5netcdf, or the netCDF3 of earlier versions)."""
+def expected_dims(axes, zip_) -> dict:
+    """The sizes of the swept dimensions of a sweep's ``series.nc``: ``{name: size}``.  ``axes``:
+    objects with ``key`` and ``values``, or ``(key, number of values)`` pairs."""
+    pairs = [(a.key, len(a.values)) if hasattr(a, "key") else (a[0], int(a[1])) for a in axes]
+    if zip_:
+        return {"case": pairs[0][1] if pairs else 0}
+    names = dim_names([k for k, _ in pairs])
+    return {names[k]: n for k, n in pairs}
+
+
+#: Largest ``series.nc`` opened (bytes).
+MAX_SERIES_BYTES = 64 * 2**30
+#: Most bytes a ``series.nc`` may expand to per byte of file (zlib's ceiling is about 1032; a
+#: larger claim is a tampered header: an array of unwritten chunks, a dimension of 10**12).
+MAX_EXPANSION = 1100
+#: Variables every ``series.nc`` holds, with the dimensions after the swept ones.
+_REQUIRED = {"t_s": ("time",), "ok": (), "n_time": (), "n_segments": ()}
+
+
+def _engine(fh) -> str:
+    """``scipy`` for a netCDF3 file (``CDF`` magic, earlier versions), ``h5netcdf`` otherwise."""
+    magic = fh.read(3)
+    fh.seek(0)
+    return "scipy" if magic == b"CDF" else "h5netcdf"
+
+
+def _check_layout(ds, size: int, expected) -> str | None:
+    """What is wrong with the dimensions and variables of an opened ``series.nc`` (None: nothing),
+    checked before any array is read."""
+    sizes = dict(ds.sizes)
+    swept = [d for d in sizes if d not in ("time", "segment", "link")]
+    if expected is not None and {d: sizes[d] for d in swept} != dict(expected):
+        return f"its swept dimensions {quote({d: sizes[d] for d in swept}, 160)} are not the sweep's {quote(dict(expected), 160)}"
+    S = sizes.get("segment", 0)
+    if not 1 <= S <= MAX_SEGMENTS or sizes.get("link") != S - 1:
+        return f"segment/link dimensions {sizes.get('segment')}/{sizes.get('link')} (expected 1..{MAX_SEGMENTS} segments, one link fewer)"
+    total = 0
+    for name, var in ds.variables.items():
+        if var.dtype.kind not in "biuf" and name not in ds.coords:
+            return f"variable {quote(name, 60)} is not numeric ({var.dtype})"
+        total += int(np.prod([sizes[d] for d in var.dims], dtype=float)) * var.dtype.itemsize
+    for name, tail in _REQUIRED.items():
+        if name not in ds.variables or tuple(ds[name].dims) != tuple(swept) + tail:
+            return f"no variable {name} over the dimensions {quote(tuple(swept) + tail, 120)}"
+    if total > MAX_EXPANSION * size + 2**26:
+        return f"its arrays would take {total:.3g} bytes, more than a {size}-byte compressed file can hold"
+    return None
+
+
+def read_series(path, expected=None, only=None):
+    """A sweep's ``series.nc`` as an :class:`xarray.Dataset`, loaded into memory and the file closed.
+
+    Opened as the other readers open a user's file: a regular file (a FIFO or a device is refused
+    unopened, never waited on) of at most :data:`MAX_SERIES_BYTES`; its dimensions are checked
+    (``expected``: the swept dimensions' sizes, :func:`expected_dims`; at most ``MAX_SEGMENTS``
+    segments) and its arrays' size against what the file can hold before a value is read.
+    ``only``: the names of the variables to load (default: all).
+
+    Raises
+    ------
+    snoworm.results.ResultFileError
+        Naming the file and what is wrong with it (any error of the netCDF libraries included).
+    """
     xr = require_xarray()
-    with xr.open_dataset(path, engine=_engine(path)) as ds:
-        return ds.load()
+    where = short_path(path)
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    except FileNotFoundError:
+        raise ResultFileError(f"{where}: missing") from None
+    except (OSError, ValueError) as exc:
+        raise ResultFileError(f"{where}: cannot be opened ({getattr(exc, 'strerror', None) or exc})") from None
+    with os.fdopen(fd, "rb") as fh:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise ResultFileError(f"{where}: not a regular file (a FIFO, a device or a folder)")
+        if st.st_size > MAX_SERIES_BYTES:
+            raise ResultFileError(f"{where}: {st.st_size} bytes, more than the {MAX_SERIES_BYTES} accepted")
+        try:
+            with xr.open_dataset(fh, engine=_engine(fh)) as ds:
+                problem = _check_layout(ds, st.st_size, expected)
+                if problem is None:
+                    return (ds[list(only)] if only else ds).load()
+        except ResultFileError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - h5py/h5netcdf/scipy/xarray on a tampered file: bad input
+            problem = f"not a netCDF file snoworm wrote ({type(exc).__name__}: {quote(str(exc), 160)})"
+    raise ResultFileError(f"{where}: {problem}")
+
+
+def cases_with_series(out, cases, keep_series, expected=None) -> set:
+    """The indices of ``cases`` whose time series ``out`` holds already: in ``series.nc`` or as a
+    ``cases/<case_id>.npz`` (``netcdf``), or as a ``cases/<case_id>/`` folder (``folders``)."""
+    out = Path(out)
+    if keep_series == "netcdf":
+        have = set()
+        if os.path.lexists(out / SERIES_FILE):
+            ok = np.asarray(read_series(out / SERIES_FILE, expected, only=("ok",))["ok"].values).reshape(-1)
+            have = {i for i in range(min(ok.size, len(cases))) if ok[i] == 1}
+        return have | {c.index for c in cases if (out / "cases" / f"{c.case_id}.npz").is_file()}
+    return {c.index for c in cases if (out / "cases" / c.case_id).is_dir()}
+
+
+def load_series(path, expected=None):
+    """The ``series.nc`` of a sweep as an :class:`xarray.Dataset` (loaded into memory, file closed;
+    netCDF4 via h5netcdf, or the netCDF3 of earlier versions); see :func:`read_series`."""
+    return read_series(path, expected)

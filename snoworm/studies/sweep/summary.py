@@ -29,7 +29,7 @@ from ...results.result import ResultFileError, read_back
 from .figures import plot_table
 from .inputs import changed_inputs
 from .metrics import METRIC_COLUMNS
-from .series import SERIES_FILE, load_series
+from .series import SERIES_FILE, expected_dims, load_series
 from .spec import parse_scalar
 
 __all__ = ["SweepTable", "summary_columns", "read_summary", "prepare_dir", "load_sweep"]
@@ -37,6 +37,8 @@ __all__ = ["SweepTable", "summary_columns", "read_summary", "prepare_dir", "load
 
 #: Largest sweep.json read (bytes): the definition lists every axis value.
 MAX_SWEEP_JSON = 64 * 2**20
+#: Largest summary.csv read (bytes): 10 kB a row for the most cases a sweep has (100 000).
+MAX_SUMMARY_BYTES = 2**30
 
 
 def summary_columns(axes, n_links) -> list:
@@ -123,7 +125,7 @@ class SweepTable:
                 f"no {SERIES_FILE} in {self.out_dir}: run the sweep with --save-cases "
                 "--series netcdf (series='netcdf') to keep every case's series in one file"
             )
-        return load_series(path)
+        return load_series(path, getattr(self, "series_dims", None))
 
     def plot(self, metric=None, *, size=None, ax=None, fig=None):
         """The sweep's standard figure (:func:`snoworm.studies.sweep.figures.plot_table`): ``metric``
@@ -184,6 +186,8 @@ def load_sweep(out_dir) -> SweepTable:
         keys = [a["key"] for a in definition.get("axes", [])] or None
         if keys is not None and not all(isinstance(k, str) for k in keys):
             raise TypeError("axis keys are not text")
+        axes = [(a["key"], len(a["values"])) for a in definition.get("axes", [])]
+        dims = expected_dims(axes, bool(definition.get("zip"))) if axes else None
     except ResultFileError:
         raise
     except (ValueError, RecursionError, AttributeError, TypeError, KeyError):
@@ -191,14 +195,35 @@ def load_sweep(out_dir) -> SweepTable:
     header, rows, dropped = read_summary(spath, keys)
     if header[:2] != ["case_id", "case_key"] or "status" not in header or (keys and header[2 : 2 + len(keys)] != keys):
         raise ResultFileError(f"{spath}: its columns {quote(header)} are not those of the sweep in {dpath}")
+    rows, twice = _first_of_each_case(rows)
     table = SweepTable(header, rows, keys or _keys_from_header(header), out_dir=out)
-    table.dropped = dropped
+    table.series_dims = dims  # the swept dimensions series.nc must have (checked when it is read)
+    table.dropped = dropped + len(twice)
     if dropped:
         warnings.warn(
             f"{spath}: {dropped} line(s) dropped (truncated or malformed); the table holds the {len(rows)} others",
             stacklevel=2,
         )
+    if twice:
+        warnings.warn(
+            f"{spath}: {len(twice)} line(s) repeat a case already listed ({', '.join(twice[:5])}"
+            f"{', ...' if len(twice) > 5 else ''}); the first line of each case is kept, the repeats dropped "
+            "(as a resume does)",
+            stacklevel=2,
+        )
     return table
+
+
+def _first_of_each_case(rows) -> tuple:
+    """(the first row of each case id, the case ids of the repeated rows dropped)."""
+    seen, kept, twice = set(), [], []
+    for r in rows:
+        if r["case_id"] in seen:
+            twice.append(str(r["case_id"]))
+        else:
+            seen.add(r["case_id"])
+            kept.append(r)
+    return kept, twice
 
 
 def _keys_from_header(header):
@@ -209,13 +234,16 @@ def _keys_from_header(header):
 
 
 def read_summary(path: Path, keys=None):
-    """(header, complete rows, number of dropped lines) of a summary.csv."""
+    """(header, complete rows, number of dropped lines) of a summary.csv of at most
+    :data:`MAX_SUMMARY_BYTES` (ResultFileError naming it otherwise)."""
     try:
-        data = read_small_file(path, 2**34).decode("utf-8", errors="replace")
+        data = read_small_file(path, MAX_SUMMARY_BYTES).decode("utf-8", errors="replace")
     except FileNotFoundError:
         raise ResultFileError(f"{path}: missing") from None
     except ManifestProblem as exc:
         raise ResultFileError(str(exc)) from None
+    except MemoryError:
+        raise ResultFileError(f"{path}: too large to read in this machine's free memory") from None
     lines = data.split("\n")
     complete, dropped = lines[:-1], (1 if lines[-1] else 0)  # no final newline: truncated
     if not complete:
