@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 from benchmarks.baseline import baseline_section, compare_envs, export_tree  # noqa: E402
 from snoworm import Simulator, load_scenario, simulate  # noqa: E402
 from snoworm.model import floatkernel  # noqa: E402
-from snoworm.simulation.driver import assemble  # noqa: E402
+from snoworm.simulation.driver import assemble, chain_model  # noqa: E402
 from snoworm.studies.sweep import run_sweep  # noqa: E402
 from tests.reference_quantities import compared, is_gait, quantities, scaled_error  # noqa: E402
 
@@ -250,7 +250,7 @@ def bench_scaling(report, repeats):
             "nfev": res.stats["nfev"],
             "njev": res.stats["njev"],
             "numpy_rhs_us": rhs_cost_us(sc, numpy_kernel=True),
-            "float_kernel": sc.chain_model.float_kernel is not None,
+            "float_kernel": chain_model(sc).float_kernel is not None,
         }
         report(
             f"  N = {n:3d}: RHS {rows[n]['rhs_us']:7.1f} us  ({rows[n]['rhs_us'] / n:6.2f} us/segment, "

@@ -98,12 +98,16 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
 def validate(scenario, sets, allow_code):
     """Check SCENARIO without running it (exit 0 if valid, 2 with the reason if not).
 
-    Nothing of the scenario runs: a controller is checked statically (the file or module exists,
-    parses and defines the class) and against --allow-code as `snoworm run` would."""
+    Besides the scenario's values, this makes the checks a run makes when it assembles the chain
+    model (e.g. a force-control target the chain cannot carry), which loading a scenario in
+    Python does not. Nothing of the scenario runs: a controller is checked statically (the file or
+    module exists, parses and defines the class) and against --allow-code as `snoworm run` would."""
     from .config.scenario import load_scenario  # lazy: start-up
+    from .simulation.driver import check_assembly  # lazy: start-up
 
     sc = load_scenario(scenario, sets)
     code_check(sc, allow_code)
+    check_assembly(sc)
     click.echo(
         f"{scenario}: valid ({sc.vehicle.segments} segments, mode {sc.mode.type}, {sc.simulation.duration_s:g} s)"
     )

@@ -12,6 +12,7 @@ from hypothesis import settings
 from snoworm import load_scenario, simulate
 from snoworm.config.scenario import apply_overrides, read_yaml, scenario_from_dict
 from snoworm.dynamics import Controls
+from snoworm.simulation.driver import chain_model
 
 # In CI (the CI variable set) every property test draws the same examples on every run, so a
 # landing never depends on the luck of the draw; locally the draws stay random and keep finding
@@ -53,7 +54,7 @@ def scenario_path():
 
 def model_for(path, overrides=(), force_loop=None):
     sc = scenario_from_dict(apply_overrides(read_yaml(path), overrides))
-    m = sc.chain_model
+    m = chain_model(sc)
     if force_loop is not None and force_loop != m.force_loop:
         from snoworm.dynamics import ChainModel
 

@@ -32,6 +32,8 @@ DOC_TABLE_HEADING = "## The layers, highest first"
 #: shows in a notebook or with plt.show(); files are drawn headless and never import it).
 #: ``h5netcdf``: the netCDF4 engine of sweeps' series (optional extra ``data``).
 #: ``IPython``: only inside ``NotebookFigure._ipython_display_``, which only IPython calls.
+#: ``snoworm.steady`` and ``snoworm.modes.force_plan``: root finding (scipy.optimize, about 0.3-0.9 s to
+#: import), loaded by the modes when a run is assembled, so validating a scenario imports no solver.
 LAZY_OK = {
     "dask",
     "distributed",
@@ -47,6 +49,8 @@ LAZY_OK = {
     "concurrent",
     "snoworm.plotting",
     "IPython",
+    "snoworm.steady",
+    "snoworm.modes.force_plan",
 }
 
 

@@ -7,6 +7,7 @@ import pytest
 
 from snoworm import ScenarioError, load_scenario
 from snoworm.config.routes import read_route
+from snoworm.simulation.driver import chain_model
 from snoworm.slope import MAX_GRADE_DEG
 
 
@@ -86,7 +87,7 @@ def test_grade_validation_messages(sets, fragment):
 def test_grade_limit_is_the_documented_one():
     assert MAX_GRADE_DEG == 40.0
     sc = load_scenario("tow6_uniform", ["terrain.grade_deg=-40"])
-    assert sc.chain_model.elevation.grade_deg == -40.0
+    assert chain_model(sc).elevation.grade_deg == -40.0
     assert math.isclose(sc.terrain.elevation_profile().max_abs_grade_deg(), 40.0)
 
 

@@ -1,9 +1,14 @@
 """Scenarios (snoworm.config.scenario): every shipped scenario is valid; bad input fails naming the field and the fix;
-Scenario.with_ and to_dict; the mode-config registry and cached properties."""
+Scenario.with_ and to_dict; the mode-config registry; a scenario is data (no kernel, no solver, no cache)."""
 
 import dataclasses
 import json
+import os
+import pickle
+import subprocess
+import sys
 
+import numpy as np
 import pytest
 import yaml
 from click.testing import CliRunner
@@ -20,7 +25,8 @@ from snoworm.config.scenario import (
     scenario_path,
     shipped_scenarios,
 )
-from tests.conftest import SCENARIOS
+from snoworm.simulation.driver import assemble, chain_model, check_assembly, simulate
+from tests.conftest import ROOT, SCENARIOS
 
 SHIPPED = sorted(SCENARIOS.glob("*.yaml"))
 
@@ -126,7 +132,7 @@ def test_with_returns_a_validated_new_scenario():
     assert (new.tow.force_N, new.terrain.xt, new.name) == (150.0, 0.7, "lighter")
     assert (sc.tow.force_N, sc.terrain.xt, sc.name) == (200.0, 0.9, "tow6_uniform")  # the original is unchanged
     assert new.vehicle == sc.vehicle and new.mode == sc.mode
-    assert new.chain_model.tow_force_N == 150.0  # built from the new values
+    assert chain_model(new).tow_force_N == 150.0  # built from the new values
 
 
 @pytest.mark.parametrize(
@@ -151,11 +157,63 @@ def test_to_dict_round_trips(path):
     assert yaml.safe_load(yaml.safe_dump(d)) == d  # plain YAML-able data
 
 
-def test_cached_properties_are_built_once():
+#: run in a fresh interpreter per scenario: load it, then list what loading imported
+_LOAD_CHILD = """
+import sys
+from snoworm.config.scenario import load_scenario, read_yaml, scenario_from_dict
+path = sys.argv[1]
+sc = load_scenario(path)
+again = scenario_from_dict(read_yaml(path), base_dir=sc.origin.base_dir)
+assert again == sc
+heavy = ("scipy.integrate", "scipy.optimize", "snoworm.dynamics", "snoworm.steady", "snoworm.simulation",
+         "snoworm.model.floatkernel", "snoworm.modes.force_plan")
+print(",".join(m for m in heavy if m in sys.modules))
+"""
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
+def test_loading_a_scenario_builds_no_kernel_and_imports_no_solver(path):
+    """A scenario is data (issue 31): validating it (load_scenario, scenario_from_dict) neither builds
+    a chain model (snoworm.dynamics is not even imported) nor imports a solver, also for force
+    control and the supervisor, whose plans need root finding when a run is assembled."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run(
+        [sys.executable, "-c", _LOAD_CHILD, str(path)], capture_output=True, text=True, env=env, timeout=120
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.strip() == "", f"loading {path.name} imported {proc.stdout.strip()}"
+
+
+@pytest.mark.parametrize("name", ["tow6_uniform", "pi3_equal"])
+def test_a_scenario_holds_its_data_only_before_and_after_a_run(name):
+    """Nothing derived is cached on a scenario: it holds its fields, and its pickle keeps its
+    size through a run (issue 31: 3.7 kB after loading, 18.8 kB after a run)."""
+    sc = load_scenario(SCENARIOS / f"{name}.yaml", [("simulation.duration_s", 2.0)])
+    size = len(pickle.dumps(sc))
+    fields = {f.name for f in dataclasses.fields(sc)}
+    assert set(vars(sc)) == fields, set(vars(sc)) - fields
+    simulate(sc)
+    assert set(vars(sc)) == fields, set(vars(sc)) - fields
+    assert len(pickle.dumps(sc)) == size
+    assert pickle.loads(pickle.dumps(sc)) == sc
+
+
+def test_each_assembly_builds_its_own_model_from_the_data():
     sc = load_scenario(SCENARIOS / "pi3_equal.yaml")
-    assert sc.chain_model is sc.chain_model
-    assert sc.mode_plan is sc.mode_plan and sc.mode_plan is not None  # force control prepares a plan
-    assert load_scenario(SCENARIOS / "tow6_uniform.yaml").mode_plan is None
+    a, b = assemble(sc), assemble(sc)
+    assert a.model is not b.model and a.mode.plan is not b.mode.plan  # built once per run, not kept
+    np.testing.assert_array_equal(a.mode.plan.link_ref_N, b.mode.plan.link_ref_N)
+    assert chain_model(sc).tow_force_N == sc.tow.force_N
+
+
+def test_a_target_the_chain_cannot_carry_is_refused_at_assembly():
+    """The check needs the chain model, so it moved from loading to assembly: the scenario loads,
+    and simulate (or check_assembly, which `snoworm validate` calls) raises the same ScenarioError
+    before anything runs."""
+    sc = load_scenario(SCENARIOS / "pi2_zero.yaml", [("tow.force_N", 400)])
+    for call in (check_assembly, assemble, simulate):
+        with pytest.raises(ScenarioError, match=r"mode\.targets.*impossible target.*segment 1"):
+            call(sc)
 
 
 def test_mode_configs_registry_holds_the_built_in_modes():

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from snoworm.config.scenario import ScenarioError, scenario_from_dict
+from snoworm.simulation.driver import chain_model
 from tests.conftest import traverse_raw as _base
 
 
@@ -20,7 +21,7 @@ def test_patches_compile_to_one_profile():
     X = p(np.array([0.0, 7.5, 7.75, 8.0, 13.0, 18.0, 18.25, 18.5, 25.0, 30.5, 29.998, 40.0]))
     np.testing.assert_allclose(X, [0.9, 0.9, 0.6, 0.3, 0.3, 0.3, 0.6, 0.9, 0.9, 0.5, 0.9, 0.9], atol=1e-3)
     # the chain model evaluates the same table (one evaluation path)
-    assert sc.chain_model.profile == p
+    assert chain_model(sc).profile == p
 
 
 def test_random_profile_reproducible_and_seeded():

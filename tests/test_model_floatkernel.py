@@ -19,6 +19,7 @@ from snoworm import load_scenario, simulate
 from snoworm.dynamics import ChainModel, Controls
 from snoworm.model import floatkernel
 from snoworm.model.floatkernel import MAX_SEGMENTS, FloatKernel
+from snoworm.simulation.driver import chain_model
 from tests.conftest import SCENARIOS, busy_controls, model_for, random_state
 
 SHIPPED = sorted(p.stem for p in SCENARIOS.glob("*.yaml"))
@@ -79,7 +80,7 @@ def states_along_track(m, rng, k):
 @pytest.mark.parametrize("name", SHIPPED)
 def test_float_kernel_equals_the_numpy_kernel_on_every_shipped_scenario(name):
     sc, controls, states = recorded(name)
-    m = sc.chain_model
+    m = chain_model(sc)
     assert m.float_kernel is not None and controls and states
     rng = np.random.default_rng(11)
     fk = FloatKernel(m)

@@ -12,6 +12,7 @@ from snoworm.config.scenario import apply_overrides, read_yaml
 from snoworm.config.schema import field
 from snoworm.model.inputs import Controls
 from snoworm.modes.base import MODES, Interval
+from snoworm.simulation.driver import chain_model
 from tests.conftest import SCENARIOS
 
 
@@ -99,8 +100,8 @@ def test_registering_a_non_mode_raises_type_error():
 
 def test_base_hooks_defaults():
     sc = snoworm.load_scenario(SCENARIOS / "tow6_uniform.yaml")
-    m = Mode(sc.mode, sc, sc.chain_model)
-    np.testing.assert_array_equal(m.initial_state(), sc.chain_model.initial_state())
+    m = Mode(sc.mode, sc, chain_model(sc))
+    np.testing.assert_array_equal(m.initial_state(), chain_model(sc).initial_state())
     assert m.summary(None) == {} and m.log == []
     with pytest.raises(NotImplementedError, match="must implement interval"):
         m.interval(0.0, m.initial_state())

@@ -13,6 +13,7 @@ import yaml
 
 from snoworm.config.scenario import load_scenario, scenario_from_dict
 from snoworm.modes.force_plan import available_drawbar_N, plan
+from snoworm.simulation.driver import chain_model
 
 SCEN = Path(__file__).resolve().parent.parent / "scenarios"
 
@@ -23,7 +24,7 @@ def _raw(name):
 
 def test_available_drawbar_terrain_and_motor_limits():
     sc = load_scenario(SCEN / "tow6_weak_segment.yaml")
-    model = sc.chain_model
+    model = chain_model(sc)
     segs = sc.vehicle.segment_params()
     healthy, why_h = available_drawbar_N(0.9, segs[0], model.tp, 1.8)
     weak, why_w = available_drawbar_N(0.9, segs[2], model.tp, 1.8)
@@ -49,7 +50,7 @@ def test_target_conversion(targets, refs):
     raw["mode"]["targets"] = targets
     raw["mode"]["free_segment"] = 2
     sc = scenario_from_dict(raw)
-    res_plan = plan(sc.mode, sc, sc.chain_model)
+    res_plan = plan(sc.mode, sc, chain_model(sc))
     np.testing.assert_allclose(res_plan.link_ref_N, refs, atol=1e-9)
     assert res_plan.wheel_net_N.sum() == pytest.approx(200.0, abs=1e-9)
     # loops around the free segment 2: 0 and 1 hold the link behind, 3 the link ahead
@@ -65,7 +66,7 @@ def test_share_rules_favour_the_stronger_segment(rule):
     raw["vehicle"]["segment_overrides"] = {0: {"mass_kg": 120.0}}
     raw["mode"]["targets"] = {"load_shares": rule}
     sc = scenario_from_dict(raw)
-    W = plan(sc.mode, sc, sc.chain_model).wheel_net_N
+    W = plan(sc.mode, sc, chain_model(sc)).wheel_net_N
     assert W.sum() == pytest.approx(200.0, abs=1e-9)
     assert W[1] == pytest.approx(W[2], rel=1e-9)
     assert W[0] > 1.05 * W[1]  # drawbar: 80 vs 60 N; inverse_slip: 70.6 vs 64.7 N

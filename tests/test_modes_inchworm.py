@@ -8,6 +8,7 @@ from snoworm import load_scenario, simulate, terrain
 from snoworm.config.params import terrain_params
 from snoworm.config.scenario import apply_overrides, read_yaml, scenario_from_dict
 from snoworm.modes.gait import progress_conditions
+from snoworm.simulation.driver import chain_model
 from tests.conftest import SCENARIOS
 
 FROSTYBOY_TERRAIN = terrain_params("frostyboy")
@@ -191,7 +192,7 @@ def test_both_kernels_give_the_same_gait_on_long_chains(n, monkeypatch):
     for kernel, limit in (("numpy", 0), ("float", 10**6)):
         monkeypatch.setattr(floatkernel, "MAX_SEGMENTS", limit)
         sc = _long_chain(n, 10.0)
-        assert (sc.chain_model.float_kernel is None) == (kernel == "numpy")
+        assert (chain_model(sc).float_kernel is None) == (kernel == "numpy")
         res[kernel] = simulate(sc).summary()
     d_np, d_fl = res["numpy"]["distance_m"], res["float"]["distance_m"]
     assert d_np > 0.5  # several gait cycles: more than one phase change per group
@@ -205,11 +206,11 @@ def test_a_group_already_at_its_limit_when_an_interval_starts_is_done():
 
     sc = _long_chain(6, 5.0)
     for offset in (-0.1 * EVENT_TOL_M, 0.0, 1e-15, 1e-12):
-        mode = InchwormMode(sc.mode, sc, sc.chain_model)
+        mode = InchwormMode(sc.mode, sc, chain_model(sc))
         y = mode.initial_state()
         mode.interval(1.0, y)  # phase 0 begins: groups [0] and [3] move
         plan = mode.plans[0]
-        m = sc.chain_model
+        m = mode.model
         Y = m.unpack(y.copy())
         j = next(int(j) for j in np.nonzero(plan.role != 0)[0] if plan.group_of_joint[j] == 1)
         sign, level = mode._event_level(plan, j)
@@ -219,7 +220,7 @@ def test_a_group_already_at_its_limit_when_an_interval_starts_is_done():
         assert j not in mode._event_joints  # its event is not armed again
         assert any(e["kind"] == "joint_limit" and f"joint {j} " in e["detail"] for e in mode.log)
         assert iv.events  # the other group's event still is
-    mode = InchwormMode(sc.mode, sc, sc.chain_model)
+    mode = InchwormMode(sc.mode, sc, chain_model(sc))
     y = mode.initial_state()
     mode.interval(1.0, y)
     Y = m.unpack(y.copy())

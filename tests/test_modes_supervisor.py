@@ -9,6 +9,7 @@ import pytest
 
 from snoworm.config.scenario import ScenarioError, scenario_from_dict
 from snoworm.results.energy import energy_metrics
+from snoworm.simulation.driver import chain_model
 from tests.conftest import traverse_raw as _base
 
 PATCH_START_M, PATCH_END_M, PATCH_RAMP_M = 8.0, 18.0, 0.5
@@ -84,8 +85,8 @@ def test_rolling_surplus_includes_the_grade():
     slope = level.with_({"terrain.grade_deg": 6.0})
     segs = level.vehicle.segment_params()
     x = np.array([30.0 - 1.5 * k for k in range(6)])  # past the patch: X_t = 0.9 under every axle
-    s0 = chain_drawbar_surplus_N(level.chain_model, segs, x, 1.8)
-    s6 = chain_drawbar_surplus_N(slope.chain_model, segs, x, 1.8)
+    s0 = chain_drawbar_surplus_N(chain_model(level), segs, x, 1.8)
+    s6 = chain_drawbar_surplus_N(chain_model(slope), segs, x, 1.8)
     th = math.radians(6.0)
     m_g = segs[0].mass_kg * segs[0].gravity_mps2
     assert s6 == pytest.approx(math.cos(th) * s0 - 6 * m_g * math.sin(th), rel=1e-9)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from snoworm import load_scenario
-from snoworm.simulation.driver import assemble
+from snoworm.simulation.driver import assemble, chain_model
 from snoworm.simulation.interval import IntervalSolver, output_grid
 from snoworm.simulation.vode import VodeStepper
 
@@ -21,7 +21,7 @@ def test_atol_per_field_scales_only_the_named_fields(scenario_path):
     np.testing.assert_allclose(list(got.values()), np.array(list(ATOL.values())) * scale, rtol=1e-15)
     assert got["omega_rear"] == pytest.approx(ATOL["omega_rear"] * sim.atol_scale * 7.0, rel=1e-15)
     assert got["omega_front"] == ATOL["omega_front"] * sim.atol_scale  # no factor: unchanged
-    m = sc.chain_model
+    m = chain_model(sc)
     atol = solver_options(m, sim)["atol"]
     assert atol[m.layout.flat_index(3, "omega_rear")] == got["omega_rear"]
     assert atol[m.layout.flat_index(3, "s_m")] == got["s_m"]

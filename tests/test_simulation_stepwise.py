@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from snoworm import Result, Simulator, load_scenario, simulate
+from snoworm.simulation.driver import chain_model
 from tests.conftest import SCENARIOS
 
 
@@ -87,7 +88,7 @@ def test_wheel_lock_holds_the_wheels(tow6):
 
 def test_joint_force_and_length_commands_through_the_actuator():
     sc = load_scenario(SCENARIOS / "inchworm2.yaml")  # starts fully extended
-    L = sc.chain_model.links
+    L = chain_model(sc).links
     sim = Simulator(sc)
     s0 = sim.reset().joint_extension_m[0]
     assert s0 == pytest.approx(L.stroke_max_m[0])

@@ -16,6 +16,7 @@ from scipy.optimize import brentq
 from snoworm import load_scenario, simulate, steady, terrain
 from snoworm.model.inputs import Controls
 from snoworm.results.energy import energy_balance, energy_metrics
+from snoworm.simulation.driver import chain_model
 from snoworm.slope import MAX_GRADE_DEG, ElevationProfile, grade_patch_profile
 
 G0 = 9.81
@@ -32,7 +33,7 @@ def _model(grade_deg, xt, segments=1, links="fixed", com_height_m=None):
     if com_height_m is not None:
         sets.append(f"vehicle.segment.com_height_m={com_height_m}")
     sc = load_scenario("tow6_uniform", sets)
-    return sc, sc.chain_model
+    return sc, chain_model(sc)
 
 
 def _coefficients(tp, X):
@@ -279,9 +280,9 @@ def test_energy_balance_closes_with_the_potential_term(seed):
 
 def test_level_profile_skips_the_grade_terms():
     sc = load_scenario("tow6_uniform")
-    assert sc.chain_model.elevation is None
-    assert load_scenario("tow6_uniform", ["terrain.grade_deg=0"]).chain_model.elevation is None
-    assert load_scenario("tow6_uniform", ["terrain.grade_deg=3"]).chain_model.elevation is not None
+    assert chain_model(sc).elevation is None
+    assert chain_model(load_scenario("tow6_uniform", ["terrain.grade_deg=0"])).elevation is None
+    assert chain_model(load_scenario("tow6_uniform", ["terrain.grade_deg=3"])).elevation is not None
 
 
 # ------------------------------------------------------------------ Eqs. 4-6 with gravity

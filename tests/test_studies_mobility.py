@@ -9,6 +9,7 @@ from click.testing import CliRunner
 from snoworm import steady
 from snoworm.cli import main
 from snoworm.config.scenario import load_scenario
+from snoworm.simulation.driver import chain_model
 from snoworm.studies.mobility import mobility_map
 
 
@@ -26,7 +27,7 @@ def test_map_rolling_boundary_matches_steady_limit(scenario_path):
     assert m["rolling_limit_xt"][0.0] == pytest.approx(0.586, abs=5e-4)
     seg = sc.vehicle.segment_params()[0]
     assert m["rolling_limit_xt"][200.0] == pytest.approx(
-        steady.immobilisation_limit_xt(seg, sc.chain_model.tp, drawbar_N=200.0 / 6, wheel_speed_mps=1.8), abs=1e-9
+        steady.immobilisation_limit_xt(seg, chain_model(sc).tp, drawbar_N=200.0 / 6, wheel_speed_mps=1.8), abs=1e-9
     )
     assert m["rolling_limit_xt"][200.0] > m["rolling_limit_xt"][0.0] + 0.01
 

@@ -47,12 +47,17 @@ class ModeConfig(Config):
         """Rules that need the vehicle (e.g. one value per segment); raise ScenarioError."""
 
     def check_scenario(self, scenario, path):
-        """Rules that need the whole scenario (terrain, tow); raise ScenarioError."""
+        """Rules that need the whole scenario (terrain, tow) but not its chain model; raise ScenarioError.
 
-    def prepare(self, scenario):
-        """A plan computed once per scenario (e.g. force-control targets), or None.
+        Validation calls it: it must build no chain model and run no solver (a scenario is data)."""
 
-        Available to the mode as ``scenario.mode_plan``; computed at most once per scenario.
+    def prepare(self, scenario, model):
+        """What the mode needs of the assembled chain ``model`` (e.g. the force-control plan), or None.
+
+        Called when a run is assembled (:func:`snoworm.simulation.driver.assemble`: the mode calls
+        it once per run, in its ``__init__``) and by :func:`snoworm.simulation.driver.check_assembly`
+        (``snoworm validate``); it runs no user code.  Raises ScenarioError if the scenario cannot
+        run on that chain (e.g. a target it cannot carry).
         """
         return None
 

@@ -9,7 +9,6 @@ key (unknown keys are rejected with suggestions) and returns a frozen :class:`Sc
 from __future__ import annotations
 
 import copy
-import functools
 import os
 from dataclasses import dataclass
 from importlib import resources
@@ -17,7 +16,6 @@ from pathlib import Path
 
 import yaml
 
-from ..dynamics import ChainModel
 from . import yamlio
 from .mode_registry import MODES, ModeConfig, build_mode_config
 from .params import PARAMETER_SETS, parameter_entries, read_model_file, source_notes
@@ -93,6 +91,10 @@ class Scenario(Config):
     Build with :func:`load_scenario` (a YAML file), :func:`scenario_from_dict` (a mapping) or the
     constructor (config objects); edit with :meth:`with_` or :func:`dataclasses.replace`, which
     validate the result too.  Every physical value is filled in from the parameter set.
+
+    A scenario is data: validating it builds no chain model and runs no root finding.  The
+    chain model and the mode's plan are assembled when a run starts
+    (:func:`snoworm.simulation.driver.assemble`), so a scenario pickles to the size of its data.
     """
 
     _section = ""
@@ -118,28 +120,9 @@ class Scenario(Config):
             )
         mode.check_vehicle(self.vehicle, "mode")
         check_vehicle_on_grade(self.vehicle, self.terrain.elevation_profile())
-        mode.check_scenario(self, "mode")  # checks needing terrain and tow (e.g. force control)
+        mode.check_scenario(self, "mode")  # checks needing terrain and tow (data only: no chain model)
 
-    @functools.cached_property
-    def chain_model(self) -> ChainModel:
-        """The assembled :class:`~snoworm.dynamics.ChainModel` (built once per scenario)."""
-        veh = self.vehicle
-        return ChainModel(
-            veh.segment_arrays(),
-            veh.link_arrays(),
-            self.terrain.model.params(),
-            self.terrain.compile(),
-            self.tow.force_N,
-            force_loop=self.mode.force_loop,
-            elevation=self.terrain.elevation_profile(),
-        )
-
-    @functools.cached_property
-    def mode_plan(self):
-        """The mode's plan (:meth:`ModeConfig.prepare`), computed once per scenario."""
-        return self.mode.prepare(self)
-
-    @functools.cached_property
+    @property
     def sources(self) -> dict:
         """The source tag of every physical value, ``{dotted key: tag}`` (e.g. ``"vehicle.segment.mass_kg":
         "[Lines] incl. wheels"``): the parameter set's tag, the scenario's ``sources:`` note, or

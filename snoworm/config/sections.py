@@ -14,9 +14,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-from ..model.arrays import STATE_FIELDS, LinkArrays, SegmentArrays
+from ..model.arrays import STATE_FIELDS
 from ..slope import ElevationProfile, grade_patch_profile
 from ..terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
 from .routes import GRADE_DOMAIN, GradePatchConfig, check_grade_inputs, read_route
@@ -423,17 +421,6 @@ class VehicleConfig(Config):
         n_links = max(self.segments - 1, 0)
         t = self.links.type
         return list(t) * n_links if len(t) == 1 else list(t)
-
-    def segment_arrays(self) -> SegmentArrays:
-        """Per-segment parameters as the model's arrays (overrides applied)."""
-        return SegmentArrays.from_list(self.segment_params())
-
-    def link_arrays(self) -> LinkArrays:
-        """Per-link parameters as the model's arrays."""
-        lc = self.links
-        ones = np.ones(max(self.segments - 1, 0))
-        kw = {k: getattr(lc, k) * ones for k in LinkArrays.__dataclass_fields__ if k != "prismatic"}
-        return LinkArrays(prismatic=np.array([1.0 if t == "prismatic" else 0.0 for t in self.link_types()]), **kw)
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ from gymnasium import spaces
 from ..config.scenario import Scenario, load_scenario
 from ..config.schema import quote
 from ..modes.command import Observation, observed_fields
+from ..simulation.driver import chain_model
 from ..simulation.stepwise import DT_MIN_S
 
 __all__ = [
@@ -118,7 +119,7 @@ class EnvCore:
         if isinstance(action_keys, str):
             action_keys = (action_keys,)
         self.action_keys = tuple(action_keys)
-        self.model = self.scenario.chain_model
+        self.model = chain_model(self.scenario)  # built once per environment
         self.duration_s = float(self.scenario.simulation.duration_s)
         #: steps until truncation: the first step whose end reaches ``simulation.duration_s``
         self.max_episode_steps = max(1, math.ceil(self.duration_s / self.dt_s - 1e-9))

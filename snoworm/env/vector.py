@@ -143,7 +143,7 @@ class SnowormVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, B)
         self.observation_space = batch_space(self.single_observation_space, B)
         self.model = core.model
-        self._y0 = np.asarray(assemble(core.scenario).mode.initial_state(), float)
+        self._y0 = np.asarray(assemble(core.scenario, core.model).mode.initial_state(), float)
         seg, lk = output_series(self.model, self._y0[None, :], CommandState(self.model).controls)
         fields0 = table_fields(seg, lk)
         self._obs0 = core.normalised(fields0, 0.0)

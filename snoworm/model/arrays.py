@@ -1,8 +1,8 @@
 """The chain as arrays: parameters per segment and per link, and the named state vector.
 
-:class:`SegmentArrays` and :class:`LinkArrays` are what the config (``Scenario.chain_model``)
-hands the kernel (:class:`snoworm.dynamics.ChainModel`), one value per segment or link in SI
-units; :class:`StateLayout` names the fields of the state (docs/model.md section 4): one block of
+:class:`SegmentArrays` and :class:`LinkArrays` are what a run's assembly
+(:func:`snoworm.simulation.driver.chain_model`) hands the kernel (:class:`snoworm.dynamics.ChainModel`),
+one value per segment or link in SI units; :class:`StateLayout` names the fields of the state (docs/model.md section 4): one block of
 ``n_s`` fields per segment, interleaved so the Jacobian is banded.
 """
 

@@ -71,7 +71,7 @@ class Mode:
     cfg : ModeConfig
         The validated mode section.
     scenario : Scenario
-        The whole scenario (``scenario.mode_plan`` holds the config's prepared plan).
+        The whole scenario (data; ``cfg.prepare(scenario, model)`` makes the config's plan on the model).
     model : ChainModel
         The assembled chain (read its parameters; never change them).
 

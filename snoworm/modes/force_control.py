@@ -23,7 +23,8 @@ equilibrium of docs/model.md section 5, Fig 11 note).  ``v_sp >= 0`` is the pape
 "the lead segment does not drive backwards" (Fig 8).
 
 The targets are turned into link-force references, checked against the available drawbar pull
-and their steady state predicted when the scenario is validated: :mod:`snoworm.modes.force_plan`.
+and their steady state predicted when a run is assembled (``ForceControlConfig.prepare``; not when
+the scenario is validated, which builds no chain model): :mod:`snoworm.modes.force_plan`.
 """
 
 from __future__ import annotations
@@ -37,7 +38,6 @@ from ..config.schema import Config, ScenarioError, field, suggest
 from ..config.sections import FINITE_WHY
 from ..model.inputs import Controls
 from .base import Mode, register_mode, rolling_interval, start_times
-from .force_plan import plan
 
 __all__ = ["TargetsConfig", "ForceControlConfig", "ForceControlMode", "SHARE_RULES"]
 
@@ -170,16 +170,19 @@ class ForceControlConfig(ModeConfig):
                     "to share the tow (or give link_forces_N)."
                 )
 
-    def check_scenario(self, sc, path):
-        """Feasibility: every segment can pull its share; set-points within [0, v_max] (the plan)."""
-        sc.mode_plan  # noqa: B018 - computing the plan raises ScenarioError if a target is impossible
+    def prepare(self, sc, model):
+        """The :class:`~snoworm.modes.force_plan.ForcePlan` on ``model``, made when a run is assembled.
 
-    def prepare(self, sc):
-        """The :class:`~snoworm.modes.force_plan.ForcePlan`, computed once per scenario (``scenario.mode_plan``)."""
-        return plan(self, sc, sc.chain_model)
+        Feasibility: every segment can pull its share, set-points within [0, v_max]; ScenarioError
+        naming the target if not."""
+        # root finding (scipy.optimize, slow to import) is loaded when a run starts: validating a
+        # scenario imports no solver
+        from .force_plan import plan
+
+        return plan(self, sc, model)
 
     def batch_signature(self):
-        """No state events (the plan is computed once per scenario): members with the same start
+        """No state events (the plan is computed once per run): members with the same start
         times and free segment have the same intervals and loop layout (targets, gains and
         speeds may differ)."""
         return ("force_control", tuple(self.start_time_s), self.free_segment)
@@ -195,7 +198,7 @@ class ForceControlMode(Mode):
     def __init__(self, cfg, scenario, model):
         super().__init__(cfg, scenario, model)
         n = model.n
-        self.plan = scenario.mode_plan
+        self.plan = cfg.prepare(scenario, model)
         self.t_start = start_times(cfg.start_time_s, n)
         self.breaks = np.unique(self.t_start)
         p = self.plan

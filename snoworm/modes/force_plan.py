@@ -1,7 +1,7 @@
 r"""The force-control mode's plan: targets -> link-force references, checked and predicted (paper section 5.2).
 
-:func:`plan` runs once per scenario, when it is validated (``ForceControlConfig.prepare``, kept
-as ``scenario.mode_plan``); :class:`~snoworm.modes.force_control.ForceControlMode` runs the
+:func:`plan` runs once per run, when the run is assembled (``ForceControlConfig.prepare``, called by
+the mode; ``snoworm validate`` calls it too); :class:`~snoworm.modes.force_control.ForceControlMode` runs the
 loops on the :class:`ForcePlan`.  All of it is steady-state root finding on the laws
 (:mod:`snoworm.steady`), before any integration.
 

@@ -49,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import steady, terrain
+from .. import terrain
 from ..config.mode_registry import ModeConfig
 from ..config.schema import ScenarioError, build, field
 from ..config.sections import FINITE_WHY
@@ -132,6 +132,8 @@ def chain_drawbar_surplus_N(model, segments, x_m, wheel_speed_mps) -> float:
     wheel_speed_mps : float
         Rolling wheel-speed set-point [m/s].
     """
+    from .. import steady  # root finding (scipy.optimize, slow to import): loaded by a run, not by validation
+
     X = model.xt_at_axles(x_m)
     grade = np.degrees(np.arcsin(model.grade_terms(x_m)[0]))  # the grade under each segment (section 7)
     total = 0.0
@@ -162,6 +164,8 @@ class SupervisorMode(Mode):
         self.inch = None
         self.timeline = [(0.0, self.state)]
         self.cycles_total = 0
+        from .. import steady  # root finding (scipy.optimize, slow to import): loaded by a run, not by validation
+
         seg0 = self.segments[0]
         self.rolling_limit_xt = steady.immobilisation_limit_xt(
             seg0, model.tp, drawbar_N=model.tow_force_N / model.n, wheel_speed_mps=cfg.rolling_speed_mps

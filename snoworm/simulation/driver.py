@@ -20,6 +20,7 @@ import numpy as np
 from ..config.scenario import Scenario
 from ..config.schema import quote
 from ..dynamics import ChainModel
+from ..model.arrays import LinkArrays, SegmentArrays
 from ..model.inputs import Controls
 from ..modes import mode_class
 from ..modes.codeload import allow_code as allowed_code
@@ -27,7 +28,17 @@ from ..results.result import Result
 from .guard import SolverError, check_sane, guarded
 from .interval import IntervalSolver, output_grid
 
-__all__ = ["SolverError", "AssembledRun", "assemble", "simulate", "simulate_batch", "batch_key", "BatchMember"]
+__all__ = [
+    "SolverError",
+    "AssembledRun",
+    "chain_model",
+    "assemble",
+    "check_assembly",
+    "simulate",
+    "simulate_batch",
+    "batch_key",
+    "BatchMember",
+]
 
 
 #: Stacked runs that fall back to one by one are logged here (INFO).
@@ -39,23 +50,82 @@ MAX_STUCK_INTERVALS = 50
 
 @dataclass
 class AssembledRun:
-    """A scenario assembled for a run: its chain model and a fresh mode (built once per run)."""
+    """A scenario assembled for one run: its chain model and a fresh mode (built once per run).
+
+    The mode holds what it prepared on the model (e.g. the force-control plan,
+    :meth:`~snoworm.config.mode_registry.ModeConfig.prepare`)."""
 
     scenario: object
     model: ChainModel
     mode: object
 
 
-def assemble(sc) -> AssembledRun:
-    """Pair a scenario's chain model (built once per scenario) with a new instance of its mode.
-
-    Raises TypeError naming ``scenario`` if ``sc`` is not a :class:`~snoworm.config.scenario.Scenario`."""
+def _check_scenario(sc) -> None:
     if not isinstance(sc, Scenario):
         raise TypeError(
             f"scenario: expected a Scenario, got {quote(sc, 60)}; read one with snoworm.load_scenario(name or path)"
         )
-    model = sc.chain_model
+
+
+def chain_model(sc) -> ChainModel:
+    """A new :class:`~snoworm.dynamics.ChainModel` of a scenario's chain, built from its data.
+
+    The one place a scenario's values become the kernel's arrays (per-segment parameters with
+    the overrides applied, per-link parameters, the terrain's coefficients, X_t and elevation
+    along the track); a scenario holds no model (it is data), so build it once per run and
+    pass it on (:func:`assemble` does).
+
+    Raises TypeError naming ``scenario`` if ``sc`` is not a :class:`~snoworm.config.scenario.Scenario`."""
+    _check_scenario(sc)
+    veh, terrain = sc.vehicle, sc.terrain
+    n_links = max(veh.segments - 1, 0)
+    ones = np.ones(n_links)
+    lc = veh.links
+    link_kw = {k: getattr(lc, k) * ones for k in LinkArrays.__dataclass_fields__ if k != "prismatic"}
+    prismatic = np.array([1.0 if t == "prismatic" else 0.0 for t in veh.link_types()])
+    return ChainModel(
+        SegmentArrays.from_list(veh.segment_params()),
+        LinkArrays(prismatic=prismatic, **link_kw),
+        terrain.model.params(),
+        terrain.compile(),
+        sc.tow.force_N,
+        force_loop=sc.mode.force_loop,
+        elevation=terrain.elevation_profile(),
+    )
+
+
+def assemble(sc, model: ChainModel | None = None) -> AssembledRun:
+    """Assemble a scenario for one run: its chain model (:func:`chain_model`, or ``model`` if the
+    caller built it for this run already) and a new instance of its mode on that model (which
+    prepares its plan on it, e.g. the force-control targets).
+
+    Raises
+    ------
+    ScenarioError
+        If the scenario cannot run on its chain (e.g. a force-control target the chain cannot
+        carry): checks that need the model are made here, not when the scenario is validated.
+    TypeError
+        Naming ``scenario`` if ``sc`` is not a :class:`~snoworm.config.scenario.Scenario`.
+    """
+    if model is None:
+        model = chain_model(sc)
+    else:
+        _check_scenario(sc)
     return AssembledRun(sc, model, mode_class(sc.mode)(sc.mode, sc, model))
+
+
+def check_assembly(sc) -> None:
+    """The checks of :func:`assemble` without making the mode: build the chain model and the mode
+    config's plan on it (:meth:`~snoworm.config.mode_registry.ModeConfig.prepare`); no user code
+    runs.  ``snoworm validate`` calls it.
+
+    Raises
+    ------
+    ScenarioError
+        As :func:`assemble` (e.g. a force-control target the chain cannot carry).
+    """
+    model = chain_model(sc)
+    sc.mode.prepare(sc, model)
 
 
 def _integrate(model, modes, sim, name, progress=None):
@@ -164,17 +234,26 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
     return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
 
 
-def batch_key(sc):
-    """A hashable key shared by the scenarios that can run as one stacked system, or None.
+def _assembled(run) -> AssembledRun:
+    """``run`` if it is an :class:`AssembledRun`, else the scenario assembled (:func:`assemble`)."""
+    return run if isinstance(run, AssembledRun) else assemble(run)
 
+
+def batch_key(run):
+    """A hashable key shared by the runs that can run as one stacked system, or None.
+
+    ``run``: a Scenario (assembled here if its mode can run in a stack) or an
+    :class:`AssembledRun` (its model is used: assemble a run once, then key and stack it).
     Members must share the mode's batch signature (:meth:`ModeConfig.batch_signature`: the same
     intervals, no events), the state layout, link types, solver settings, terrain coefficients,
     the X_t profile (or all have constant X_t) and the elevation profile (docs/model.md section 7).
     """
+    sc = run.scenario if isinstance(run, AssembledRun) else run
+    _check_scenario(sc)
     sig = sc.mode.batch_signature()
     if sig is None:
         return None
-    model = sc.chain_model
+    model = _assembled(run).model
     sim = sc.simulation
     profile = "constant" if model.profile.is_constant else model.profile
     return (
@@ -209,6 +288,9 @@ class BatchMember:
 def simulate_batch(scenarios) -> list:
     """Run scenarios of one :func:`batch_key` as ONE stacked system through the same interval driver.
 
+    ``scenarios``: Scenarios, or runs assembled already (:class:`AssembledRun`, e.g. to compute
+    their :func:`batch_key` first); each is assembled once.
+
     The members' models are stacked (:meth:`ChainModel.stack`: the same kernel with one more
     leading axis on the parameters) and integrated together; LSODA's error test is a weighted
     max-norm, so every member is held to the tolerance it has alone.  If the stacked solve fails,
@@ -223,13 +305,21 @@ def simulate_batch(scenarios) -> list:
     ------
     ValueError
         If the scenarios do not share a batch key.
+    ScenarioError
+        If a scenario cannot run on its chain (:func:`assemble`).
     """
     wall0 = time.perf_counter()
-    scs = list(scenarios)
-    keys = {batch_key(sc) for sc in scs}
-    if None in keys or len(keys) != 1:
-        raise ValueError("simulate_batch needs scenarios with one batch key (see snoworm.simulation.driver.batch_key)")
-    cases = [assemble(sc) for sc in scs]
+    one_key = "simulate_batch needs scenarios with one batch key (see snoworm.simulation.driver.batch_key)"
+    runs = list(scenarios)
+    for run in runs:  # before assembling: a mode that cannot run in a stack is not made
+        sc = run.scenario if isinstance(run, AssembledRun) else run
+        _check_scenario(sc)
+        if sc.mode.batch_signature() is None:
+            raise ValueError(one_key)
+    cases = [_assembled(run) for run in runs]
+    scs = [c.scenario for c in cases]
+    if len({batch_key(c) for c in cases}) != 1:
+        raise ValueError(one_key)
     try:
         big = ChainModel.stack([c.model for c in cases]) if len(cases) > 1 else cases[0].model
         pieces, phases, stats = _guarded_integrate(big, [c.mode for c in cases], scs[0].simulation, scs[0].name)

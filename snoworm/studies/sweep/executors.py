@@ -17,7 +17,7 @@ import time
 
 from ...config.schema import ScenarioError, quote
 from ...infra.pool import ProcessExecutor
-from ...simulation.driver import batch_key, simulate_batch
+from ...simulation.driver import assemble, batch_key, simulate_batch
 from .metrics import case_metrics, save_case_series
 
 __all__ = ["SweepExecutionError", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "BatchExecutor", "run_chunk"]
@@ -129,10 +129,10 @@ class DaskExecutor:
             self.client.close()
 
 
-def _run_group(tasks, scs, fallback, metrics):
-    """Rows of one group of batchable tasks (one stacked solve; failing members reported per member)."""
+def _run_group(tasks, cases, fallback, metrics):
+    """Rows of one group of batchable tasks, assembled (one stacked solve; failing members reported per member)."""
     wall0 = time.perf_counter()
-    members = simulate_batch(scs)
+    members = simulate_batch(cases)
     wall = (time.perf_counter() - wall0) / len(tasks)
     out = []
     for task, mem in zip(tasks, members):
@@ -159,14 +159,16 @@ def run_chunk(tasks, fn, metrics, max_group=None) -> list:
     for task in tasks:
         try:
             sc = task.validated()
-            key = batch_key(sc)
             task = task.with_scenario(sc)  # validated once: fn (run_case) reuses it
+            # assembled once (model and mode): the key reads its model, the stack runs it
+            case = assemble(sc) if sc.mode.batch_signature() is not None else None
+            key = None if case is None else batch_key(case)
         except (ScenarioError, ValueError):
-            key = None
+            key = None  # fn reports an invalid case (e.g. a target the chain cannot carry)
         if key is None:
             results.append(fn(task))
         else:
-            groups.setdefault(key, []).append((task, sc))
+            groups.setdefault(key, []).append((task, case))
     for members in groups.values():
         size = max_group or len(members)
         for j in range(0, len(members), size):
@@ -174,8 +176,8 @@ def run_chunk(tasks, fn, metrics, max_group=None) -> list:
             if len(part) == 1:
                 results.append(fn(part[0][0]))
             else:
-                tasks_, scs = zip(*part)
-                results.extend(_run_group(list(tasks_), list(scs), fn, metrics))
+                tasks_, cases = zip(*part)
+                results.extend(_run_group(list(tasks_), list(cases), fn, metrics))
     return results
 
 
