@@ -45,7 +45,8 @@ binds; a torque limit below ~43 N m binds instead).  The available drawbar is th
 the two, evaluated at the nominal wheel speed and the terrain under the segment at its start
 position.  A target asking a segment for more (or, braking, for less than its locked-wheel
 limit), or one whose predicted steady set-point exceeds ``max_speed_mps``, is a
-:class:`~snoworm.config.schema.ScenarioError` when the scenario is validated, never left to wind up.
+:class:`~snoworm.config.schema.ScenarioError` when the run is assembled (before any solve; ``snoworm
+validate`` checks it too), never left to wind up.
 Saturation during the run (a set-point pinned at 0 or ``v_max`` at the end) is reported in
 the mode summary (``force_control.saturated_at_end``).
 
