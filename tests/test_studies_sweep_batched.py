@@ -105,3 +105,21 @@ def test_grade_sweep_batches_only_equal_elevations():
     for m, sc in zip(simulate_batch([a, c]), [a, c]):
         alone = simulate(sc)
         np.testing.assert_allclose(m.result.segments["v_mps"][-1], alone.segments["v_mps"][-1], rtol=1e-4)
+
+
+def test_batched_sweep_assembles_each_case_once_and_records_a_refused_one(scenario_path, monkeypatch):
+    """A batchable case is assembled once (its key and its stack read the same model); a case whose
+    run cannot be assembled (a tow beyond the whole chain's drawbar: a check that needs the chain
+    model, so not made while planning) is recorded invalid with the message, the others stacked."""
+    from snoworm.simulation import driver
+
+    built = []
+    real = driver.chain_model
+    monkeypatch.setattr(driver, "chain_model", lambda sc: built.append(sc.tow.force_N) or real(sc))
+    sets = ["tow.force_N=100,200,1100", "simulation.duration_s=2"]
+    table = run_sweep(scenario_path("pi3_equal"), sets, plot=False, batch=10)
+    rows = {r["tow.force_N"]: r for r in table.rows}
+    assert rows[100.0]["status"] == rows[200.0]["status"] == "ok"
+    assert rows[1100.0]["status"] == "invalid" and "whole chain" in rows[1100.0]["error"]
+    # once per case; the refused case once more, run alone to report it
+    assert sorted(built) == [100.0, 200.0, 1100.0, 1100.0]

@@ -242,7 +242,7 @@ def _assembled(run) -> AssembledRun:
 def batch_key(run):
     """A hashable key shared by the runs that can run as one stacked system, or None.
 
-    ``run``: a Scenario (assembled here if its mode can run in a stack) or an
+    ``run``: a Scenario (its chain model is built here if its mode can run in a stack) or an
     :class:`AssembledRun` (its model is used: assemble a run once, then key and stack it).
     Members must share the mode's batch signature (:meth:`ModeConfig.batch_signature`: the same
     intervals, no events), the state layout, link types, solver settings, terrain coefficients,
@@ -253,7 +253,7 @@ def batch_key(run):
     sig = sc.mode.batch_signature()
     if sig is None:
         return None
-    model = _assembled(run).model
+    model = run.model if isinstance(run, AssembledRun) else chain_model(sc)
     sim = sc.simulation
     profile = "constant" if model.profile.is_constant else model.profile
     return (
