@@ -11,7 +11,6 @@ A failed run never returns a partial result as if it were whole.
 from __future__ import annotations
 
 import logging
-import os
 import time
 from dataclasses import dataclass
 
@@ -21,8 +20,7 @@ from ..config.scenario import Scenario
 from ..config.schema import quote
 from ..dynamics import ChainModel
 from ..model.inputs import Controls
-from ..modes import mode_class
-from ..modes.codeload import allow_code as allowed_code
+from ..modes.base import build_mode
 from ..results.result import Result
 from .guard import SolverError, check_sane, guarded
 from .interval import IntervalSolver, output_grid
@@ -46,8 +44,10 @@ class AssembledRun:
     mode: object
 
 
-def assemble(sc) -> AssembledRun:
-    """Pair a scenario's chain model (built once per scenario) with a new instance of its mode.
+def assemble(sc, allow_code=()) -> AssembledRun:
+    """Pair a scenario's chain model (built once per scenario) with a new instance of its mode
+    (:func:`snoworm.modes.base.build_mode`, which hands ``allow_code`` to a mode that runs the
+    user's code).
 
     Raises TypeError naming ``scenario`` if ``sc`` is not a :class:`~snoworm.config.scenario.Scenario`."""
     if not isinstance(sc, Scenario):
@@ -55,7 +55,7 @@ def assemble(sc) -> AssembledRun:
             f"scenario: expected a Scenario, got {quote(sc, 60)}; read one with snoworm.load_scenario(name or path)"
         )
     model = sc.chain_model
-    return AssembledRun(sc, model, mode_class(sc.mode)(sc.mode, sc, model))
+    return AssembledRun(sc, model, build_mode(sc.mode, sc, model, allow_code))
 
 
 def _integrate(model, modes, sim, name, progress=None):
@@ -119,21 +119,6 @@ def _guarded_integrate(model, modes, sim, name, progress=None):
     return pieces, phases, stats
 
 
-def _working_directory():
-    try:
-        return os.getcwd()
-    except OSError:  # the working directory was removed
-        return None
-
-
-def _restore_working_directory(cwd) -> None:
-    if cwd is not None and _working_directory() != cwd:
-        try:
-            os.chdir(cwd)
-        except OSError:
-            pass
-
-
 def simulate(sc, progress=None, allow_code=()) -> Result:
     """Run a scenario and return its :class:`~snoworm.results.result.Result`.
 
@@ -143,8 +128,8 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
     :class:`snoworm.infra.progress.Progress`).
     ``allow_code``: paths (files or folders) whose controller code may run although they lie
     outside the scenario's folder (a controller in the scenario's folder tree runs without it;
-    docs/controllers.md). A controller that changes the working directory (``os.chdir``) does not
-    move the caller's: it is restored when the run ends.
+    docs/controllers.md); handed to the controller mode, which loads the code (and restores the
+    working directory a controller changed: the caller's relative paths stay theirs).
 
     Raises
     ------
@@ -153,13 +138,8 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
         messages, the time reached and the interval's label).
     """
     wall0 = time.perf_counter()
-    cwd = _working_directory()
-    try:
-        with allowed_code(allow_code):
-            case = assemble(sc)
-            pieces, phases, stats = _guarded_integrate(case.model, [case.mode], sc.simulation, sc.name, progress)
-    finally:  # a controller's os.chdir does not outlive the run (the caller's relative paths stay theirs)
-        _restore_working_directory(cwd)
+    case = assemble(sc, allow_code)
+    pieces, phases, stats = _guarded_integrate(case.model, [case.mode], sc.simulation, sc.name, progress)
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
 
