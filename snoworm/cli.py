@@ -75,10 +75,8 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
     sc = load_scenario(scenario, sets)
     code_check(sc, allow_code, "running")
     check_output_folder(out_dir, overwrite)
-    from .modes.codeload import allow_code as allowed  # lazy: start-up
-
-    with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar, allowed(allow_code):
-        res = simulate(sc, progress=bar.set)
+    with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar:
+        res = simulate(sc, progress=bar.set, allow_code=allow_code)
     paths = res.write(
         out_dir,
         plot=not no_plot,

@@ -18,7 +18,7 @@ from click.testing import CliRunner
 from snoworm import load_result, load_scenario, load_sweep, run_sweep, simulate
 from snoworm.cli import main
 from snoworm.config.schema import ScenarioError
-from snoworm.modes.codeload import allow_code, check_reference, find_module_source, trust_problem
+from snoworm.modes.codeload import check_reference, find_module_source, trust_problem
 from tests.conftest import SCENARIOS
 
 EVIL = """
@@ -194,13 +194,14 @@ def test_a_module_reference_is_found_without_importing_its_packages(tmp_path, ma
     monkeypatch.delitem(sys.modules, "mypkg", raising=False)
 
 
-def test_trust_problem_and_allow_code_nest(tmp_path):
+def test_trust_problem_with_and_without_an_allowed_path(tmp_path):
     f = tmp_path / "a" / "c.py"
     assert trust_problem(f"{f}:C", tmp_path) is None
     assert "outside" in trust_problem(f"{f}:C", tmp_path / "b")
-    with allow_code([tmp_path / "a"]):
-        assert trust_problem(f"{f}:C", tmp_path / "b") is None
-        assert trust_problem(f"{f}:C", None) is None
+    allowed = [tmp_path / "a"]  # passed explicitly: no ambient state to leak into a later call
+    assert trust_problem(f"{f}:C", tmp_path / "b", allowed=allowed) is None
+    assert trust_problem(f"{f}:C", None, allowed=allowed) is None
+    assert "outside" in trust_problem(f"{f}:C", tmp_path / "b")
     assert "load_result" in trust_problem(f"{f}:C", None)
     assert trust_problem("yaml:YAMLObject", None) is None  # installed code (site-packages): no file rule
     assert trust_problem("snoworm.modes.uniform:UniformMode", None) is None  # snoworm itself

@@ -10,7 +10,6 @@ import yaml
 from snoworm import Simulator, load_scenario, simulate
 from snoworm.config.schema import ScenarioError
 from snoworm.modes import watchdog
-from snoworm.modes.codeload import allow_code
 from snoworm.modes.controller import ControllerError, load_controller
 from snoworm.studies.sweep import SweepTask
 from tests.conftest import ROOT, SCENARIOS
@@ -105,8 +104,7 @@ def test_a_failing_constructor_is_scenario_error_when_the_run_starts_not_at_load
 
 
 def test_module_spec_loads_importable_class():
-    with allow_code(TESTS_ALLOWED):
-        cls = load_controller("tests.controller_helpers:Uniform")
+    cls = load_controller("tests.controller_helpers:Uniform", allow_code=TESTS_ALLOWED)
     assert cls.__name__ == "Uniform"
 
 

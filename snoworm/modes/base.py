@@ -19,8 +19,9 @@ import numpy as np
 from ..config.mode_registry import MODES, ModeConfig
 from ..config.schema import ScenarioError
 from ..model.inputs import Controls
+from .codeload import allowed_paths
 
-__all__ = ["Mode", "Interval", "MODES", "register_mode", "mode_class", "start_times", "rolling_interval"]
+__all__ = ["Mode", "Interval", "MODES", "register_mode", "mode_class", "build_mode", "start_times", "rolling_interval"]
 
 
 @dataclass
@@ -90,6 +91,7 @@ class Mode:
     config_class = ModeConfig
     continue_solver = False
     steps_asked = False
+    runs_code = False
 
     def __init__(self, cfg, scenario, model):
         self.cfg = cfg
@@ -129,6 +131,19 @@ def register_mode(cls):
 def mode_class(cfg):
     """The :class:`Mode` subclass registered for a validated mode config."""
     return MODES[cfg.type]
+
+
+def build_mode(cfg, scenario, model, allow_code=()):
+    """A new instance of the mode of ``cfg`` for one run of ``scenario`` on ``model``.
+
+    ``allow_code``: the paths whose controller code the user allowed (``--allow-code``,
+    ``allow_code=``), handed only to a mode that runs the user's code (``runs_code``, the
+    controller mode, which loads it through :mod:`snoworm.modes.codeload`); checked here for
+    every mode (an empty path is a ScenarioError, :func:`~snoworm.modes.codeload.allowed_paths`).
+    """
+    allowed = allowed_paths(allow_code)
+    cls = mode_class(cfg)
+    return cls(cfg, scenario, model, allow_code=allowed) if cls.runs_code else cls(cfg, scenario, model)
 
 
 def start_times(values, n_segments, path="mode.start_time_s"):

@@ -12,7 +12,9 @@ named Python code.  Reading it never does (issue 24):
   library, and its syntax tree defines ``class Name``.
 * :func:`trust_problem` (static too): a file controller must lie inside the scenario's own folder
   tree (both resolved, so a symlink cannot escape) or inside a folder the user allowed
-  (:func:`allow_code`, ``--allow-code PATH``, ``allow_code=`` in Python).  A scenario read back
+  (``--allow-code PATH``, ``allow_code=`` in Python), passed explicitly from the entry point
+  that asked for the run (the CLI, ``simulate``, a sweep's task) to the controller mode that
+  loads the code: no other layer holds or reads the allow-list.  A scenario read back
   by ``load_result`` trusts no folder of its own.  A module controller is trusted as installed
   code when its source lies in the installed packages (site-packages, a folder an editable
   install maps, snoworm itself); otherwise its source and its packages' ``__init__.py`` follow
@@ -28,7 +30,6 @@ named Python code.  Reading it never does (issue 24):
 from __future__ import annotations
 
 import ast
-import contextvars
 import hashlib
 import importlib
 import importlib.machinery
@@ -37,7 +38,6 @@ import os
 import site
 import sys
 import sysconfig
-from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 
@@ -52,8 +52,6 @@ __all__ = [
     "resolve_spec",
     "check_reference",
     "trust_problem",
-    "allow_code",
-    "allowed_roots",
     "allowed_paths",
     "module_sources",
     "import_class",
@@ -65,7 +63,6 @@ MAX_SOURCE_BYTES = 4 * 2**20
 #: Longest controller reference accepted (characters).
 MAX_SPEC_CHARS = 4096
 
-_ALLOWED = contextvars.ContextVar("snoworm_allowed_code", default=())
 _PKG_DIR = Path(__file__).resolve().parents[1]
 
 
@@ -333,32 +330,11 @@ def allowed_paths(paths) -> tuple:
     return tuple(out)
 
 
-@contextmanager
-def allow_code(paths=()):
-    """Within the block, controller files under ``paths`` (files or folders) may run, wherever
-    the scenario lies (``--allow-code PATH``).  Nests: the allowed paths add up.
-
-    Raises
-    ------
-    ScenarioError
-        If a path is empty (see :func:`allowed_paths`).
-    """
-    token = _ALLOWED.set(_ALLOWED.get() + allowed_paths(paths))
-    try:
-        yield
-    finally:
-        _ALLOWED.reset(token)
-
-
-def allowed_roots() -> tuple:
-    """The paths allowed in this context (resolved)."""
-    return _ALLOWED.get()
-
-
-def trust_problem(spec: str, root, path: str = "mode.controller") -> str | None:
+def trust_problem(spec: str, root, path: str = "mode.controller", allowed=()) -> str | None:
     """Why the controller ``spec`` may not run (None if it may): a file outside ``root`` (the
     scenario's folder, resolved; None: no folder is trusted, a read-back scenario) and outside
-    every allowed path; a module whose source is not installed code (:func:`module_sources`)
+    every path of ``allowed`` (the user's ``--allow-code`` / ``allow_code=``, resolved by
+    :func:`allowed_paths`); a module whose source is not installed code (:func:`module_sources`)
     follows the same rule for its source and its packages' ``__init__.py``."""
     target, _ = split_spec(spec, path)
     if is_file_spec(target):
@@ -368,7 +344,7 @@ def trust_problem(spec: str, root, path: str = "mode.controller") -> str | None:
         if installed:
             return None
         what = f"module {target} is not installed code (not in site-packages or an editable install), and its source"
-    roots = [Path(r) for r in allowed_roots()] + ([Path(os.path.realpath(root))] if root is not None else [])
+    roots = [Path(r) for r in allowed_paths(allowed)] + ([Path(os.path.realpath(root))] if root is not None else [])
     outside = [f for f in files if not any(f == r or f.is_relative_to(r) for r in roots)]
     if not outside:
         return None
@@ -449,13 +425,13 @@ def _import_checked(target: str, name: str, path):
     return module
 
 
-def import_class(spec: str, root, path: str = "mode.controller"):
+def import_class(spec: str, root, path: str = "mode.controller", allowed=()):
     """Import the controller class of ``spec`` (when a simulation starts): the static checks and
     the trust check again, then the import; ``Name`` must be a class defined in that module.
     A file, or a module that is not installed code, runs from the bytes checked (never a
     ``__pycache__`` file); an installed module is imported as usual."""
     check_reference(spec, path)
-    why = trust_problem(spec, root, path)
+    why = trust_problem(spec, root, path, allowed)
     if why is not None:
         raise ScenarioError(why)
     target, name = split_spec(spec, path)

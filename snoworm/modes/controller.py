@@ -31,7 +31,6 @@ from ..config.schema import ScenarioError, field, quote
 from ..config.sections import MAX_OUTPUT_SAMPLES
 from .base import Interval, Mode, register_mode
 from .codeload import (
-    allow_code as allow_code_ctx,
     check_reference,
     code_files,
     import_class,
@@ -110,26 +109,26 @@ def code_root(scenario) -> str | None:
     return origin.code_root if origin is not None else os.path.realpath(os.getcwd())
 
 
-def trust_problem_of(scenario, path="mode.controller") -> str | None:
-    """Why ``scenario``'s controller may not run here (see :func:`snoworm.modes.codeload.trust_problem`)."""
-    return trust_problem(scenario.mode.controller, code_root(scenario), path)
+def trust_problem_of(scenario, path="mode.controller", allow_code=()) -> str | None:
+    """Why ``scenario``'s controller may not run here, with the paths ``allow_code`` allowed (see
+    :func:`snoworm.modes.codeload.trust_problem`)."""
+    return trust_problem(scenario.mode.controller, code_root(scenario), path, allow_code)
 
 
 def code_notice(scenario, allow_code=()) -> str:
     """``controller code <spec> (<files>)`` for the CLI's notice; ScenarioError if ``scenario``'s
     controller may not run (with ``allow_code`` allowed too)."""
-    with allow_code_ctx(allow_code):
-        why = trust_problem_of(scenario)
+    why = trust_problem_of(scenario, allow_code=allow_code)
     if why is not None:
         raise ScenarioError(why)
     spec = scenario.mode.controller
     return f"controller code {spec} ({', '.join(str(f) for f in code_files(spec))})"
 
 
-def load_controller(spec: str, path: str = "mode.controller", root=None):
+def load_controller(spec: str, path: str = "mode.controller", root=None, allow_code=()):
     """Import the controller class named by ``spec`` ('file.py:Name' or 'package.module:Name'):
-    this RUNS the file's or module's code.  A file must lie under ``root`` or an allowed path
-    (:func:`snoworm.modes.codeload.allow_code`).
+    this RUNS the file's or module's code.  A file must lie under ``root`` or a path of
+    ``allow_code``.
 
     Raises
     ------
@@ -137,12 +136,13 @@ def load_controller(spec: str, path: str = "mode.controller", root=None):
         If the file or module cannot be found or imported, does not define class ``Name``, or
         may not run.
     """
-    return import_class(spec, root, path)
+    return import_class(spec, root, path, allow_code)
 
 
-def construct(cfg, scenario, path="mode.controller"):
-    """A new controller instance, ``cls(params, scenario)`` (ScenarioError if the constructor fails)."""
-    cls = import_class(cfg.controller, code_root(scenario), path)
+def construct(cfg, scenario, path="mode.controller", allow_code=()):
+    """A new controller instance, ``cls(params, scenario)`` (ScenarioError if the constructor fails);
+    its code may run from the scenario's folder or a path of ``allow_code``."""
+    cls = import_class(cfg.controller, code_root(scenario), path, allow_code)
     try:
         return cls(dict(cfg.params), scenario)
     except Exception as exc:  # noqa: BLE001 - a failing constructor is bad input
@@ -164,10 +164,20 @@ def user_traceback(exc, limit: int = 2000) -> str:
     return text
 
 
+def _working_directory():
+    try:
+        return os.getcwd()
+    except OSError:  # the working directory was removed
+        return None
+
+
 @contextmanager
 def _guard(deadline, when: str, limit):
     """Run a user's code: past ``deadline`` (``simulation.max_wall_s``, :mod:`snoworm.modes.watchdog`)
-    or on ``sys.exit`` it stops with ControllerError; the process never ends on the user's word."""
+    or on ``sys.exit`` it stops with ControllerError; the process never ends on the user's word.
+    A working directory the code changed (``os.chdir``) is restored: the caller's relative paths
+    (``res.write("out")`` after the run) stay theirs."""
+    cwd = _working_directory()
     try:
         with wall_limit(deadline):
             yield
@@ -182,6 +192,12 @@ def _guard(deadline, when: str, limit):
             f"controller called sys.exit({quote(exc.code, 40)}) {when}; a controller never ends "
             "the process. Raise an exception to stop the run."
         ) from None
+    finally:
+        if cwd is not None and _working_directory() != cwd:
+            try:
+                os.chdir(cwd)
+            except OSError:
+                pass
 
 
 @register_mode
@@ -193,12 +209,14 @@ class ControllerMode(Mode):
     continue_solver = True  # short periods: VODE keeps its history across them
     steps_asked = True  # fixed periods, at most MAX_OUTPUT_SAMPLES / segments of them (check_scenario)
 
-    def __init__(self, cfg, scenario, model):
+    runs_code = True  # takes the user's allow-list (Mode.runs_code)
+
+    def __init__(self, cfg, scenario, model, allow_code=()):
         super().__init__(cfg, scenario, model)
         limit = scenario.simulation.max_wall_s
         self.deadline = time.perf_counter() + limit if limit is not None else None  # user code counts too
         with _guard(self.deadline, "while importing and constructing it", limit):
-            self.controller = construct(cfg, scenario)
+            self.controller = construct(cfg, scenario, allow_code=allow_code)
         self.commands = CommandState(model)
         self.calls = 0
 

@@ -11,7 +11,6 @@ A failed run never returns a partial result as if it were whole.
 from __future__ import annotations
 
 import logging
-import os
 import time
 from dataclasses import dataclass
 
@@ -22,8 +21,7 @@ from ..config.schema import quote
 from ..dynamics import ChainModel
 from ..model.arrays import LinkArrays, SegmentArrays
 from ..model.inputs import Controls
-from ..modes import mode_class
-from ..modes.codeload import allow_code as allowed_code
+from ..modes.base import build_mode
 from ..results.result import Result
 from .guard import SolverError, check_sane, guarded
 from .interval import IntervalSolver, output_grid
@@ -94,10 +92,11 @@ def chain_model(sc) -> ChainModel:
     )
 
 
-def assemble(sc, model: ChainModel | None = None) -> AssembledRun:
+def assemble(sc, model: ChainModel | None = None, allow_code=()) -> AssembledRun:
     """Assemble a scenario for one run: its chain model (:func:`chain_model`, or ``model`` if the
     caller built it for this run already) and a new instance of its mode on that model (which
-    prepares its plan on it, e.g. the force-control targets).
+    prepares its plan on it, e.g. the force-control targets; :func:`snoworm.modes.base.build_mode`,
+    which hands ``allow_code`` to a mode that runs the user's code).
 
     Raises
     ------
@@ -111,7 +110,7 @@ def assemble(sc, model: ChainModel | None = None) -> AssembledRun:
         model = chain_model(sc)
     else:
         _check_scenario(sc)
-    return AssembledRun(sc, model, mode_class(sc.mode)(sc.mode, sc, model))
+    return AssembledRun(sc, model, build_mode(sc.mode, sc, model, allow_code))
 
 
 def check_assembly(sc) -> None:
@@ -189,21 +188,6 @@ def _guarded_integrate(model, modes, sim, name, progress=None):
     return pieces, phases, stats
 
 
-def _working_directory():
-    try:
-        return os.getcwd()
-    except OSError:  # the working directory was removed
-        return None
-
-
-def _restore_working_directory(cwd) -> None:
-    if cwd is not None and _working_directory() != cwd:
-        try:
-            os.chdir(cwd)
-        except OSError:
-            pass
-
-
 def simulate(sc, progress=None, allow_code=()) -> Result:
     """Run a scenario and return its :class:`~snoworm.results.result.Result`.
 
@@ -213,8 +197,8 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
     :class:`snoworm.infra.progress.Progress`).
     ``allow_code``: paths (files or folders) whose controller code may run although they lie
     outside the scenario's folder (a controller in the scenario's folder tree runs without it;
-    docs/controllers.md). A controller that changes the working directory (``os.chdir``) does not
-    move the caller's: it is restored when the run ends.
+    docs/controllers.md); handed to the controller mode, which loads the code (and restores the
+    working directory a controller changed: the caller's relative paths stay theirs).
 
     Raises
     ------
@@ -223,13 +207,8 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
         messages, the time reached and the interval's label).
     """
     wall0 = time.perf_counter()
-    cwd = _working_directory()
-    try:
-        with allowed_code(allow_code):
-            case = assemble(sc)
-            pieces, phases, stats = _guarded_integrate(case.model, [case.mode], sc.simulation, sc.name, progress)
-    finally:  # a controller's os.chdir does not outlive the run (the caller's relative paths stay theirs)
-        _restore_working_directory(cwd)
+    case = assemble(sc, allow_code=allow_code)
+    pieces, phases, stats = _guarded_integrate(case.model, [case.mode], sc.simulation, sc.name, progress)
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
 

@@ -23,7 +23,6 @@ from ...config.scenario import Scenario, scenario_from_dict
 from ...config.schema import ScenarioError
 from ...infra.folders import OutputError, os_error_message
 from ...infra.locks import lock_token_matches
-from ...modes.codeload import allow_code
 from ...modes.controller import ControllerError
 from ...simulation.driver import SolverError, simulate
 from .series import save_series
@@ -220,8 +219,7 @@ def run_case(task: SweepTask) -> dict:
     wall0 = time.perf_counter()
     out = {"index": task.index, "status": "ok", "error": ""}
     try:
-        with allow_code(task.allow_code):
-            res = simulate(task.validated())
+        res = simulate(task.validated(), allow_code=task.allow_code)
         out.update(case_metrics(res))
         if task.save_dir:
             out.update(save_case_series(res, task.save_dir, task.lock_token))

@@ -17,7 +17,7 @@ from ..._version import __version__
 from ...config.scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
 from ...config.schema import ScenarioError, short_key
 from ...infra.csvwriter import canonical_json
-from ...modes.codeload import allow_code as allowed_code, allowed_paths
+from ...modes.codeload import allowed_paths
 from ...modes.controller import trust_problem_of
 from .cases import build_cases
 from .inputs import input_hashes
@@ -92,13 +92,12 @@ def plan_sweep(scenario, sets, zip_, save_cases, out_dir, jobs, keep=False, allo
     scenarios (up to :data:`KEEP_VALIDATED_MAX` cases) for the tasks.  ``allow_code``: see
     ``run_sweep`` (a controller that may not run refuses the whole sweep here)."""
     allow = list(allowed_paths(allow_code))  # ScenarioError for an empty path
-    with allowed_code(allow):
-        plan = _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep)
+    plan = _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep, allow)
     plan.allow_code = allow
     return plan
 
 
-def _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep) -> SweepPlan:
+def _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep, allow_code) -> SweepPlan:
     axes = as_axes(sets)
     raw, source, base_dir = _base(scenario)
     if not isinstance(raw, dict):
@@ -116,7 +115,7 @@ def _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep) -> SweepP
         except ScenarioError as exc:
             invalid[c.index] = one_line(exc)
             continue
-        why = trust_problem_of(sc) if sc.mode.type == "controller" else None
+        why = trust_problem_of(sc, allow_code=allow_code) if sc.mode.type == "controller" else None
         if why is not None:  # refused for the whole sweep, before anything runs
             raise ScenarioError(f"case {c.case_id}: {why}")
         n_links = max(n_links, sc.vehicle.segments - 1)
