@@ -216,33 +216,47 @@ def run_sweep(
         Axes: ``"KEY=SPEC"`` strings (see :func:`parse_spec`), ``(key, spec)`` pairs or
         :class:`Axis` objects.  Several axes form a full grid (first axis slowest).
     out_dir : str or Path, optional
-        Where ``sweep.json``, ``summary.csv`` and the plot go (None: nothing is written); locked while the
-        sweep runs (:class:`~snoworm.infra.folders.FolderLocked`); a re-run of the same sweep resumes.
-    jobs, scheduler : int, str or distributed.Client, optional
-        Local worker processes (1: this process), or a Dask scheduler (``tcp://host:port``) instead.
+        Where ``sweep.json``, ``summary.csv`` and the plot go.  A re-run with the same
+        definition resumes; with another definition it is refused (unless ``overwrite`` or
+        ``restart``).  None: nothing is written.  The folder is locked while the sweep runs (a
+        second sweep into it raises :class:`~snoworm.infra.folders.FolderLocked` naming the process
+        holding it).
+    jobs : int
+        Local worker processes (1: run in this process).
+    scheduler : str or distributed.Client, optional
+        Address of a Dask scheduler (``tcp://host:port``); overrides ``jobs``.
     zip_ : bool
         Pair the axes element by element (equal lengths) instead of a grid.
-    save_cases, series : bool, {"folders", "netcdf"}
-        Keep each case's time series (needs ``out_dir``): ``folders``, a run folder per case,
-        ``out_dir/cases/<case_id>/``; ``netcdf`` (implies ``save_cases``), every case in one file
-        ``out_dir/series.nc`` (dims: swept keys x time x segment/link, see
-        :mod:`snoworm.studies.sweep.series`; needs xarray).
+    save_cases : bool
+        Keep each case's time series (needs ``out_dir``), as ``series`` says.
+    series : {"folders", "netcdf"}
+        ``folders``: a run folder per case, ``out_dir/cases/<case_id>/``; ``netcdf``: every case in
+        one file ``out_dir/series.nc`` (dims: swept keys x time x segment/link, see
+        :mod:`snoworm.studies.sweep.series`; needs xarray).  ``netcdf`` implies ``save_cases``.
     progress : bool, optional
         Progress on stderr (default True): a bar on a terminal, one line per ~10 % otherwise.
-    plot, plot_format, figure_size : bool, {"png", "pdf", "svg"}, str or (float, float), optional
-        Write ``sweep.png`` (one varying axis, or zipped axes) or ``heatmap.png`` (two), in that format
-        and print size (``"column"``, ``"page"`` (default) or ``"WxH"`` inches).
+    plot : bool
+        Write ``sweep.png`` (one varying axis, or zipped axes) or ``heatmap.png`` (two).
+    plot_format : {"png", "pdf", "svg"}
+        File format of the plot.
+    figure_size : str or (float, float), optional
+        Print size of the plot: ``"column"``, ``"page"`` (default) or ``"WxH"`` inches
+        (:func:`snoworm.plotting.style.parse_size`).
     executor : object, optional
         Anything with ``map_unordered(fn, tasks)`` and ``close()``; overrides jobs/scheduler.
     batch : int
-        With ``batch > 1`` (no scheduler or executor): up to ``batch`` cases of the same structure
-        integrated as one stacked system (:class:`~snoworm.studies.sweep.executors.BatchExecutor`).
-    overwrite, restart : bool
-        Start afresh in a folder holding another sweep or not written by snoworm (``overwrite``), or
-        over a sweep in ``out_dir`` run from other inputs, removing its rows (``restart``).
-    allow_code, command : sequence of paths, str, optional
-        Paths whose controller code may run outside the scenario's folder (:func:`snoworm.simulate`);
-        the command line recorded in the folder's manifest (default: this process's).
+        With ``batch > 1`` (and no scheduler or executor): integrate up to ``batch`` cases of the
+        same structure as one stacked system (:class:`~snoworm.studies.sweep.executors.BatchExecutor`,
+        ``jobs`` processes); other cases run one by one.  Same metrics within the solver tolerance.
+    overwrite : bool
+        Start afresh in a folder holding another sweep (its files are removed), or write into a
+        non-empty folder snoworm did not write.
+    allow_code : sequence of str or Path
+        Paths whose controller code may run outside the scenario's folder (:func:`snoworm.simulate`).
+    restart : bool
+        Start afresh (removing its rows) over a sweep in ``out_dir`` run from other inputs.
+    command : str, optional
+        The command line recorded in the folder's manifest (default: this process's).
 
     Returns
     -------
