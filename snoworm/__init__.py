@@ -30,9 +30,11 @@ from typing import TYPE_CHECKING
 
 from ._version import __version__
 
-#: Each public name -> the module defining it.  Imported on first use (PEP 562), so that
-#: ``import snoworm`` and the command line start without SciPy, the sweeps or matplotlib; a
-#: command pays only for the modules it uses (``snoworm --help`` imports none of them).
+#: The public API, in one list: each public name -> the module defining it (docs/architecture.md,
+#: "The public surface").  ``__all__`` and ``dir(snoworm)`` derive from it; the names are imported
+#: on first use (PEP 562), so that ``import snoworm`` and the command line start without NumPy,
+#: SciPy, the sweeps or matplotlib; a command pays only for the modules it uses (``snoworm --help``
+#: imports none of them).
 _EXPORTS = {
     "BatchMember": "simulation.driver",
     "SolverError": "simulation.guard",
@@ -57,42 +59,28 @@ _EXPORTS = {
     "run_sweep": "studies.sweep",
 }
 
-__all__ = [
-    "__version__",
-    "BatchMember",
-    "Mode",
-    "ModeConfig",
-    "Observation",
-    "OutputError",
-    "Result",
-    "ResultFileError",
-    "Scenario",
-    "ScenarioError",
-    "Simulator",
-    "SolverError",
-    "SweepTable",
-    "load_result",
-    "load_scenario",
-    "load_sweep",
-    "register_mode",
-    "run_sweep",
-    "scenario_from_dict",
-    "shipped_scenarios",
-    "simulate",
-    "simulate_batch",
-]
+__all__ = ["__version__", *sorted(_EXPORTS)]
 
-if TYPE_CHECKING:  # for type checkers and editors; at run time the names come from __getattr__
+if TYPE_CHECKING:
+    # What type checkers and editors read: they do not run __getattr__ (``X as X`` marks a re-export
+    # of a py.typed package).  At run time the names come from __getattr__; tests/test_init.py
+    # checks that these imports name exactly the entries of _EXPORTS.
     from . import modes as modes
-    from .config.mode_registry import ModeConfig
-    from .config.scenario import Scenario, ScenarioError, load_scenario, scenario_from_dict, shipped_scenarios
-    from .infra.folders import OutputError
-    from .modes import Mode, register_mode
-    from .results.result import Result, ResultFileError, load_result
-    from .simulation.driver import BatchMember, simulate, simulate_batch
-    from .simulation.guard import SolverError
-    from .simulation.stepwise import Observation, Simulator
-    from .studies.sweep import SweepTable, load_sweep, run_sweep
+    from .config.mode_registry import ModeConfig as ModeConfig
+    from .config.scenario import (
+        Scenario as Scenario,
+        ScenarioError as ScenarioError,
+        load_scenario as load_scenario,
+        scenario_from_dict as scenario_from_dict,
+        shipped_scenarios as shipped_scenarios,
+    )
+    from .infra.folders import OutputError as OutputError
+    from .modes import Mode as Mode, register_mode as register_mode
+    from .results.result import Result as Result, ResultFileError as ResultFileError, load_result as load_result
+    from .simulation.driver import BatchMember as BatchMember, simulate as simulate, simulate_batch as simulate_batch
+    from .simulation.guard import SolverError as SolverError
+    from .simulation.stepwise import Observation as Observation, Simulator as Simulator
+    from .studies.sweep import SweepTable as SweepTable, load_sweep as load_sweep, run_sweep as run_sweep
 
 
 def __getattr__(name: str):

@@ -16,32 +16,8 @@ def _labels(fig):
     legends (as a whole), texts placed in axes and on the figure."""
     out = []
     for i, a in enumerate(fig.axes):
-        if not a.get_visible():
-            continue
-        for name, t in (
-            ("xlabel", a.xaxis.label),
-            ("ylabel", a.yaxis.label),
-            ("title", a.title),
-            ("ltitle", a._left_title),
-            ("rtitle", a._right_title),
-        ):
-            if _visible_text(t):
-                out.append((f"axes{i}.{name}:{t.get_text()!r}", t))
-        for axis in (a.xaxis, a.yaxis) if a.axison else ():
-            lo, hi = sorted(axis.get_view_interval())
-            for tick in axis.get_major_ticks():
-                if lo - 1e-9 * abs(hi - lo) <= tick.get_loc() <= hi + 1e-9 * abs(hi - lo):
-                    for t in (tick.label1, tick.label2):
-                        if _visible_text(t):
-                            out.append((f"axes{i}.tick:{t.get_text()!r}", t))
-        if a.get_legend() is not None and a.get_legend().get_visible():
-            out.append((f"axes{i}.legend", a.get_legend()))
-            out += [
-                (f"axes{i}.legend.text:{t.get_text()!r}", t) for t in a.get_legend().get_texts() if _visible_text(t)
-            ]
-        for t in a.texts:
-            if _visible_text(t):
-                out.append((f"axes{i}.text:{t.get_text()!r}", t))
+        if a.get_visible():
+            out += _axes_labels(i, a)
     for t in fig.texts:
         if _visible_text(t) and t is not fig._suptitle:
             out.append((f"figure.text:{t.get_text()!r}", t))
@@ -49,6 +25,34 @@ def _labels(fig):
         out.append(("suptitle", fig._suptitle))
     for leg in fig.legends:
         out.append(("figure.legend", leg))
+    return out
+
+
+def _axes_labels(i, a):
+    """The label-like artists of the visible axes ``a`` (the ``i``-th of its figure)."""
+    out = []
+    for name, t in (
+        ("xlabel", a.xaxis.label),
+        ("ylabel", a.yaxis.label),
+        ("title", a.title),
+        ("ltitle", a._left_title),
+        ("rtitle", a._right_title),
+    ):
+        if _visible_text(t):
+            out.append((f"axes{i}.{name}:{t.get_text()!r}", t))
+    for axis in (a.xaxis, a.yaxis) if a.axison else ():
+        lo, hi = sorted(axis.get_view_interval())
+        for tick in axis.get_major_ticks():
+            if lo - 1e-9 * abs(hi - lo) <= tick.get_loc() <= hi + 1e-9 * abs(hi - lo):
+                for t in (tick.label1, tick.label2):
+                    if _visible_text(t):
+                        out.append((f"axes{i}.tick:{t.get_text()!r}", t))
+    if a.get_legend() is not None and a.get_legend().get_visible():
+        out.append((f"axes{i}.legend", a.get_legend()))
+        out += [(f"axes{i}.legend.text:{t.get_text()!r}", t) for t in a.get_legend().get_texts() if _visible_text(t)]
+    for t in a.texts:
+        if _visible_text(t):
+            out.append((f"axes{i}.text:{t.get_text()!r}", t))
     return out
 
 

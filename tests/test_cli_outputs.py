@@ -165,11 +165,11 @@ def test_python_dash_m_snoworm_runs_the_cli(tmp_path):
 def test_jobs_option_on_every_command_that_runs_cases_in_parallel():
     import inspect
 
-    from snoworm.studies import calibrate, groundtruth, inching
+    from snoworm.studies import calibrate, groundtruth, mobility
     from snoworm.studies.paper import report
     from snoworm.studies.sweep import run as sweep_run
 
-    parallel = {"sweep": sweep_run, "mobility-map": inching, "paper": report}  # the map's runs: studies.inching
+    parallel = {"sweep": sweep_run, "mobility-map": mobility, "paper": report}
     serial = {"calibrate": calibrate, "groundtruth": groundtruth}
     for name, mod in parallel.items():
         assert "ProcessExecutor" in inspect.getsource(mod)

@@ -32,7 +32,7 @@ def test_api_reference_builds_without_warnings(tmp_path):
         assert name in page, name
     assert (out / "snoworm" / "plotting" / "style.html").exists() and (out / "index.html").exists()
     # every module has its page: the layer packages' modules (walked by pdoc) and the faces' ones
-    for mod in ("config/scenario", "studies/sweep/run", "studies/paper/claims", "infra/folders", "modes/gait"):
+    for mod in ("config/scenario", "studies/sweep/run", "studies/paper/claims", "infra/folders", "modes/inchworm"):
         assert (out / "snoworm" / f"{mod}.html").exists(), mod
     assert "__main__" not in " ".join(p.name for p in out.rglob("*.html"))
 

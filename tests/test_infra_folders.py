@@ -1,8 +1,13 @@
-"""Atomic file writing (snoworm.infra.folders): a reader never sees a half-written file."""
+"""Atomic file writing (snoworm.infra.folders): a reader never sees a half-written file; durable output
+folders: every staged file is on disk before the folder appears."""
+
+import errno
+import os
 
 import pytest
 
-from snoworm.infra.folders import atomic_path, atomic_write_text
+from snoworm.infra import folders
+from snoworm.infra.folders import MANIFEST, OutputError, atomic_path, atomic_write_text, output_folder, sync_files
 
 
 def test_atomic_write_text_writes_and_replaces(tmp_path):
@@ -42,22 +47,16 @@ def test_failure_of_text_encoding_leaves_no_temp_file(tmp_path):
 
 
 # ------------------------------------------------------------------ file modes
-import errno  # noqa: E402
 import json  # noqa: E402
 import multiprocessing  # noqa: E402
-import os  # noqa: E402
 import stat  # noqa: E402
 
-from snoworm.infra import folders  # noqa: E402
 from snoworm.infra.folders import (  # noqa: E402
     LOCK,
-    MANIFEST,
     FolderLocked,
-    OutputError,
     check_output_folder,
     folder_lock,
     folder_state,
-    output_folder,
     read_manifest,
 )
 
@@ -265,3 +264,60 @@ def test_earlier_output_note(tmp_path):
     note = earlier_output_note(tmp_path)
     assert note.startswith(f"note: {tmp_path} holds earlier results (snoworm run x --out d, ") and "\n" not in note
     assert "resumed" in earlier_output_note(tmp_path, resumes=True)
+
+
+# ------------------------------------ durable: every staged file on disk before the folder appears
+def _write(out, names):
+    with output_folder(out, command="test") as stage:
+        for n in names:
+            folders.atomic_write_text(stage / n, n)
+    return out
+
+
+def test_sync_files_syncs_every_file_of_a_tree(tmp_path, monkeypatch):
+    (tmp_path / "sub").mkdir()
+    for n in ("a.csv", "sub/b.png"):
+        (tmp_path / n).write_text("x")
+    synced = []
+    real = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: synced.append(os.readlink(f"/proc/self/fd/{fd}")) or real(fd))
+    sync_files(tmp_path)
+    assert sorted(os.path.relpath(p, tmp_path) for p in synced) == ["a.csv", "sub/b.png"]
+
+
+def test_every_staged_file_is_synced_to_disk_before_the_folder_appears(tmp_path, monkeypatch):
+    """Files staged by atomic_write_text skip their own fsync; the commit syncs every staged file
+    (plots and the manifest included) before the rename; outside a stage each file syncs itself."""
+    synced, events = [], []
+    real_fsync, real_rename = os.fsync, os.rename
+
+    def fsync(fd):
+        synced.append(os.path.basename(os.readlink(f"/proc/self/fd/{fd}")))
+        events.append("fsync")
+        return real_fsync(fd)
+
+    def rename(src, dst):
+        events.append("rename")
+        return real_rename(src, dst)
+
+    monkeypatch.setattr(folders.os, "fsync", fsync)
+    monkeypatch.setattr(folders.os, "rename", rename)
+    with output_folder(tmp_path / "run", command="test") as stage:
+        folders.atomic_write_text(stage / "summary.json", "{}\n")
+        (stage / "plot.png").write_bytes(b"png")  # a file written by another writer
+        assert synced == []  # deferred to the commit
+    assert sorted(synced) == sorted([MANIFEST, "plot.png", "summary.json"])
+    assert events[-1] == "rename" and "rename" not in events[:-1]  # all synced, then the folder appears
+    synced.clear()
+    folders.atomic_write_text(tmp_path / "alone.txt", "x")
+    assert len(synced) == 1  # not in a stage: synced at once
+
+
+def test_a_failed_sync_at_the_commit_writes_nothing(tmp_path, monkeypatch):
+    def no_disk(fd):
+        raise OSError(errno.EIO, os.strerror(errno.EIO))
+
+    monkeypatch.setattr(folders.os, "fsync", no_disk)
+    with pytest.raises(OutputError, match="Input/output error"):
+        _write(tmp_path / "run", ["segments.csv"])
+    assert list(tmp_path.iterdir()) == []

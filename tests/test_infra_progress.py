@@ -1,7 +1,8 @@
-"""snoworm.infra.progress: a bar on a terminal, one line per ~10 % otherwise, tqdm optional."""
+"""snoworm.infra.progress: a bar (tqdm, a dependency) on a terminal, one line per ~10 % otherwise."""
 
 import io
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -48,19 +49,24 @@ def test_nothing_is_printed_when_off_or_when_nothing_was_done():
     assert s.getvalue() == ""
 
 
-def test_plain_bar_on_a_terminal_without_tqdm(monkeypatch):
-    monkeypatch.setattr(P, "_tqdm", lambda notebook=False: None)
-    s = TTY()
-    with P.Progress(4, "map", "runs", stream=s) as bar:
-        assert bar.mode == "bar"
-        for _ in range(4):
-            bar.update()
-    out = s.getvalue()
-    assert out.startswith("\rmap [") and "4/4 runs" in out and out.endswith("\n")
+def test_tqdm_is_a_dependency_and_draws_every_bar():
+    # tqdm is in [project].dependencies (not an optional extra): every bar on a terminal is tqdm's,
+    # there is no home-made bar to fall back to
+    import tqdm
+
+    try:
+        import tomllib
+    except ImportError:  # Python 3.10
+        import tomli as tomllib
+    project = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())["project"]
+    assert any(d.replace(" ", "").startswith("tqdm>=") for d in project["dependencies"])
+    assert not any(d.startswith("tqdm") for d in project["optional-dependencies"].get("progress", []))
+    assert not hasattr(P.Progress, "_plain")
+    with P.Progress(4, "map", "runs", stream=TTY()) as bar:
+        assert bar.mode == "bar" and isinstance(bar._bar, tqdm.tqdm)
 
 
-def test_tqdm_draws_the_bar_on_a_terminal_when_installed():
-    pytest.importorskip("tqdm")
+def test_tqdm_draws_the_bar_on_a_terminal():
     s = TTY()
     with P.Progress(3, "sweep", "cases", stream=s) as bar:
         bar.update(info="1 failed")
@@ -99,7 +105,6 @@ def test_counts_are_rounded_to_what_the_total_needs():
 
 
 def test_tqdm_bar_shows_rounded_counts():
-    pytest.importorskip("tqdm")
     s = TTY()
     with P.Progress(100.0, "run", "s simulated", stream=s) as bar:
         bar.set(14.970594137667268)

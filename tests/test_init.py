@@ -113,3 +113,32 @@ print(type(sc.mode).__name__, sorted(MODES), simulate(sc).summary()["distance_m"
     out = fresh(code)
     assert out.split(maxsplit=1)[0] == "MineConfig"
     assert "'mine'" in out and "'uniform'" in out and "'inchworm'" in out and out.split()[-1] == "True"
+
+
+@pytest.mark.parametrize("package", ["snoworm", "snoworm.modes"])
+def test_the_public_names_are_one_list(package):
+    # the dict _EXPORTS (name -> module) is the one list: __all__ derives from it (no second literal
+    # list of names), every name resolves from its module, and the imports for static tools
+    # (TYPE_CHECKING) name exactly its entries, so the three cannot drift apart
+    import ast
+    import importlib
+    from pathlib import Path
+
+    mod = importlib.import_module(package)
+    tree = ast.parse(Path(mod.__file__).read_text(encoding="utf-8"))
+    literal_alls = [
+        n
+        for n in tree.body
+        if isinstance(n, ast.Assign)
+        and any(isinstance(t, ast.Name) and t.id == "__all__" for t in n.targets)
+        and isinstance(n.value, ast.List)
+        and all(isinstance(e, ast.Constant) for e in n.value.elts)
+    ]
+    assert not literal_alls, f"{package}.__all__ is a second literal list of the names"
+    assert set(mod.__all__) - {"__version__"} == set(mod._EXPORTS)
+    assert set(mod._EXPORTS) <= set(dir(mod))
+    for name, module in mod._EXPORTS.items():
+        assert getattr(mod, name) is getattr(importlib.import_module(f"{package}.{module}"), name), name
+    guard = next(n for n in tree.body if isinstance(n, ast.If) and ast.unparse(n.test) == "TYPE_CHECKING")
+    typed = {a.asname or a.name for n in guard.body if isinstance(n, ast.ImportFrom) for a in n.names}
+    assert typed - {"modes"} == set(mod._EXPORTS)

@@ -1,4 +1,7 @@
-"""Figures of one run (snoworm.plotting.runs): panels, styles, legends, own axes, file formats."""
+"""Figures of one run (snoworm.plotting.runs): panels, styles, legends, own axes, file formats, and the
+force diagram of a force-control run."""
+
+import dataclasses
 
 import numpy as np
 import pytest
@@ -142,3 +145,21 @@ def test_route_figure_shows_speeds_over_elevation_and_xt(tmp_path):
     assert "route.png" in names
     level = simulate(load_scenario("tow6_uniform", ["simulation.duration_s=1"]))
     assert "route.png" not in [p.name for p in runs.plot_result(level, tmp_path / "level")]
+
+
+# ---------------------------------------------------------------------------------- force diagram
+def test_one_box_per_segment_with_its_wheel_force(uniform):
+    fig = runs.plot_force_diagram(uniform)
+    texts = [t.get_text() for t in fig.axes[0].texts]
+    assert sum(t.startswith(("leader 0", "follower")) for t in texts) == uniform.n_segments
+    assert sum("wheels" in t for t in texts) == uniform.n_segments
+
+
+def test_force_diagram_never_prints_minus_zero(uniform):
+    links = dict(uniform.links, force_N=np.full_like(uniform.links["force_N"], -1e-3))
+    segments = dict(uniform.segments, net_force_N=np.full_like(uniform.segments["net_force_N"], -0.02))
+    res = dataclasses.replace(uniform, links=links, segments=segments)
+    fig = runs.plot_force_diagram(res)
+    texts = [t.get_text() for t in fig.axes[0].texts]
+    assert any("0.0 N" in t for t in texts)
+    assert not [t for t in texts if "-0.0" in t or "\u22120.0" in t]

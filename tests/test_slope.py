@@ -295,7 +295,7 @@ def test_eq6_with_gravity_is_eq4_plus_eq5(F_c, Ft_f, Ftr_f, Ftr_r, G_f, G_r):
     """Eq. 6 with gravity is Eq. 4 + Eq. 5 for every joint force; so some F_c satisfies both Eq. 4
     (> 0) and Eq. 5 (>= 0) exactly when Eq. 6 > 0: the largest F_c the anchor holds, F_tr,rear + G_rear,
     makes Eq. 4 equal Eq. 6."""
-    from snoworm.modes.gait import progress_conditions
+    from snoworm.modes.inchworm import progress_conditions
 
     pc = progress_conditions(F_c, Ft_f, Ftr_f, Ftr_r, G_f, G_r)
     assert pc["eq6_N"] == pytest.approx(pc["eq4_N"] + pc["eq5_N"], abs=1e-9)
@@ -314,7 +314,7 @@ def test_eq6_on_a_uniform_slope_is_a_grade_limit(X, grade, slip):
     """Two segments on a uniform slope, the front one driven at slip i, the rear one held (wheels
     locked): with the laws' forces at F_n = W cos(theta), Eq. 6 with gravity reads
     W n cos(theta) c_t(i) > 2 m g sin(theta), i.e. tan(theta) < c_t(i) / 2 (the resistances cancel)."""
-    from snoworm.modes.gait import progress_conditions
+    from snoworm.modes.inchworm import progress_conditions
 
     sc, m = _model(0.0, X)
     seg, tp = sc.vehicle.segment_params()[0], m.tp

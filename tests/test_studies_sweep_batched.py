@@ -50,7 +50,7 @@ def test_unbatchable_cases_run_one_by_one(scenario_path):
 def test_in_process_sweep_validates_each_case_once(scenario_path, monkeypatch, batch):
     """A sweep run in this process hands the scenarios it validated while planning to the executor."""
     import snoworm.studies.sweep.metrics as metrics
-    import snoworm.studies.sweep.plan as plan_mod
+    import snoworm.studies.sweep.run as plan_mod
 
     calls = []
 
@@ -74,8 +74,7 @@ def test_local_pool_tasks_carry_the_validated_scenarios(scenario_path):
     """For a local executor (this process or its own pool) the tasks carry the scenarios validated
     while planning, and no mapping to validate again; each equals a fresh validation of its case."""
     from snoworm.config.scenario import load_scenario
-    from snoworm.studies.sweep.plan import plan_sweep as _plan
-    from snoworm.studies.sweep.run import _tasks
+    from snoworm.studies.sweep.run import _tasks, plan_sweep as _plan
 
     sets = ["tow.force_N=0,100", "simulation.duration_s=1"]
     plan = _plan(scenario_path("tow6_uniform"), sets, False, False, None, 2, keep=True)

@@ -69,7 +69,7 @@ def test_another_snoworm_version_refuses_the_resume(tmp_path, monkeypatch):
         progress=False,
         plot=False,
     )
-    import snoworm.studies.sweep.plan as plan_mod  # the resume key is the plan's
+    import snoworm.studies.sweep.run as plan_mod  # the resume key is the plan's (in run)
 
     monkeypatch.setattr(plan_mod, "__version__", "999.0")
     with pytest.raises(ScenarioError, match="run by snoworm .* this is 999.0"):

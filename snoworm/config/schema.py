@@ -266,7 +266,7 @@ def _type_info(tp):
     return typing.get_origin(tp), typing.get_args(tp), dataclasses.is_dataclass(tp)
 
 
-def _convert(path, value, tp, md):
+def _convert(path, value, tp, md):  # noqa: C901, PLR0912 (one branch per kind of annotation: a flat dispatch)
     if md.get("convert") is not None:
         return md["convert"](value, path)
     origin, args, is_dc = _type_info(tp)

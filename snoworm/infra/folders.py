@@ -15,6 +15,10 @@
   replaces (from the start if it exists, else from the commit), so no command replaces or writes
   into a folder another live process holds (:class:`FolderLocked`, exit status 2).  A lock left
   by a dead process is taken over.
+* :func:`sync_files`: files written by :func:`atomic_write_text` inside the staging folder
+  (:data:`STAGING`) skip their own ``fsync``; the commit syncs the whole staging folder, every
+  file concurrently, before the rename, so the folder appears only with every file (plots and the
+  manifest too) on disk.
 
 I/O failures (disk full, read-only, a path under a file) raise :class:`OutputError` naming the
 path and the operating system's reason (the CLI: exit status 2).
@@ -22,6 +26,7 @@ path and the operating system's reason (the CLI: exit status 2).
 
 from __future__ import annotations
 
+import contextvars
 import errno
 import json
 import os
@@ -29,6 +34,7 @@ import shlex
 import shutil
 import sys
 import tempfile
+import threading
 import time
 from contextlib import contextmanager
 from pathlib import Path
@@ -36,7 +42,6 @@ from pathlib import Path
 from .._version import __version__
 from . import manifest as _manifest
 from .commit import commit_in_place, owns_stage, recover, unfinished_commit
-from .durable import STAGING as _STAGING, sync_files
 from .locks import FolderLocked, OutputError, check_unlocked, folder_lock, os_error_message, pid_alive, try_folder_lock
 from .manifest import (
     JOURNAL,
@@ -67,7 +72,38 @@ __all__ = [
     "LOCK",
     "os_error_message",
     "file_mode",
+    "STAGING",
 ]
+
+# ---------------------------------- durable: every staged file synced before the folder appears
+#: the staging folder of the output folder being written (its files are synced at the commit)
+STAGING = contextvars.ContextVar("snoworm_staging_folder", default=None)
+
+
+def sync_files(folder) -> None:
+    """``fsync`` every file under ``folder``, concurrently (the file system commits them together:
+    5 files took 3-7 ms this way against 18-36 ms one after the other, measured on ext4)."""
+    paths = [os.path.join(root, n) for root, _, names in os.walk(folder) for n in names]
+    errors = []
+
+    def sync(p):
+        try:
+            fd = os.open(p, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+        except OSError as exc:
+            errors.append(exc)
+
+    threads = [threading.Thread(target=sync, args=(p,)) for p in paths]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    if errors:
+        raise errors[0]
+
 
 _OLD = ".snoworm-old-"
 
@@ -107,9 +143,9 @@ def atomic_write_text(path, text: str) -> Path:
 
     The file is flushed to disk (``fsync``) before it replaces ``path``; inside the staging folder
     of :func:`output_folder` that happens for every staged file at once when the folder is
-    committed (:func:`snoworm.infra.durable.sync_files`), which is when it must.
+    committed (:func:`sync_files`), which is when it must.
     """
-    stage = _STAGING.get()
+    stage = STAGING.get()
     deferred = stage is not None and os.path.abspath(path).startswith(stage + os.sep)
     with atomic_path(path) as tmp:
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
@@ -383,13 +419,13 @@ def output_folder(path, overwrite: bool = False, command: str | None = None):
             stage, in_place = _make_stage(target)
         except OSError as exc:
             raise OutputError(f"cannot write results: {os_error_message(exc, target)}") from None
-        token = _STAGING.set(os.path.abspath(stage))
+        token = STAGING.set(os.path.abspath(stage))
         try:
             try:
                 yield stage
                 write_manifest(stage, command)
             finally:
-                _STAGING.reset(token)
+                STAGING.reset(token)
             sync_files(stage)  # every staged file on disk before the folder appears
             held.take()  # a folder made meanwhile (a sweep started there): its lock decides
             state = check_output_folder(target, overwrite) if held.lease is None else _recheck(target, overwrite)

@@ -1,8 +1,8 @@
 """Progress of long commands: a bar on a terminal, a widget in a notebook, lines in a log file.
 
-:class:`Progress` draws with ``tqdm`` when it is installed (``pip install 'snoworm[progress]'``)
-and with a plain one-line bar otherwise; in a Jupyter kernel it uses ``tqdm.auto`` (a widget
-where ipywidgets is installed); when the stream is not a terminal (a batch job's log) it prints
+:class:`Progress` draws its bar with ``tqdm`` (a dependency); in a Jupyter kernel it uses
+``tqdm.auto`` (a widget where ipywidgets is installed); when the stream is not a terminal (a batch
+job's log) it prints
 one line each time another ~10 % is done, and at least every :data:`LINE_EVERY_S` seconds of
 wall time while work advances, so logs show how far a job got.  Counts are rounded to the
 precision their total needs (``15/100 s simulated``, not ``14.970594137667268/100``).
@@ -49,13 +49,12 @@ def _isatty(stream) -> bool:
 
 
 def _tqdm(notebook=False):
-    try:
-        if notebook and importlib.util.find_spec("ipywidgets") is not None:
-            from tqdm.auto import tqdm  # lazy: optional extra `progress`; a widget in a notebook
-        else:
-            from tqdm import tqdm  # lazy: optional extra `progress`; the plain bar stands in without it
-    except ImportError:
-        return None
+    """tqdm's bar class: ``tqdm.auto``'s in a notebook where ipywidgets is installed (a widget), else
+    the terminal bar.  Imported when a bar is drawn (not for lines in a log, nor by ``import snoworm``)."""
+    if notebook and importlib.util.find_spec("ipywidgets") is not None:
+        from tqdm.auto import tqdm  # lazy: only a bar needs it
+    else:
+        from tqdm import tqdm  # lazy: only a bar needs it
     return tqdm
 
 
@@ -88,12 +87,10 @@ class Progress:
     stream : file, optional
         Where to draw (default: ``sys.stderr``).
     mode : {"auto", "bar", "lines", "off"}
-        ``auto``: a bar on a terminal or in a notebook, lines otherwise.
-    use_tqdm : bool
-        Draw the bar with tqdm when it is installed.
+        ``auto``: a bar (tqdm's) on a terminal or in a notebook, lines otherwise.
     """
 
-    def __init__(self, total, desc, unit="", stream=None, mode="auto", use_tqdm=True):
+    def __init__(self, total, desc, unit="", stream=None, mode="auto"):
         self.total, self.desc, self.unit = float(total), desc, unit
         self.stream = sys.stderr if stream is None else stream
         notebook = _in_notebook(self.stream)
@@ -104,9 +101,13 @@ class Progress:
         self.mode = mode
         self.value, self.info = 0.0, ""
         self.t0 = time.perf_counter()
-        self._last, self._decile, self._closed, self._printed = 0.0, 0, False, 0.0
+        self._decile, self._closed, self._printed = 0, False, 0.0
         self._line_t = self.t0
-        tq = _tqdm(notebook) if (mode == "bar" and use_tqdm) else None
+        self._bar = self._new_bar(notebook) if mode == "bar" else None
+
+    def _new_bar(self, notebook):
+        """tqdm's bar for :attr:`total`, counts rounded as in the lines (``15/100 s simulated``)."""
+        unit = self.unit
         d = _decimals(self.total)
         fmt = (
             "{desc}: {percentage:3.0f}%|{bar}| "
@@ -114,18 +115,14 @@ class Progress:
             + (f" {unit}" if unit else "")
             + " [{elapsed}<{remaining}{postfix}]"
         )
-        self._bar = (
-            tq(
-                total=_num(self.total),
-                desc=desc,
-                unit=f" {unit}" if unit else "it",
-                file=self.stream,
-                leave=True,
-                dynamic_ncols=True,
-                bar_format=fmt,
-            )
-            if tq is not None
-            else None
+        return _tqdm(notebook)(
+            total=_num(self.total),
+            desc=self.desc,
+            unit=f" {unit}" if unit else "it",
+            file=self.stream,
+            leave=True,
+            dynamic_ncols=True,
+            bar_format=fmt,
         )
 
     # ---------------------------------------------------------------- updates
@@ -159,9 +156,6 @@ class Progress:
         if self._bar is not None:
             self._bar.set_postfix_str(self.info, refresh=False)
             self._bar.close()
-        elif self.mode == "bar":
-            self._plain(force=True)
-            self._write("\n")
         elif self.mode == "lines" and self.value > self._printed:
             self._line()
 
@@ -191,28 +185,11 @@ class Progress:
             if self.info:
                 self._bar.set_postfix_str(self.info, refresh=False)
             self._bar.update(_num(self.value) - self._bar.n)
-        elif self.mode == "bar":
-            self._plain()
         elif int(10 * self._frac() + 1e-9) > self._decile:
             self._decile = int(10 * self._frac() + 1e-9)
             self._line()
         elif self.value > self._printed and time.perf_counter() - self._line_t >= LINE_EVERY_S:
             self._line()
-
-    def _plain(self, force=False):
-        now = time.perf_counter()
-        if not force and now - self._last < 0.1 and self.value < self.total:
-            return
-        self._last = now
-        width = 24
-        fill = int(width * self._frac())
-        el = now - self.t0
-        left = self.total - self.value
-        eta = f", ~{hms(el / self.value * left)} left" if self.value > 0 and left > 0 else ""
-        info = f", {self.info}" if self.info else ""
-        self._write(
-            f"\r{self.desc} [{'#' * fill}{'.' * (width - fill)}] {self._count()}{info}, {hms(el)} elapsed{eta}   "
-        )
 
     def _line(self):
         self._printed, self._line_t = self.value, time.perf_counter()

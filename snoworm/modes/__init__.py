@@ -11,62 +11,72 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-from .base import MODES, Interval, Mode, mode_class, register_mode, rolling_interval, start_times
-from .command import COMMAND_KEYS, CommandState, Observation, observe
+from . import base, command  # noqa: F401  (the registries; every run needs them)
 
-#: Names of the built-in modes' modules, imported on first use (PEP 562) so that a run imports
+#: The modes' public names, in one list: each name -> the module defining it.  ``__all__`` and
+#: ``dir()`` derive from it; the names are imported on first use (PEP 562), so that a run imports
 #: only its own mode (the registries import a mode's module when its type is looked up).
-_LAZY = {
-    "ControllerConfig": "controller",
-    "ControllerError": "controller",
-    "ControllerMode": "controller",
+_EXPORTS = {
+    "MODES": "base",
+    "Interval": "base",
+    "Mode": "base",
+    "mode_class": "base",
+    "register_mode": "base",
+    "rolling_interval": "base",
+    "start_times": "base",
+    "COMMAND_KEYS": "command",
+    "CommandState": "command",
+    "Observation": "command",
+    "observe": "command",
+    "UniformConfig": "uniform",
+    "UniformMode": "uniform",
     "ForceControlConfig": "force_control",
     "ForceControlMode": "force_control",
     "InchwormConfig": "inchworm",
     "InchwormMode": "inchworm",
     "SupervisorConfig": "supervisor",
     "SupervisorMode": "supervisor",
-    "UniformConfig": "uniform",
-    "UniformMode": "uniform",
+    "ControllerConfig": "controller",
+    "ControllerError": "controller",
+    "ControllerMode": "controller",
 }
 
-__all__ = [
-    "MODES",
-    "Interval",
-    "Mode",
-    "mode_class",
-    "register_mode",
-    "rolling_interval",
-    "start_times",
-    "UniformConfig",
-    "UniformMode",
-    "ForceControlConfig",
-    "ForceControlMode",
-    "InchwormConfig",
-    "InchwormMode",
-    "SupervisorConfig",
-    "SupervisorMode",
-    "COMMAND_KEYS",
-    "CommandState",
-    "Observation",
-    "observe",
-    "ControllerConfig",
-    "ControllerError",
-    "ControllerMode",
-]
+__all__ = list(_EXPORTS)
 
-if TYPE_CHECKING:  # for type checkers and editors; at run time the names come from __getattr__
-    from .controller import ControllerConfig, ControllerError, ControllerMode
-    from .force_control import ForceControlConfig, ForceControlMode
-    from .inchworm import InchwormConfig, InchwormMode
-    from .supervisor import SupervisorConfig, SupervisorMode
-    from .uniform import UniformConfig, UniformMode
+if TYPE_CHECKING:
+    # What type checkers and editors read: they do not run __getattr__ (``X as X`` marks a re-export
+    # of a py.typed package).  At run time the names come from __getattr__; tests/test_init.py
+    # checks that these imports name exactly the entries of _EXPORTS.
+    from .base import (
+        MODES as MODES,
+        Interval as Interval,
+        Mode as Mode,
+        mode_class as mode_class,
+        register_mode as register_mode,
+        rolling_interval as rolling_interval,
+        start_times as start_times,
+    )
+    from .command import (
+        COMMAND_KEYS as COMMAND_KEYS,
+        CommandState as CommandState,
+        Observation as Observation,
+        observe as observe,
+    )
+    from .controller import (
+        ControllerConfig as ControllerConfig,
+        ControllerError as ControllerError,
+        ControllerMode as ControllerMode,
+    )
+    from .force_control import ForceControlConfig as ForceControlConfig, ForceControlMode as ForceControlMode
+    from .inchworm import InchwormConfig as InchwormConfig, InchwormMode as InchwormMode
+    from .supervisor import SupervisorConfig as SupervisorConfig, SupervisorMode as SupervisorMode
+    from .uniform import UniformConfig as UniformConfig, UniformMode as UniformMode
 
 
 def __getattr__(name: str):
-    """Import a built-in mode's module on first access to one of its names."""
+    """Import a public name's module on first access (a built-in mode's module the first time)."""
     try:
-        module = _LAZY[name]
+        module = _EXPORTS[name]
     except KeyError:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
     value = getattr(importlib.import_module(f".{module}", __name__), name)

@@ -8,24 +8,25 @@ so a case re-runs on its own with ``snoworm run``.
 Modules, in data-flow order
 ---------------------------
 :mod:`.spec`
-    ``KEY=SPEC`` -> :class:`Axis` (lists and ``START:STOP:COUNT`` ranges).
-:mod:`.cases`
-    :func:`build_cases`: grid or zip, deterministic case ids and keys.
+    ``KEY=SPEC`` -> :class:`Axis` (lists and ``START:STOP:COUNT`` ranges); :func:`build_cases`:
+    grid or zip, deterministic case ids and keys.
+:mod:`.inputs`
+    The files a sweep's scenario names, hashed into its resume key.
 :mod:`.metrics`
     :func:`run_case` (one case, never raising for a failing case) and :func:`case_metrics`.
 :mod:`.executors`
     Where the cases run: serial, local processes (:class:`snoworm.infra.pool.ProcessExecutor`),
     a Dask cluster, or stacked in batched solves.
-:mod:`.table`
-    :class:`SweepTable` (``to_pandas``, ``series``), ``summary.csv`` and ``sweep.json``,
-    resumption, :func:`load_sweep`.
+:mod:`.summary`
+    :class:`SweepTable` (``to_pandas``, ``series``, ``plot``), ``summary.csv`` and ``sweep.json``,
+    resumption, :func:`load_sweep`, the table's figures.
 :mod:`.series`
     Every case's time series in one netCDF file (``series="netcdf"``).
 :mod:`.run`
-    :func:`run_sweep`: every case validated up front (invalid ones are recorded, not run) ->
-    tasks (:class:`SweepTask`, small: the overridden scenario mapping, never a big object) -> an
-    executor -> one row per case, appended to ``summary.csv`` as it finishes -> the table,
-    sorted by case id, and a plot.
+    The plan (every case validated up front; invalid ones are recorded, not run) and
+    :func:`run_sweep`: tasks (:class:`SweepTask`, small: the overridden scenario mapping, never a
+    big object) -> an executor -> one row per case, appended to ``summary.csv`` as it finishes ->
+    the table, sorted by case id, and a plot.
 
 Files in the output directory
 -----------------------------
@@ -55,7 +56,6 @@ order (and ``close()``); pass it to :func:`run_sweep` as ``executor=``.
 """
 
 from ...infra.pool import ProcessExecutor
-from .cases import SweepCase, build_cases
 from .executors import BatchExecutor, DaskExecutor, SerialExecutor, SweepExecutionError, run_chunk
 from .metrics import (
     IMMOBILISED_SIGN_FACTOR,
@@ -70,7 +70,7 @@ from .metrics import (
 )
 from .run import run_sweep
 from .series import SERIES_FORMATS, combine_series, load_series
-from .spec import Axis, parse_spec, parse_sweep_option
+from .spec import Axis, SweepCase, build_cases, parse_spec, parse_sweep_option
 from .summary import SweepTable, load_sweep
 
 __all__ = [

@@ -1,13 +1,18 @@
-"""Sweep specifications: the values of one swept key from ``KEY=SPEC``.
+"""Sweep specifications: the values of one swept key from ``KEY=SPEC``, and the cases they make.
 
 A SPEC is a list (``0,100,200``; each item a number or a YAML value, brackets allowed for list
 values) or an inclusive range ``START:STOP:COUNT`` (``0.3:1.0:15``).  The same grammar serves
 ``snoworm sweep --set`` and ``snoworm mobility-map --xt/--tow`` (:func:`parse_spec` names the
 option in its messages).
+
+The cases: :func:`build_cases` makes the grid (or zip) of an axis list, each case a
+:class:`SweepCase` with a stable id and key.
 """
 
 from __future__ import annotations
 
+import hashlib
+import itertools
 import math
 import re
 from dataclasses import dataclass
@@ -19,7 +24,17 @@ from ...config.schema import ScenarioError, quote
 from ...config.yamlio import load_yaml_text
 from ...infra.csvwriter import canonical_json
 
-__all__ = ["Axis", "MAX_CASES", "RANGE", "as_axes", "parse_scalar", "parse_spec", "parse_sweep_option"]
+__all__ = [
+    "Axis",
+    "MAX_CASES",
+    "RANGE",
+    "as_axes",
+    "parse_scalar",
+    "parse_spec",
+    "parse_sweep_option",
+    "SweepCase",
+    "build_cases",
+]
 
 
 #: Most values of one range and most cases of a sweep (grid or zip): each case is a simulation and a
@@ -223,3 +238,49 @@ def as_axes(sets) -> list:
         if keys.count(k) > 1:
             raise ScenarioError(f"--set {k}: the key is given more than once. Put all its values in one SPEC.")
     return axes
+
+
+# --------------------------------------------------------- cases: the grid (or zip) of the axes
+@dataclass(frozen=True)
+class SweepCase:
+    """One case: its index in the grid order and one value per axis."""
+
+    index: int
+    values: tuple
+    case_id: str
+    key: str
+
+    def overrides(self, axes):
+        return [(a.key, v) for a, v in zip(axes, self.values)]
+
+
+def build_cases(axes, zip_: bool = False) -> list:
+    """All cases of a sweep, in a deterministic order.
+
+    A grid (``itertools.product``, the first axis varying slowest) or, with ``zip_``, the
+    element-wise pairing of axes of equal length.  ``case_id`` is the zero-padded index in that
+    order; ``key`` is a digest of the keys and values, the identity used for resumption.
+    """
+    n_cases = len(axes[0].values) if zip_ and axes else math.prod(len(a.values) for a in axes)
+    if n_cases > MAX_CASES:
+        raise ScenarioError(
+            f"--set: the sweep has {n_cases} cases, over the {MAX_CASES} allowed in one sweep; "
+            "use fewer values or split the study into several sweeps."
+        )
+    if zip_:
+        lens = {a.key: len(a.values) for a in axes}
+        if len(set(lens.values())) > 1:
+            detail = ", ".join(f"{k} has {n}" for k, n in lens.items())
+            raise ScenarioError(
+                f"--zip pairs the values of every --set element by element, so each needs the "
+                f"same number of values; {detail}. Make the lengths equal or drop --zip for a grid."
+            )
+        combos = list(zip(*(a.values for a in axes)))
+    else:
+        combos = list(itertools.product(*(a.values for a in axes)))
+    width = max(4, len(str(len(combos) - 1)))
+    cases = []
+    for j, vals in enumerate(combos):
+        digest = hashlib.sha1(canonical_json([[a.key, v] for a, v in zip(axes, vals)]).encode()).hexdigest()[:12]
+        cases.append(SweepCase(j, tuple(vals), f"{j:0{width}d}", digest))
+    return cases

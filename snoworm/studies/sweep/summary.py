@@ -1,9 +1,15 @@
-"""The summary of a sweep: :class:`SweepTable`, ``summary.csv`` and ``sweep.json``, resumption.
+"""The summary of a sweep: :class:`SweepTable`, ``summary.csv`` and ``sweep.json``, resumption,
+and the table's figures.
 
 ``summary.csv`` holds one line per finished case (appended as cases finish, in completion
 order; cells formatted by :mod:`snoworm.infra.csvwriter` at full precision).  ``sweep.json`` holds the
 sweep's definition and columns: :func:`prepare_dir` refuses an output directory holding another
 sweep and returns the cases already finished there, dropping a truncated last line.
+
+Figures of the table (:func:`plot_table`, :func:`write_plot`): metrics against the swept value
+(one varying key, or a zip) or a heat map of one metric (two keys on a grid).  Used by
+:meth:`SweepTable.plot` and by :func:`~snoworm.studies.sweep.run.run_sweep` for ``sweep.<fmt>`` /
+``heatmap.<fmt>``.
 """
 
 from __future__ import annotations
@@ -16,23 +22,32 @@ import shutil
 import warnings
 from pathlib import Path
 
+import numpy as np
 import yaml
 
 from ..._version import __version__
 from ...config.schema import ScenarioError, quote
 from ...infra.commit import unfinished_commit
-from ...infra.csvwriter import FULL, csv_line, csv_text, write_csv
+from ...infra.csvwriter import FULL, canonical_json, csv_line, csv_text, format_cell, write_csv
 from ...infra.folders import MANIFEST, atomic_write_text, folder_state, remove_listed
 from ...infra.manifest import STAGE, ManifestProblem, read_small_file
 from ...results.frames import require_pandas
 from ...results.result import ResultFileError, read_back
-from .figures import plot_table
 from .inputs import changed_inputs
 from .metrics import METRIC_COLUMNS
 from .series import SERIES_FILE, expected_dims, load_series
 from .spec import parse_scalar
 
-__all__ = ["SweepTable", "summary_columns", "read_summary", "prepare_dir", "load_sweep"]
+__all__ = [
+    "SweepTable",
+    "summary_columns",
+    "read_summary",
+    "prepare_dir",
+    "load_sweep",
+    "plot_table",
+    "write_plot",
+    "SWEEP_METRICS",
+]
 
 
 #: Largest sweep.json read (bytes): the definition lists every axis value.
@@ -128,7 +143,7 @@ class SweepTable:
         return load_series(path, getattr(self, "series_dims", None))
 
     def plot(self, metric=None, *, size=None, ax=None, fig=None):
-        """The sweep's standard figure (:func:`snoworm.studies.sweep.figures.plot_table`): ``metric``
+        """The sweep's standard figure (:func:`snoworm.studies.sweep.summary.plot_table`): ``metric``
         (default: speed, slip, link force, energy) against the swept value of a one-key sweep or a
         zip, or a heat map of ``metric`` (default mean speed) over a two-key grid.  ``size``:
         ``"column"``, ``"page"`` or ``"WxH"``; ``ax``/``fig``: yours.  Returns the Figure."""
@@ -433,3 +448,110 @@ def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: 
         keep = SweepTable(columns, list(done.values()), keys)
         keep.to_csv(spath)
     return done
+
+
+# ------------------------------------------------------------------------- figures of the table
+#: The metrics drawn against a one-axis (or zip) sweep, a panel each.
+SWEEP_METRICS = ("mean_speed_mps", "mean_slip", "max_link_force_N", "energy_per_m_J")
+
+
+def _distinct(values) -> list:
+    """Distinct values in order of first appearance (the rows are in case-id order, so a grid's
+    values come back in the order of the sweep's definition)."""
+    seen, out = set(), []
+    for v in values:
+        key = canonical_json(v)
+        if key not in seen:
+            seen.add(key)
+            out.append(v)
+    return out
+
+
+def _positions(values):
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        return [float(v) for v in values], None
+    return list(range(len(values))), [format_cell(v, FULL) for v in values]
+
+
+def _layout(table):
+    """("line", key) for one varying key or a zip; ("heatmap", (key_x, key_y)) for a two-key grid."""
+    varying = [k for k in table.keys if len(_distinct(table.column(k))) > 1] or list(table.keys[:1])
+    counts = [len(_distinct(table.column(k))) for k in varying]
+    grid = len(varying) == 2 and counts[0] * counts[1] == len(table.rows)
+    if grid:
+        return "heatmap", tuple(varying)
+    if len(varying) > 2 and int(np.prod(counts)) == len(table.rows):
+        raise ValueError(
+            f"a sweep over {len(varying)} keys on a grid has no standard figure; "
+            "pick two keys with table.to_pandas() and plotting.plot_sweep_heatmap"
+        )
+    return "line", varying[0]
+
+
+def plot_table(table, metric=None, *, size=None, ax=None, fig=None):
+    """The standard figure of a sweep: ``metric`` (default: the four of :data:`SWEEP_METRICS`)
+    against the swept value for one varying key or a zip (immobilised cases crossed, failed ones
+    dotted), or a heat map of ``metric`` (default ``mean_speed_mps``) over a two-key grid.
+    ``size``, ``ax``, ``fig``: as for every plotting function.  Returns the Figure."""
+    from ... import plotting  # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
+
+    kind, keys = _layout(table)
+    ok = [r["status"] == "ok" for r in table.rows]
+    if kind == "line":
+        x, labels = _positions(table.column(keys))
+        names = [metric] if isinstance(metric, str) else list(metric or SWEEP_METRICS)
+        return plotting.plot_sweep(
+            x,
+            {m: table.column(m) for m in names},
+            keys,
+            immobilised=table.column("immobilised"),
+            ok=ok,
+            tick_labels=labels,
+            size=size,
+            ax=ax,
+            fig=fig,
+        )
+    metric = metric or "mean_speed_mps"
+    kx, ky = keys
+    xs, ys = _distinct(table.column(kx)), _distinct(table.column(ky))
+    xi = {canonical_json(v): j for j, v in enumerate(xs)}
+    yi = {canonical_json(v): j for j, v in enumerate(ys)}
+    grid = np.full((len(ys), len(xs)), np.nan)
+    imm = np.zeros(grid.shape, bool)
+    fail = np.zeros(grid.shape, bool)
+    for r in table.rows:
+        j, k = yi[canonical_json(r[ky])], xi[canonical_json(r[kx])]
+        if r["status"] == "ok":
+            grid[j, k] = np.nan if r.get(metric) is None else r[metric]
+            imm[j, k] = bool(r["immobilised"])
+        else:
+            fail[j, k] = True
+    return plotting.plot_sweep_heatmap(
+        [format_cell(v, FULL) for v in xs],
+        [format_cell(v, FULL) for v in ys],
+        grid,
+        kx,
+        ky,
+        plotting.quantity_label(metric),
+        immobilised=imm,
+        failed=fail,
+        size=size,
+        ax=ax,
+        fig=fig,
+    )
+
+
+def write_plot(table, out, plot_format="png", size=None):
+    """Write the sweep's standard figure (headless) as ``sweep.<fmt>`` (line) or
+    ``heatmap.<fmt>`` (grid of two keys) in ``out``; nothing for a grid of more keys.
+    Returns the path or None."""
+    from ... import plotting  # lazy: matplotlib costs ~0.5 s to import; sweeps without plots never pay it
+
+    try:
+        kind, _ = _layout(table)
+    except ValueError:
+        return None
+    name = "sweep" if kind == "line" else "heatmap"
+    return plotting.write_figure(
+        out / f"{name}.{plot_format}", lambda size=None: plot_table(table, size=size), fmt=plot_format, size=size
+    )
