@@ -163,7 +163,12 @@ def test_only_the_controller_mode_continues_the_solver():
     assert {name for name, cls in MODES.items() if cls.continue_solver} == {"controller"}
 
 
-def test_progress_reports_simulated_time_and_changes_nothing(scenario_path):
+def test_progress_reports_simulated_time_and_changes_nothing(scenario_path, monkeypatch):
+    # one report per interval: the reports within an interval (every PROGRESS_EVERY_S of wall time)
+    # are switched off, as on a loaded machine an interval can outlast it (a wall-clock count)
+    from snoworm.simulation import guard
+
+    monkeypatch.setattr(guard, "PROGRESS_EVERY_S", float("inf"))
     sc = load_scenario(scenario_path("inchworm2")).with_({"simulation.duration_s": 4.0})
     seen = []
     res = simulate(sc, progress=lambda t, total: seen.append((t, total)))
