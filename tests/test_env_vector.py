@@ -216,9 +216,9 @@ def test_num_envs_beyond_the_measured_range_is_refused(short6):
         with pytest.raises(ValueError, match=rf"^num_envs: must be a whole number from 1 to {MAX_NUM_ENVS}, got"):
             SnowormVectorEnv(bad, short6)
     vec = SnowormVectorEnv(MAX_NUM_ENVS, short6)  # the bound itself is taken: stacks of bounded size
-    sizes = [m.stop - m.start for m, _ in vec._stacks]
+    sizes = [m.stop - m.start for m, _ in vec.stepper.stacks]
     assert sum(sizes) == MAX_NUM_ENVS and max(sizes) <= stack_size(vec.model)
-    assert max(s.model.n_states for _, s in vec._stacks) <= STACK_MAX_STATES
+    assert max(model.n_states for _, model in vec.stepper.stacks) <= STACK_MAX_STATES
 
 
 def test_the_work_per_member_does_not_grow_with_num_envs(short6, monkeypatch):

@@ -139,7 +139,7 @@ def test_batched_members_on_vode_are_stacked_on_lsoda(scenario_path):
 
 
 def test_vode_carries_its_history_across_simulator_steps(scenario_path):
-    """Simulator (its IntervalSolver carries VODE's history) on VODE: no restart per 10 ms step, same states, far less work."""
+    """Simulator (its stepper carries VODE's history) on VODE: no restart per 10 ms step, same states, far less work."""
     from snoworm.simulation.stepwise import Simulator
 
     sc = load_scenario(scenario_path("tow6_uniform"), [("simulation.method", "VODE"), ("simulation.duration_s", 3)])
@@ -147,7 +147,7 @@ def test_vode_carries_its_history_across_simulator_steps(scenario_path):
     for cont in (True, False):
         sim = Simulator(sc)
         sim.reset()
-        sim._solver.carry_history = cont
+        sim._stepper.carry_history = cont
         for k in range(300):
             sim.step({"wheel_speed_mps": [1.8] * 6} if k == 50 else None, 0.01, restart=not cont)
         runs[cont] = sim.result()

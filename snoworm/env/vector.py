@@ -10,14 +10,13 @@
 The members share the scenario and the options of :class:`snoworm.env.single.SnowormEnv` (spaces,
 action map, observation normalisation, default reward, termination and truncation: one
 :class:`~snoworm.env.core.EnvCore`).  A control period has no gait events, so every member's interval
-ends at the same time: the B chains are stacked (:meth:`ChainModel.stack`, the kernel with one
-more leading axis) in stacks of at most :data:`STACK_MAX_MEMBERS` (64) members and
-:data:`STACK_MAX_STATES` states, of sizes that differ by at most one, and each stack is integrated
-over the period by the driver's interval solve (:class:`snoworm.simulation.interval.IntervalSolver`),
-on VODE with its tolerances divided by sqrt(size), restarted at a period whose command changed and
-carried on while every member holds its command (as the single environment): VODE's error test is
-a weighted RMS norm over the whole stack, and with those tolerances a stack that passes it has
-every member within the RMS norm it has alone.  One stack of all B members cost more per member as
+ends at the same time: the B chains are stepped by the one stepper of one chain or many,
+:class:`snoworm.simulation.stepper.ChainStepper` (the Simulator's, and so the single
+environment's, with one member): stacks of at most :data:`STACK_MAX_MEMBERS` (64) members and
+:data:`STACK_MAX_STATES` states (:meth:`ChainModel.stack`, the kernel with one more leading axis),
+of sizes that differ by at most one, each integrated over the period on VODE with its tolerances
+divided by sqrt(size), restarted at a period whose command changed and carried on while every
+member holds its command (as the single environment).  One stack of all B members cost more per member as
 B grew (its steps follow its most demanding member at tighter tolerances, and past 10 000 states
 VODE's BLAS calls start threads: 67 s a period for B = 1 000 against 0.3 s for 64); with stacks
 the cost per member stays at its floor (~3 ms of CPU for tow6 from B = 64 to 1 024,
@@ -44,33 +43,21 @@ different times of their episodes share one period.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 from gymnasium.error import ResetNeeded
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ..config.schema import quote
-from ..dynamics import ChainModel
 from ..model.quantities import output_series
 from ..modes.command import CommandState
 from ..simulation.driver import assemble
-from ..simulation.guard import SPEED_SANITY_FACTOR, SolverError
-from ..simulation.interval import IntervalSolver, output_grid
+from ..simulation.interval import output_grid
+from ..simulation.stepper import STACK_MAX_MEMBERS, STACK_MAX_STATES, ChainStepper, stack_size
 from .core import EnvCore, table_fields
 
 __all__ = ["SnowormVectorEnv", "MAX_NUM_ENVS", "STACK_MAX_MEMBERS", "STACK_MAX_STATES", "stack_size"]
 
-#: Most members of one stacked solve.  A stack steps at the pace of its most demanding member with
-#: VODE's tolerances divided by sqrt(size), so its evaluations per period grow with its size (tow6,
-#: random actions: 193 for 1 member, 317 for 64, 481 for 256, 662 for 1 000) while the kernel's cost
-#: per member falls until ~64 members: stacks of this size keep the cost per member flat in B.
-STACK_MAX_MEMBERS = 64
-#: Most states of one stacked solve: VODE's level-1 BLAS calls on the whole state vector (OpenBLAS's
-#: daxpy) start threads past 10 000 elements, which cost 3-10x a period on a loaded machine (tow6:
-#: 0.9 s for B = 270, 10.5 s for B = 300).
-STACK_MAX_STATES = 8192
 #: Most members of a vector environment: the range over which the cost per member was measured flat
 #: (docs/performance.md, "Vector environment"); more are refused (run several environments instead).
 MAX_NUM_ENVS = 1024
@@ -148,16 +135,10 @@ class SnowormVectorEnv(VectorEnv):
         fields0 = table_fields(seg, lk)
         self._obs0 = core.normalised(fields0, 0.0)
         self._xmean0 = float(np.mean(fields0["x_m"]))
-        self._vmax = SPEED_SANITY_FACTOR * float(
-            np.max(self.model.seg.no_load_speed_radps * self.model.seg.wheel_radius_m)
-        )
         self._grid = np.asarray(output_grid(0.0, core.dt_s, core.scenario.simulation.output_dt_s, include_start=True))
-        self.stats = {"nfev": 0, "njev": 0, "nlu": 0, "intervals": 0, "member_solves": 0, "solver_failures": 0}
-        #: (members, interval solve) of each stack, kept over the periods: VODE on each (see :meth:`step`)
-        self._stacks = [
-            (members, IntervalSolver(model, sc.simulation, "step", vode_stack=True, stats=self.stats, asked_steps=True))
-            for members, model in _stacks(self.model, B)
-        ]
+        #: the one stepper of one chain or many (simulation.stepper), kept over the periods
+        self.stepper = ChainStepper(self.model, sc.simulation, B, "step")
+        self.stats = self.stepper.stats
         self._started = False
 
     # ------------------------------------------------------------------ reset
@@ -207,8 +188,7 @@ class SnowormVectorEnv(VectorEnv):
         held = self._command is not None and all(np.array_equal(command[k], self._command[k]) for k in command)
         # VODE: restarted at every period, but carried on while every member holds its command (a
         # member reset in between changes the state, and the stepper then restarts by itself)
-        for _, solver in self._stacks:
-            solver.carry_history = held
+        self.stepper.carry_history = held
         self._command = command
         ctl = self._cmd.apply(command)
         restart = self._autoreset.copy()
@@ -256,86 +236,9 @@ class SnowormVectorEnv(VectorEnv):
         return info
 
     def _solve(self, ctl):
-        """One period of every stack: ``(ts, ys (n_t, B, n_states), failed (B,), errors {b: message})``.
-
-        The members of a stack are solved alone (and failures isolated) only if its stacked solve fails."""
-        B, n_s = self.num_envs, self._y0.size
+        """One period of every member (:meth:`ChainStepper.solve <snoworm.simulation.stepper.ChainStepper.solve>`):
+        ``(ts, ys (n_t, B, n_states), failed (B,), errors {b: message})``."""
         t0 = self._T
         t_eval = t0 + self._grid
-        ys = np.empty((t_eval.size, B, n_s))
-        failed, errors = np.zeros(B, bool), {}
-        for members, solver in self._stacks:
-            part = ctl if len(self._stacks) == 1 else _members(ctl, members)
-            y0 = self._y[members].reshape(-1)
-            try:
-                ts, yk, _, _, _ = solver.solve(part, t0, t0 + self.dt_s, y0, (), t_eval, "step")
-                if ts.size == t_eval.size:
-                    yk = yk.reshape(ts.size, -1, n_s)
-                    ys[:, members] = yk
-                    if not self._insane(yk).any():
-                        continue
-            except SolverError:
-                pass
-            self._solve_members(ctl, t_eval, members, ys, failed, errors)
+        ys, _, failed, errors = self.stepper.solve(ctl, t0, t0 + self.dt_s, self._y, t_eval)
         return t_eval, ys, failed, errors
-
-    def _solve_members(self, ctl, t_eval, members, ys, failed, errors):
-        """Each member of the stack ``members`` (a slice) alone into ``ys``, ``failed`` and ``errors``
-        (the fallback of :meth:`_solve`)."""
-        sim, t0 = self.scenario.simulation, self._T
-        for b in range(members.start, members.stop):
-            self.stats["member_solves"] += 1
-            ys[:, b] = self._y[b]
-            try:
-                alone = IntervalSolver(self.model, sim, "step", stats=self.stats)
-                tb, yb, _, _, _ = alone.solve(_member(ctl, b), t0, t0 + self.dt_s, self._y[b], (), t_eval, "step")
-            except SolverError as exc:
-                failed[b], errors[b] = True, str(exc)
-                self.stats["solver_failures"] += 1
-                continue
-            if tb.size != t_eval.size or self._insane(yb[:, None, :])[0]:
-                failed[b], errors[b] = True, "the member's state left the physics (non-finite or runaway speed)"
-                self.stats["solver_failures"] += 1
-                continue
-            ys[:, b, :] = yb
-
-    def _insane(self, ys):
-        """Per member: a non-finite state or a speed beyond the sanity limit in ``ys`` (n_t, B, n_states)."""
-        lay = self.model.layout
-        Y = ys.reshape(ys.shape[:2] + (lay.n, lay.n_s))
-        finite = np.all(np.isfinite(Y), axis=(0, 2, 3))
-        v = np.max(np.abs(np.nan_to_num(Y[..., lay.v], nan=np.inf)), axis=(0, 2))
-        return ~finite | (v > self._vmax)
-
-
-def _member(ctl, b):
-    """Member ``b``'s controls out of stacked controls (arrays with a batch axis have two dimensions)."""
-    return replace(ctl, **{k: getattr(ctl, k)[b] for k in ctl.__dataclass_fields__ if np.ndim(getattr(ctl, k)) == 2})
-
-
-def _members(ctl, members):
-    """The controls of the members ``members`` (a slice) out of stacked controls."""
-    return replace(
-        ctl, **{k: getattr(ctl, k)[members] for k in ctl.__dataclass_fields__ if np.ndim(getattr(ctl, k)) == 2}
-    )
-
-
-def stack_size(model) -> int:
-    """Most members of ``model`` in one stacked solve: :data:`STACK_MAX_MEMBERS`, fewer if their
-    states would pass :data:`STACK_MAX_STATES`, at least 1."""
-    return max(1, min(STACK_MAX_MEMBERS, STACK_MAX_STATES // model.n_states))
-
-
-def _stacks(model, num_envs):
-    """``[(members, stacked model)]``: ``num_envs`` members in the fewest stacks of at most
-    :func:`stack_size` members, of sizes that differ by at most one (one stacked model per size)."""
-    count = -(-num_envs // stack_size(model))
-    q, r = divmod(num_envs, count)
-    sizes = [q + 1] * r + [q] * (count - r)
-    models, out, start = {}, [], 0
-    for k in sizes:
-        if k not in models:
-            models[k] = ChainModel.stack([model] * k) if k > 1 else model
-        out.append((slice(start, start + k), models[k]))
-        start += k
-    return out

@@ -9,8 +9,9 @@
 
 The chain, its initial state, the solver, its tolerances and the output grid are those of
 :func:`snoworm.simulate` for the same scenario (the scenario's ``mode`` only gives the initial
-state; the commands replace its control).  Each step is one interval of the driver's solver
-(:meth:`snoworm.simulation.interval.IntervalSolver.solve`, one solver per reset); the ``controller`` mode
+state; the commands replace its control).  Each step is one period of the one stepper of one
+chain or many (:class:`snoworm.simulation.stepper.ChainStepper`, with one member; one per reset:
+the driver's interval solve, :meth:`snoworm.simulation.interval.IntervalSolver.solve`); the ``controller`` mode
 (:mod:`snoworm.modes.controller`) runs the same intervals with the same observations and
 commands (:mod:`snoworm.modes.command`), so a controller gives the same result either way.
 """
@@ -28,7 +29,9 @@ from ..modes import Mode
 from ..modes.command import COMMAND_KEYS, CommandState, Observation, observe
 from ..results.result import Result
 from .driver import assemble
-from .interval import IntervalSolver, output_grid
+from .guard import SolverError
+from .interval import output_grid
+from .stepper import ChainStepper
 
 __all__ = ["Simulator", "Observation", "COMMAND_KEYS", "DT_MIN_S"]
 
@@ -72,12 +75,11 @@ class Simulator:
         self._y = self._y0.copy()
         self.commands = CommandState(self.model)
         self._pieces, self._phases, self._samples = [], [], 0
-        # VODE (simulation.method) carries its history across steps; the solver owns the counters
-        self._solver = IntervalSolver(
-            self.model, self.scenario.simulation, "step", carry_history=True, asked_steps=True
-        )
-        self._stats = self._solver.stats
-        self._stats["wall_time_s"] = 0.0
+        # the one stepper of one chain or many (simulation.stepper); VODE (simulation.method) carries
+        # its history across steps
+        self._stepper = ChainStepper(self.model, self.scenario.simulation, 1, "step")
+        self._stepper.carry_history = True
+        self._wall_s = 0.0
         self.last_step = None
         return self.observation()
 
@@ -121,12 +123,15 @@ class Simulator:
         t, t1 = self.t_s, self.t_s + float(dt)
         sim = self.scenario.simulation
         t_eval = output_grid(t, t1, sim.output_dt_s, include_start=not (self._phases and self.record))
-        self._solver.carry_history = not restart
+        self._stepper.carry_history = not restart
         try:
-            ts, ys, t_next, y_next, _ = self._solver.solve(ctl, t, t1, self._y, (), t_eval, "step")
+            ys, y_end, failed, errors = self._stepper.solve(ctl, t, t1, self._y[None, :], t_eval)
+            if failed[0]:
+                raise SolverError(errors[0])
         except Exception:
             self.commands.restore(saved)
             raise
+        ts, ys, t_next, y_next = np.asarray(t_eval, float), ys[:, 0, :], t1, y_end[0]
         if self.record:
             self._pieces.append((ts, ys, ctl))
             self._samples += len(ts)
@@ -135,7 +140,7 @@ class Simulator:
         if not self.record:
             self._phases = self._phases[-1:]  # only "a step was made" matters: memory stays flat
         self.t_s, self._y = t_next, y_next
-        self._stats["wall_time_s"] += time.perf_counter() - wall0
+        self._wall_s += time.perf_counter() - wall0
         return self.observation()
 
     def _check_dt(self, dt) -> float:
@@ -174,5 +179,12 @@ class Simulator:
             Mode(sc.mode, sc, self.model),
             self._pieces,
             [dict(p) for p in self._phases],
-            dict(self._stats),
+            self.stats,
         )
+
+    @property
+    def stats(self) -> dict:
+        """Solver counters since the last :meth:`reset` (``nfev``, ``njev``, ``nlu``, ``intervals``)
+        and the wall-clock time spent stepping, ``wall_time_s``."""
+        s = self._stepper.stats
+        return {**{k: s[k] for k in ("nfev", "njev", "nlu", "intervals")}, "wall_time_s": self._wall_s}
