@@ -80,7 +80,7 @@ def test_solver_failure_exit_1_nothing_written(tmp_path, monkeypatch):
 
     S = importlib.import_module("snoworm.simulation.driver")
 
-    def boom(sc, progress=None):
+    def boom(sc, progress=None, allow_code=()):
         raise S.SolverError("solve_ivp (LSODA) failed near t = 3 s: test")
 
     monkeypatch.setattr(S, "simulate", boom)

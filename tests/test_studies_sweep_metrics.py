@@ -39,10 +39,10 @@ def test_a_failing_case_does_not_stop_the_others(tmp_path, monkeypatch):
     simmod = sys.modules["snoworm.studies.sweep.metrics"]  # where run_case looks simulate up
     real = simmod.simulate
 
-    def flaky(sc):
+    def flaky(sc, allow_code=()):
         if sc.terrain.xt == 0.8:
             raise SolverError("forced failure for the test")
-        return real(sc)
+        return real(sc, allow_code=allow_code)
 
     monkeypatch.setattr(simmod, "simulate", flaky)
     table = run_sweep(TOW6, ["terrain.xt=-1,0.8,0.9", SHORT], out_dir=tmp_path, plot=False)
@@ -81,7 +81,7 @@ def test_run_case_reports_each_status_without_raising(monkeypatch):
     bad = run_case(SweepTask(4, raw={**raw, "terrain": {"xt": -1}}))
     assert bad["status"] == "invalid" and "terrain.xt" in bad["error"] and "distance_m" not in bad
 
-    def buggy(sc):
+    def buggy(sc, allow_code=()):
         raise ZeroDivisionError("line one\nline two")
 
     monkeypatch.setattr("snoworm.studies.sweep.metrics.simulate", buggy)
