@@ -190,6 +190,25 @@ except ResultFileError as exc:
     assert "READ" in r.stdout and "RESUME" in r.stdout and r.stdout.count("not a regular file") == 2, r.stdout
 
 
+@pytest.mark.parametrize("kind", ["folder", "symlink_loop"])
+def test_a_series_nc_that_is_a_folder_or_a_symlink_loop_is_a_result_file_error(nc_sweep, tmp_path, kind):
+    """Hostile battery (benchmarks/hostile.py): a folder at series.nc was an IsADirectoryError from
+    os.fdopen, and a symlink loop a FileNotFoundError claiming there is no series.nc."""
+    import os
+
+    from snoworm import load_sweep
+    from snoworm.results.result import ResultFileError
+
+    d = _copy(nc_sweep, tmp_path)
+    (d / "series.nc").unlink()
+    if kind == "folder":
+        (d / "series.nc").mkdir()
+    else:
+        os.symlink(d / "series.nc", d / "series.nc")
+    with pytest.raises(ResultFileError, match="series.nc: (not a regular file|cannot be opened)"):
+        load_sweep(d).series()
+
+
 def test_a_huge_dimension_in_series_nc_is_refused_before_allocating(nc_sweep, tmp_path):
     """A tampered series.nc declaring a 10**12-sample time axis (chunks never written: a tiny
     file) made xarray allocate terabytes (a MemoryError)."""

@@ -377,10 +377,11 @@ def read_series(path, expected=None, only=None):
         raise ResultFileError(f"{where}: missing") from None
     except (OSError, ValueError) as exc:
         raise ResultFileError(f"{where}: cannot be opened ({getattr(exc, 'strerror', None) or exc})") from None
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode):  # checked before fdopen, which refuses a folder with IsADirectoryError
+        os.close(fd)
+        raise ResultFileError(f"{where}: not a regular file (a FIFO, a device or a folder)")
     with os.fdopen(fd, "rb") as fh:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise ResultFileError(f"{where}: not a regular file (a FIFO, a device or a folder)")
         if st.st_size > MAX_SERIES_BYTES:
             raise ResultFileError(f"{where}: {st.st_size} bytes, more than the {MAX_SERIES_BYTES} accepted")
         try:
