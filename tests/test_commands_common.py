@@ -71,6 +71,27 @@ def test_each_failure_is_one_message_and_its_exit_status(monkeypatch, exc, code,
     assert text in r.stderr and "Traceback" not in r.stderr
 
 
+def _raised_in_c_code(interrupt):
+    """What a signal handler raising inside NumPy's C code gives: a SystemError caused by it."""
+    try:
+        raise interrupt
+    except KeyboardInterrupt as cause:
+        try:
+            raise SystemError("<method 'tolist'> returned a result with an exception set") from cause
+        except SystemError as exc:
+            return exc
+
+
+@pytest.mark.parametrize("interrupt, code", [(KeyboardInterrupt(), 130), (Terminated(), 143)])
+def test_an_interrupt_inside_c_code_is_an_interruption_not_an_internal_error(monkeypatch, interrupt, code):
+    """Hostile battery (benchmarks/hostile.py): SIGTERM to `snoworm run` mid-way ended as 'internal
+    error (SystemError: <method 'tolist' ...> returned a result with an exception set)', exit 1."""
+    monkeypatch.delenv("SNOWORM_DEBUG", raising=False)
+    r = CliRunner().invoke(_cli(_raised_in_c_code(interrupt)), ["cmd", "--out", "o"])
+    assert r.exit_code == code
+    assert "interrupted; nothing half-written" in r.stderr and "internal error" not in r.stderr
+
+
 def test_debug_shows_the_traceback_of_a_bug(monkeypatch):
     monkeypatch.setenv("SNOWORM_DEBUG", "1")
     r = CliRunner().invoke(_cli(ZeroDivisionError("boom")), ["cmd", "--out", "o"])

@@ -177,6 +177,15 @@ def test_a_figure_size_that_is_not_a_size_is_a_value_error_naming_the_rule(size)
         parse_size(size)
 
 
+def test_a_long_figure_size_is_not_echoed_in_full():
+    """Hostile battery (benchmarks/hostile.py): a 14 000-character --figure-size came back whole."""
+    from snoworm.plotting.style import parse_size
+
+    with pytest.raises(ValueError, match="figure size") as info:
+        parse_size("3.5x2.5" * 2000)
+    assert len(str(info.value)) < 200
+
+
 def test_result_write_checks_the_figure_size_before_writing(tmp_path):
     from snoworm import load_scenario, simulate
 

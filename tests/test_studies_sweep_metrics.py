@@ -88,3 +88,24 @@ def test_run_case_reports_each_status_without_raising(monkeypatch):
     err = run_case(SweepTask(5, raw=raw))
     assert err["status"] == "error"
     assert err["error"].startswith("ZeroDivisionError: line one | line two at test_studies_sweep_metrics.py:")
+
+
+@pytest.mark.parametrize("signal_name", ["KeyboardInterrupt", "Terminated"])
+def test_an_interrupt_inside_c_code_stops_the_sweep_instead_of_recording_an_error(monkeypatch, signal_name):
+    """Hostile battery (benchmarks/hostile.py): a second Ctrl-C landing in NumPy's C code came back as
+    'SystemError: <method 'tolist' ...> returned a result with an exception set', which run_case
+    recorded as the case's error (kept by the resume) instead of stopping the sweep."""
+    from snoworm.commands.common import Terminated
+
+    kind = {"KeyboardInterrupt": KeyboardInterrupt, "Terminated": Terminated}[signal_name]
+    raw = read_yaml(TOW6)
+
+    def interrupted(sc):
+        try:
+            raise kind()
+        except KeyboardInterrupt as interrupt:
+            raise SystemError("<method 'tolist'> returned a result with an exception set") from interrupt
+
+    monkeypatch.setattr("snoworm.studies.sweep.metrics.simulate", interrupted)
+    with pytest.raises(kind):
+        run_case(SweepTask(0, raw=raw))

@@ -190,6 +190,64 @@ except ResultFileError as exc:
     assert "READ" in r.stdout and "RESUME" in r.stdout and r.stdout.count("not a regular file") == 2, r.stdout
 
 
+@pytest.mark.parametrize("kind", ["folder", "symlink_loop"])
+def test_a_series_nc_that_is_a_folder_or_a_symlink_loop_is_a_result_file_error(nc_sweep, tmp_path, kind):
+    """Hostile battery (benchmarks/hostile.py): a folder at series.nc was an IsADirectoryError from
+    os.fdopen, and a symlink loop a FileNotFoundError claiming there is no series.nc."""
+    import os
+
+    from snoworm import load_sweep
+    from snoworm.results.result import ResultFileError
+
+    d = _copy(nc_sweep, tmp_path)
+    (d / "series.nc").unlink()
+    if kind == "folder":
+        (d / "series.nc").mkdir()
+    else:
+        os.symlink(d / "series.nc", d / "series.nc")
+    with pytest.raises(ResultFileError, match="series.nc: (not a regular file|cannot be opened)"):
+        load_sweep(d).series()
+
+
+def test_a_series_nc_with_flipped_bytes_is_one_error_without_library_tracebacks(nc_sweep, tmp_path):
+    """Hostile battery (benchmarks/hostile.py): on some flipped bytes h5netcdf fails half-way through
+    opening the file and, when that half-open file is collected, prints 'Exception ignored in
+    File.close' with a traceback on stderr, beside snoworm's one-line ResultFileError."""
+    import os
+    import subprocess
+    import sys
+
+    copies = []
+    for seed in range(12):
+        d = _copy(nc_sweep, tmp_path / str(seed))
+        data = bytearray((d / "series.nc").read_bytes())
+        rng = np.random.default_rng(seed)
+        for k in rng.integers(0, len(data), 8):
+            data[k] ^= 0xFF
+        (d / "series.nc").write_bytes(bytes(data))
+        copies.append(str(d))
+    code = f"""
+import snoworm
+from snoworm.results.result import ResultFileError
+for d in {copies!r}:
+    try:
+        snoworm.load_sweep(d).series()
+    except ResultFileError:
+        print("refused")
+"""
+    root = str(Path(__file__).resolve().parents[1])
+    r = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "PYTHONPATH": root},
+    )
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "refused" in r.stdout
+    assert "Exception ignored" not in r.stderr and "Traceback" not in r.stderr, r.stderr[-2000:]
+
+
 def test_a_huge_dimension_in_series_nc_is_refused_before_allocating(nc_sweep, tmp_path):
     """A tampered series.nc declaring a 10**12-sample time axis (chunks never written: a tiny
     file) made xarray allocate terabytes (a MemoryError)."""

@@ -38,6 +38,9 @@ def test_range_spec_is_inclusive_with_count_values():
         (["terrain.xt=0.3:1.0"], "START:STOP:COUNT"),
         (["terrain.xt=0.3:1.0:0"], "COUNT must be at least 1"),
         (["terrain.xt=0.3:1.0:x"], "COUNT must be a whole number"),
+        # hostile battery (benchmarks/hostile.py): more than two colons was an internal error
+        (["terrain.xt=:::"], "has 3 colons, not 2"),
+        (["terrain.xt=0.2:1.0:3:4"], "has 3 colons, not 2"),
         (["terrain.xt=a:b:3"], "START and STOP must be numbers"),
         (["terrain.xt=0,,1"], "empty item"),
         (["terrain.xt=0.5,0.5"], "appears twice"),

@@ -196,9 +196,9 @@ def _number(text, where):
     try:
         v = float(text)
     except ValueError:
-        raise ScenarioError(f"{where}: expected a number, got {text.strip()!r}.") from None
+        raise ScenarioError(f"{where}: expected a number, got {quote(text.strip(), 60)}.") from None
     if not math.isfinite(v):
-        raise ScenarioError(f"{where}: expected a finite number, got {text.strip()!r}.")
+        raise ScenarioError(f"{where}: expected a finite number, got {quote(text.strip(), 60)}.")
     return v
 
 
@@ -269,6 +269,12 @@ def read_route(path) -> Route:
     col = {c: header.index(c) for c in ROUTE_COLUMNS}
     dist, elev, xts, prev = [], [], [], None
     for n, row in rows[1:]:
+        if any(c.strip() for c in row[len(header) :]):
+            raise ScenarioError(
+                f"{where}, line {n}: {len(row)} cells, but the header names {len(header)} columns; a cell "
+                "without a column (a decimal comma? a missing header name?) would be dropped. Give each row "
+                "one cell per header column, with decimal points."
+            )
         vals = {}
         for c in ROUTE_COLUMNS:
             j = col[c]

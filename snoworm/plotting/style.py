@@ -98,7 +98,7 @@ def parse_size(size):
             return FIGURE_SIZES[key]
         m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*[x×]\s*([0-9]*\.?[0-9]+)\s*", key)
         if not m:
-            raise ValueError(f"figure size {size!r}: expected column, page or WxH in inches (e.g. 3.5x2.5)")
+            raise ValueError(f"figure size {quote(size, 60)}: expected column, page or WxH in inches (e.g. 3.5x2.5)")
         size = (float(m.group(1)), float(m.group(2)))
     try:
         if isinstance(size, (bool, bytes, dict)) or any(isinstance(v, (bool, str, bytes)) for v in size):

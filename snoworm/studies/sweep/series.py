@@ -24,12 +24,15 @@ the netCDF3 files of earlier versions.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import errno
+import gc
 import json
 import os
 import re
 import stat
+import sys
 import typing
 from pathlib import Path
 
@@ -377,22 +380,46 @@ def read_series(path, expected=None, only=None):
         raise ResultFileError(f"{where}: missing") from None
     except (OSError, ValueError) as exc:
         raise ResultFileError(f"{where}: cannot be opened ({getattr(exc, 'strerror', None) or exc})") from None
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode):  # checked before fdopen, which refuses a folder with IsADirectoryError
+        os.close(fd)
+        raise ResultFileError(f"{where}: not a regular file (a FIFO, a device or a folder)")
     with os.fdopen(fd, "rb") as fh:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise ResultFileError(f"{where}: not a regular file (a FIFO, a device or a folder)")
         if st.st_size > MAX_SERIES_BYTES:
             raise ResultFileError(f"{where}: {st.st_size} bytes, more than the {MAX_SERIES_BYTES} accepted")
-        try:
-            with xr.open_dataset(fh, engine=_engine(fh)) as ds:
-                problem = _check_layout(ds, st.st_size, expected)
-                if problem is None:
-                    return (ds[list(only)] if only else ds).load()
-        except ResultFileError:
-            raise
-        except Exception as exc:  # noqa: BLE001 - h5py/h5netcdf/scipy/xarray on a tampered file: bad input
-            problem = f"not a netCDF file snoworm wrote ({type(exc).__name__}: {quote(str(exc), 160)})"
+        with _quiet_half_open_files():
+            try:
+                with xr.open_dataset(fh, engine=_engine(fh)) as ds:
+                    problem = _check_layout(ds, st.st_size, expected)
+                    if problem is None:
+                        return (ds[list(only)] if only else ds).load()
+            except ResultFileError:
+                raise
+            except Exception as exc:  # noqa: BLE001 - h5py/h5netcdf/scipy/xarray on a tampered file: bad input
+                problem = f"not a netCDF file snoworm wrote ({type(exc).__name__}: {quote(str(exc), 160)})"
     raise ResultFileError(f"{where}: {problem}")
+
+
+@contextlib.contextmanager
+def _quiet_half_open_files():
+    """Drop the 'Exception ignored in File.close' tracebacks that h5netcdf prints (through
+    :func:`sys.unraisablehook`) when it closes a file whose opening failed half-way (a tampered
+    ``series.nc``): :func:`read_series` reports that file as one ResultFileError instead.  Every
+    other unraisable exception goes to the hook as before."""
+    previous = sys.unraisablehook
+
+    def hook(u):
+        if not type(u.object).__module__.startswith("h5netcdf") and not getattr(u.object, "__module__", "").startswith(
+            "h5netcdf"
+        ):
+            previous(u)
+
+    sys.unraisablehook = hook
+    try:
+        yield
+    finally:
+        gc.collect()  # the half-open file's finaliser runs now, under the hook
+        sys.unraisablehook = previous
 
 
 def cases_with_series(out, cases, keep_series, expected=None) -> set:

@@ -151,8 +151,11 @@ def parse_spec(key: str, spec, option: str | None = None) -> tuple:
 
 
 def _parse_range(opt, text):
-    a, b, c = (p.strip() for p in text.split(":"))
     hint = "A range is START:STOP:COUNT, inclusive, e.g. 0.3:1.0:15 for 15 values from 0.3 to 1.0."
+    parts = [p.strip() for p in text.split(":")]
+    if len(parts) != 3:
+        raise ScenarioError(f"{opt}: {quote(text, 60)} has {len(parts) - 1} colons, not 2. {hint}")
+    a, b, c = parts
     try:
         start, stop = _number(a), _number(b)
     except ValueError:

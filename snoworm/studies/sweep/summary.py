@@ -135,7 +135,7 @@ class SweepTable:
         """Every case's time series as an :class:`xarray.Dataset` (the sweep's ``series.nc``,
         written by ``run_sweep(..., series="netcdf")``; see :mod:`snoworm.studies.sweep.series`)."""
         path = self.out_dir / SERIES_FILE if self.out_dir is not None else None
-        if path is None or not path.exists():
+        if path is None or not os.path.lexists(path):  # a symlink loop or dangling link: read_series says so
             raise FileNotFoundError(
                 f"no {SERIES_FILE} in {self.out_dir}: run the sweep with --save-cases "
                 "--series netcdf (series='netcdf') to keep every case's series in one file"
