@@ -102,102 +102,123 @@ def _route_setup(content):
     return setup
 
 
+# setups of the route-path cases (module-level: one small function each, listed by _route_path_setups)
+def _rp_symlink_good(ctx):
+    write_scenario(ctx)
+    _write(ctx.base / "real.csv", GOOD_ROUTE)
+    os.symlink(ctx.base / "real.csv", ctx.cwd / "route.csv")
+
+
+def _rp_symlink_loop(ctx):
+    write_scenario(ctx)
+    os.symlink(ctx.cwd / "route.csv", ctx.cwd / "route.csv")
+
+
+def _rp_symlink_loop2(ctx):
+    write_scenario(ctx)
+    os.symlink(ctx.cwd / "b.csv", ctx.cwd / "route.csv")
+    os.symlink(ctx.cwd / "route.csv", ctx.cwd / "b.csv")
+
+
+def _rp_dangling(ctx):
+    write_scenario(ctx)
+    os.symlink(ctx.base / "nowhere.csv", ctx.cwd / "route.csv")
+
+
+def _rp_fifo(ctx):
+    write_scenario(ctx)
+    os.mkfifo(ctx.cwd / "route.csv")
+
+
+def _rp_devzero(ctx):
+    write_scenario(ctx)
+    os.symlink("/dev/zero", ctx.cwd / "route.csv")
+
+
+def _rp_devurandom(ctx):
+    write_scenario(ctx)
+    os.symlink("/dev/urandom", ctx.cwd / "route.csv")
+
+
+def _rp_directory(ctx):
+    write_scenario(ctx)
+    (ctx.cwd / "route.csv").mkdir()
+
+
+def _rp_missing(ctx):
+    write_scenario(ctx)
+
+
+def _rp_nul_in_path(ctx):
+    write_scenario(ctx, terrain='{route: "rou\\0te.csv"}')
+
+
+def _rp_long_path(ctx):
+    write_scenario(ctx, terrain="{route: " + "a" * 10_000 + ".csv}")
+
+
+def _rp_deep_path(ctx):
+    write_scenario(ctx, terrain="{route: " + "d/" * 3000 + "r.csv}")
+
+
+def _rp_victim_route(ctx):
+    write_scenario(ctx, terrain="{route: ../victim.txt}")
+
+
+def _rp_outside_route(ctx):
+    write_scenario(ctx, terrain="{route: ../real.csv}")
+    _write(ctx.base / "real.csv", GOOD_ROUTE)
+
+
+def _rp_unreadable_perm(ctx):
+    write_scenario(ctx)
+    _write(ctx.cwd / "route.csv", GOOD_ROUTE)
+    os.chmod(ctx.cwd / "route.csv", 0)
+
+
+def _rp_route_number(ctx):
+    write_scenario(ctx, terrain="{route: 12}")
+
+
+def _rp_route_list(ctx):
+    write_scenario(ctx, terrain="{route: [a, b]}")
+
+
+def _rp_route_empty(ctx):
+    write_scenario(ctx, terrain="{route: ''}")
+
+
+def _rp_route_dot(ctx):
+    write_scenario(ctx, terrain="{route: .}")
+
+
+def _rp_route_and_xt(ctx):
+    write_scenario(ctx, terrain="{route: route.csv, xt: 0.5}")
+    _write(ctx.cwd / "route.csv", GOOD_ROUTE)
+
+
 def _route_path_setups():
-    def symlink_good(ctx):
-        write_scenario(ctx)
-        _write(ctx.base / "real.csv", GOOD_ROUTE)
-        os.symlink(ctx.base / "real.csv", ctx.cwd / "route.csv")
-
-    def symlink_loop(ctx):
-        write_scenario(ctx)
-        os.symlink(ctx.cwd / "route.csv", ctx.cwd / "route.csv")
-
-    def symlink_loop2(ctx):
-        write_scenario(ctx)
-        os.symlink(ctx.cwd / "b.csv", ctx.cwd / "route.csv")
-        os.symlink(ctx.cwd / "route.csv", ctx.cwd / "b.csv")
-
-    def dangling(ctx):
-        write_scenario(ctx)
-        os.symlink(ctx.base / "nowhere.csv", ctx.cwd / "route.csv")
-
-    def fifo(ctx):
-        write_scenario(ctx)
-        os.mkfifo(ctx.cwd / "route.csv")
-
-    def devzero(ctx):
-        write_scenario(ctx)
-        os.symlink("/dev/zero", ctx.cwd / "route.csv")
-
-    def devurandom(ctx):
-        write_scenario(ctx)
-        os.symlink("/dev/urandom", ctx.cwd / "route.csv")
-
-    def directory(ctx):
-        write_scenario(ctx)
-        (ctx.cwd / "route.csv").mkdir()
-
-    def missing(ctx):
-        write_scenario(ctx)
-
-    def nul_in_path(ctx):
-        write_scenario(ctx, terrain='{route: "rou\\0te.csv"}')
-
-    def long_path(ctx):
-        write_scenario(ctx, terrain="{route: " + "a" * 10_000 + ".csv}")
-
-    def deep_path(ctx):
-        write_scenario(ctx, terrain="{route: " + "d/" * 3000 + "r.csv}")
-
-    def victim_route(ctx):
-        write_scenario(ctx, terrain="{route: ../victim.txt}")
-
-    def outside_route(ctx):
-        write_scenario(ctx, terrain="{route: ../real.csv}")
-        _write(ctx.base / "real.csv", GOOD_ROUTE)
-
-    def unreadable_perm(ctx):
-        write_scenario(ctx)
-        _write(ctx.cwd / "route.csv", GOOD_ROUTE)
-        os.chmod(ctx.cwd / "route.csv", 0)
-
-    def route_number(ctx):
-        write_scenario(ctx, terrain="{route: 12}")
-
-    def route_list(ctx):
-        write_scenario(ctx, terrain="{route: [a, b]}")
-
-    def route_empty(ctx):
-        write_scenario(ctx, terrain="{route: ''}")
-
-    def route_dot(ctx):
-        write_scenario(ctx, terrain="{route: .}")
-
-    def route_and_xt(ctx):
-        write_scenario(ctx, terrain="{route: route.csv, xt: 0.5}")
-        _write(ctx.cwd / "route.csv", GOOD_ROUTE)
-
     return {
-        "symlink_to_good": (symlink_good, EITHER),
-        "symlink_loop": (symlink_loop, RR),
-        "symlink_loop2": (symlink_loop2, RR),
-        "dangling_symlink": (dangling, RR),
-        "fifo": (fifo, RR),
-        "dev_zero": (devzero, RR),
-        "dev_urandom": (devurandom, RR),
-        "directory": (directory, RR),
-        "missing": (missing, RR),
-        "nul_in_path": (nul_in_path, RR),
-        "long_path": (long_path, RR),
-        "deep_path": (deep_path, RR),
-        "victim_as_route": (victim_route, RR),
-        "outside_folder": (outside_route, EITHER),
-        "mode_000": (unreadable_perm, EITHER),
-        "route_number": (route_number, RR),
-        "route_list": (route_list, RR),
-        "route_empty": (route_empty, RR),
-        "route_dot": (route_dot, RR),
-        "route_and_xt": (route_and_xt, RR),
+        "symlink_to_good": (_rp_symlink_good, EITHER),
+        "symlink_loop": (_rp_symlink_loop, RR),
+        "symlink_loop2": (_rp_symlink_loop2, RR),
+        "dangling_symlink": (_rp_dangling, RR),
+        "fifo": (_rp_fifo, RR),
+        "dev_zero": (_rp_devzero, RR),
+        "dev_urandom": (_rp_devurandom, RR),
+        "directory": (_rp_directory, RR),
+        "missing": (_rp_missing, RR),
+        "nul_in_path": (_rp_nul_in_path, RR),
+        "long_path": (_rp_long_path, RR),
+        "deep_path": (_rp_deep_path, RR),
+        "victim_as_route": (_rp_victim_route, RR),
+        "outside_folder": (_rp_outside_route, EITHER),
+        "mode_000": (_rp_unreadable_perm, EITHER),
+        "route_number": (_rp_route_number, RR),
+        "route_list": (_rp_route_list, RR),
+        "route_empty": (_rp_route_empty, RR),
+        "route_dot": (_rp_route_dot, RR),
+        "route_and_xt": (_rp_route_and_xt, RR),
     }
 
 

@@ -227,6 +227,30 @@ def _csv_rows(text: str, where: str) -> list:
             rows.append((reader.line_num, r))
 
 
+def _route_row(row, n, header, col, where) -> dict:
+    """The numbers of route line ``n`` (its cells ``row``) by column name, checked: one cell per
+    header column, each a finite number, X_t in (0, 1] (ScenarioError naming the line and column)."""
+    if any(c.strip() for c in row[len(header) :]):
+        raise ScenarioError(
+            f"{where}, line {n}: {len(row)} cells, but the header names {len(header)} columns; a cell "
+            "without a column (a decimal comma? a missing header name?) would be dropped. Give each row "
+            "one cell per header column, with decimal points."
+        )
+    vals = {}
+    for c in ROUTE_COLUMNS:
+        j = col[c]
+        cell = f"{where}, line {n}, column {j + 1} ({c})"
+        if j >= len(row):
+            raise ScenarioError(f"{cell}: missing; the row has {len(row)} columns, the header {len(header)}.")
+        vals[c] = _number(row[j], cell)
+    if not 0 < vals["xt"] <= 1:
+        raise ScenarioError(
+            f"{where}, line {n}, column {col['xt'] + 1} (xt): X_t must be in (0, 1] "
+            f"(paper section 3), got {vals['xt']:g}."
+        )
+    return vals
+
+
 def read_route(path) -> Route:
     """Read a route CSV: a header with ``distance_m``, ``elevation_m`` and ``xt`` (other columns ignored),
     then one row per survey point; lines starting with ``#`` are comments (e.g. the provenance).
@@ -269,24 +293,7 @@ def read_route(path) -> Route:
     col = {c: header.index(c) for c in ROUTE_COLUMNS}
     dist, elev, xts, prev = [], [], [], None
     for n, row in rows[1:]:
-        if any(c.strip() for c in row[len(header) :]):
-            raise ScenarioError(
-                f"{where}, line {n}: {len(row)} cells, but the header names {len(header)} columns; a cell "
-                "without a column (a decimal comma? a missing header name?) would be dropped. Give each row "
-                "one cell per header column, with decimal points."
-            )
-        vals = {}
-        for c in ROUTE_COLUMNS:
-            j = col[c]
-            cell = f"{where}, line {n}, column {j + 1} ({c})"
-            if j >= len(row):
-                raise ScenarioError(f"{cell}: missing; the row has {len(row)} columns, the header {len(header)}.")
-            vals[c] = _number(row[j], cell)
-        if not 0 < vals["xt"] <= 1:
-            raise ScenarioError(
-                f"{where}, line {n}, column {col['xt'] + 1} (xt): X_t must be in (0, 1] "
-                f"(paper section 3), got {vals['xt']:g}."
-            )
+        vals = _route_row(row, n, header, col, where)
         pair = (vals["distance_m"], vals["elevation_m"])
         _check_step(prev, pair, f"{where}, line {n}")
         prev = pair
