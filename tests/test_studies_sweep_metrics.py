@@ -100,7 +100,7 @@ def test_an_interrupt_inside_c_code_stops_the_sweep_instead_of_recording_an_erro
     kind = {"KeyboardInterrupt": KeyboardInterrupt, "Terminated": Terminated}[signal_name]
     raw = read_yaml(TOW6)
 
-    def interrupted(sc):
+    def interrupted(sc, allow_code=()):
         try:
             raise kind()
         except KeyboardInterrupt as interrupt:
