@@ -87,20 +87,6 @@ def _catch_sigterm():
         return None
 
 
-def _interrupt_within(exc):
-    """The KeyboardInterrupt (or :class:`Terminated`) in ``exc``'s chain of causes, or None: a signal
-    handler raising while NumPy or SciPy runs C code comes back as, e.g., ``SystemError: ...
-    returned a result with an exception set`` caused by the interrupt (the sweep's cases check the
-    same, :mod:`snoworm.studies.sweep.metrics`)."""
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return exc
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return None
-
-
 def handle_errors(fn):
     """Turn ScenarioError and OutputError into exit 2, SolverError and ControllerError into exit 1,
     each with a clear message; SIGTERM is handled like Ctrl-C."""
@@ -133,7 +119,9 @@ def handle_errors(fn):
                 143 if isinstance(exc, Terminated) else 130,
             )
         except Exception as exc:  # a bug: one paragraph, the traceback on request
-            interrupt = _interrupt_within(exc)
+            from ..infra.pool import interrupt_within  # lazy: start-up (the error path only)
+
+            interrupt = interrupt_within(exc)
             if interrupt is not None:  # Ctrl-C/SIGTERM inside NumPy/SciPy C code came back as another error
                 fail(
                     "interrupted; nothing half-written was left (finished files of a sweep were kept).",

@@ -21,7 +21,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from threadpoolctl import threadpool_limits
 
-__all__ = ["ProcessExecutor", "start_method", "THREAD_ENV"]
+__all__ = ["ProcessExecutor", "interrupt_within", "start_method", "THREAD_ENV"]
 
 #: Thread-pool variables set to 1 in worker processes (unless the user set them), as Dask does:
 #: one multi-threaded OpenBLAS per worker oversubscribes the cores and halved the speed here.
@@ -46,6 +46,19 @@ def _exit_with_parent(ppid: int, poll_s: float = 1.0):
                 os._exit(1)
 
     threading.Thread(target=watch, name="snoworm-parent-watch", daemon=True).start()
+
+
+def interrupt_within(exc: BaseException | None) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt (or a subclass, e.g. SIGTERM's ``Terminated``) in ``exc``'s chain of
+    causes, or None: a signal handler raising while NumPy or SciPy runs C code comes back as another
+    exception (``SystemError: ... returned a result with an exception set``) caused by the interrupt."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
 
 
 def start_method() -> str:

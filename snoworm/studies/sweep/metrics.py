@@ -23,6 +23,7 @@ from ...config.scenario import Scenario, scenario_from_dict
 from ...config.schema import ScenarioError
 from ...infra.folders import OutputError, os_error_message
 from ...infra.locks import lock_token_matches
+from ...infra.pool import interrupt_within
 from ...modes.controller import ControllerError
 from ...simulation.driver import SolverError, simulate
 from .series import save_series
@@ -201,21 +202,6 @@ class SweepTask:
         return dataclasses.replace(self, scenario=sc)
 
 
-def _interrupt_within(exc: BaseException) -> KeyboardInterrupt | None:
-    """The KeyboardInterrupt (or SIGTERM's subclass of it) that caused ``exc``, if any.
-
-    A signal handler that raises while NumPy or SciPy runs C code comes back as another exception
-    (``SystemError: ... returned a result with an exception set``) whose cause is the interrupt.
-    """
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return exc
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return None
-
-
 def run_case(task: SweepTask) -> dict:
     """Run one case (the function executors call; top-level so it pickles).
 
@@ -246,7 +232,7 @@ def run_case(task: SweepTask) -> dict:
     except ControllerError as exc:
         out.update(status="controller_failure", error=one_line(exc))
     except Exception as exc:  # noqa: BLE001 - a case must never stop the sweep
-        interrupt = _interrupt_within(exc)
+        interrupt = interrupt_within(exc)
         if interrupt is not None:  # Ctrl-C/SIGTERM inside a C call: the sweep stops, the case is not recorded
             raise interrupt from None
         tb = traceback.extract_tb(exc.__traceback__)
