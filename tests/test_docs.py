@@ -148,3 +148,38 @@ def test_readme_figure_is_made_by_the_command_it_names(tmp_path):
         return struct.unpack(">II", png[16:24])
 
     assert size(made) == size(committed) and size(made)[0] == 700
+
+
+def _anchor(heading):
+    """GitHub's anchor of a Markdown heading: lower case, punctuation dropped, spaces to hyphens."""
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def _headings(md):
+    return re.findall(r"^#+ (.+)$", md.read_text(encoding="utf-8"), re.M)
+
+
+def test_markdown_links_and_cited_sections_exist():
+    """Every relative link of README.md, CHANGELOG.md and docs/*.md reaches a file, and its
+    ``#anchor`` a heading there; every ``docs/X.md, "Section"`` cited in the docs, the package or
+    the tests names a heading of that file (a section a rewrite renames breaks them)."""
+    pages = [ROOT / "README.md", ROOT / "CHANGELOG.md", *sorted((ROOT / "docs").glob("*.md"))]
+    broken = []
+    for page in pages:
+        for target in re.findall(r"\]\(([^)\s]+)\)", page.read_text(encoding="utf-8")):
+            if re.match(r"[a-z]+:", target):  # https:, mailto:
+                continue
+            path, _, anchor = target.partition("#")
+            dest = (page.parent / path) if path else page
+            if not dest.exists():
+                broken.append(f"{page.name}: {target} (no such file)")
+            elif anchor and dest.suffix == ".md" and anchor not in {_anchor(h) for h in _headings(dest)}:
+                broken.append(f"{page.name}: {target} (no such heading)")
+    cited = re.compile(r'(docs/[a-z_]+\.md)`?,? "([^"]+)"')
+    sources = [*pages, *ROOT.glob("snoworm/**/*.py"), *ROOT.glob("tests/*.py"), *ROOT.glob("benchmarks/*.py")]
+    for src in sources:
+        for doc, section in cited.findall(src.read_text(encoding="utf-8")):
+            heads = _headings(ROOT / doc) if (ROOT / doc).exists() else []
+            if not any(h.strip().startswith(section) for h in heads):
+                broken.append(f"{src.relative_to(ROOT)}: {doc}, {section!r} (no such section)")
+    assert not broken, "\n".join(broken)
