@@ -4,12 +4,14 @@ import ast
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import snoworm
 from snoworm import load_scenario
 from snoworm.dynamics import Controls
+from snoworm.simulation.guard import SolverError
 from snoworm.simulation.interval import IntervalSolver, output_grid
-from snoworm.simulation.stepper import ChainStepper, stack_size
+from snoworm.simulation.stepper import PERIODS, WHOLE_RUNS, ChainStepper, stack_size
 
 PKG = Path(snoworm.__file__).parent
 
@@ -78,3 +80,34 @@ def test_the_environments_and_the_simulator_have_no_stepper_of_their_own():
         tree = ast.parse((PKG / rel).read_text())
         names = {a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names}
         assert not names & {"IntervalSolver", "SPEED_SANITY_FACTOR", "ChainModel"}, rel
+
+
+def test_member_chains_stack_as_given_and_a_failed_stack_is_the_callers_under_whole_runs():
+    """of_members: B different chains of one structure (a batched sweep's cases) in one stack under
+    WHOLE_RUNS, each member within the batched path's accuracy of its chain alone (LSODA's max
+    norm: 1e-3 m/s on a 1.5 m/s scale); a failed stack raises (the caller reruns the members), where
+    PERIODS solves the bad member alone and the others go on."""
+    cases = [_tow6(**{"tow.force_N": f, "simulation.method": "LSODA"}) for f in (0.0, 150.0, 300.0)]
+    sc, models, y0 = cases[0][0], [m for _, m, _ in cases], np.stack([y for _, _, y in cases])
+    st = ChainStepper.of_members(models, sc.simulation, "batch", policy=WHOLE_RUNS, asked_steps=False)
+    assert [(s.start, s.stop, m.n_batch) for s, m in st.stacks] == [(0, 3, 3)]
+    np.testing.assert_array_equal(st.stacks[0][1].tow_force_N, [0.0, 150.0, 300.0])
+    n = models[0].n
+    ctl = Controls.rolling(n, np.ones(n), np.full(n, 1.5))
+    t_eval = output_grid(0.0, 0.5, sc.simulation.output_dt_s, include_start=True)
+    ys, _, failed, errors = st.solve(Controls.stack([ctl] * 3), 0.0, 0.5, y0, t_eval)
+    assert not failed.any() and errors == {} and "member_solves" not in st.stats
+    for b, m in enumerate(models):
+        alone = IntervalSolver(m, sc.simulation, "alone").solve(ctl, 0.0, 0.5, y0[b], (), t_eval)[1]
+        v, v_alone = m.unpack(ys[-1, b])[:, m.layout.v], m.unpack(alone[-1])[:, m.layout.v]
+        np.testing.assert_allclose(v, v_alone, rtol=0, atol=1e-3)
+    y_bad = y0.copy()
+    y_bad[1, models[1].layout.flat_index(0, "v_mps")] = np.nan
+    stack = Controls.stack([ctl] * 3)
+    with pytest.raises(SolverError):
+        ChainStepper.of_members(models, sc.simulation, "batch", policy=WHOLE_RUNS).solve(
+            stack, 0.0, 0.2, y_bad, t_eval[:5]
+        )
+    per = ChainStepper.of_members(models, sc.simulation, "env", policy=PERIODS)
+    _, _, failed, errors = per.solve(stack, 0.0, 0.2, y_bad, output_grid(0.0, 0.2, sc.simulation.output_dt_s, True))
+    assert failed.tolist() == [False, True, False] and set(errors) == {1}

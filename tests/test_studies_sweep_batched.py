@@ -23,6 +23,31 @@ def test_batched_sweep_matches_serial_sweep(scenario_path):
         assert_metrics_close({**a, "final_link_forces_N": a_links}, {**b, "final_link_forces_N": b_links})
 
 
+def test_batched_sweep_stacks_its_groups_in_the_one_stepper(scenario_path, monkeypatch):
+    """--batch B: each group of up to B cases is one stack of ChainStepper (the stepper of the
+    Simulator and the environments, issue 31), under the batched sweeps' policy; the rows equal
+    the serial sweep's (the cases run alone, no stepper) within the batched path's 0.1 %."""
+    from snoworm.simulation import stepper as stepper_mod
+
+    stacks = set()
+    real = stepper_mod.ChainStepper.solve
+
+    def spy(self, *a, **k):
+        stacks.add((self.policy, tuple((m.stop - m.start, model.n_batch) for m, model in self.stacks)))
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(stepper_mod.ChainStepper, "solve", spy)
+    sets = ["tow.force_N=0,100,200,300,400", "simulation.duration_s=2"]
+    serial = run_sweep(scenario_path("tow6_uniform"), sets, plot=False)
+    assert stacks == set()
+    batched = run_sweep(scenario_path("tow6_uniform"), sets, plot=False, batch=3)
+    assert stacks == {(stepper_mod.WHOLE_RUNS, ((3, 3),)), (stepper_mod.WHOLE_RUNS, ((2, 2),))}
+    for a, b in zip(serial.rows, batched.rows):
+        assert a["case_id"] == b["case_id"] and b["status"] == "ok"
+        a, b = ({**r, "final_link_forces_N": [r[f"final_link_force_{j}_N"] for j in range(5)]} for r in (a, b))
+        assert_metrics_close(a, b)
+
+
 def test_unbatchable_cases_run_one_by_one(scenario_path):
     """Event-driven modes and lone cases go through the ordinary per-case function."""
     uni = read_yaml(scenario_path("tow6_uniform"))

@@ -3,9 +3,11 @@
 One interval loop serves single runs (:func:`simulate`) and batched stacks
 (:func:`simulate_batch`): the integration restarts at every controller start time and every
 gait phase change (state events), so no switch of a controller falls inside a solver step
-(docs/model.md section 6).  Each interval is solved by the run's
-:class:`~snoworm.simulation.interval.IntervalSolver` (method fallbacks, work limit, VODE stepper).
-A failed run never returns a partial result as if it were whole.
+(docs/model.md section 6).  Each interval of a single run is solved by the run's
+:class:`~snoworm.simulation.interval.IntervalSolver` (method fallbacks, work limit, VODE stepper);
+a batch's by the one stepper of many chains, :class:`~snoworm.simulation.stepper.ChainStepper`
+(which stacks the members; the driver knows no stacking).  A failed run never returns a partial
+result as if it were whole.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from ..modes.base import build_mode
 from ..results.result import Result
 from .guard import SolverError, check_sane, guarded
 from .interval import IntervalSolver, output_grid
+from .stepper import WHOLE_RUNS, ChainStepper
 
 __all__ = [
     "SolverError",
@@ -127,28 +130,49 @@ def check_assembly(sc) -> None:
     sc.mode.prepare(sc, model)
 
 
-def _integrate(model, modes, sim, name, progress=None):
-    """THE interval loop: ``modes`` (one per member) drive ``model`` (stacked if several members).
+def _interval_solve(models, modes, sim, name, progress):
+    """``(solve, stats)``: the interval solve of a run's members, ``solve(ctl, t, t1, y, events,
+    t_eval, label) -> (ts, ys, t_next, y_next, event_index)`` as
+    :meth:`IntervalSolver.solve <snoworm.simulation.interval.IntervalSolver.solve>`.
+
+    One member: its :class:`~snoworm.simulation.interval.IntervalSolver` (a mode's events end its
+    intervals).  Several (a batch, whose modes have no events): the one stepper of many chains,
+    :class:`~snoworm.simulation.stepper.ChainStepper` under its batched sweeps' policy
+    (:data:`~snoworm.simulation.stepper.WHOLE_RUNS`: one stack of the members, the scenario's
+    method, a failed stack raises :class:`SolverError`)."""
+    options = {
+        "carry_history": all(getattr(md, "continue_solver", False) for md in modes),
+        "progress": progress,
+        "asked_steps": all(getattr(md, "steps_asked", False) for md in modes),
+    }
+    if len(models) == 1:
+        solver = IntervalSolver(models[0], sim, name, **options)
+        return solver.solve, solver.stats
+    stepper = ChainStepper.of_members(models, sim, name, policy=WHOLE_RUNS, **options)
+
+    def solve(ctl, t, t1, y, events, t_eval, label):
+        ys, y_end, _, _ = stepper.solve(ctl, t, t1, y, t_eval, label)
+        return np.asarray(t_eval, float), ys.reshape(len(t_eval), -1), t1, y_end.reshape(-1), None
+
+    return solve, stepper.stats
+
+
+def _integrate(models, modes, sim, name, progress=None):
+    """THE interval loop: ``modes`` drive the chains ``models`` (one per member; several: a batch,
+    stacked by :func:`_interval_solve`).
 
     ``progress(t_s, duration_s)`` is called after each interval, if given, and within long
     intervals by the solver's work meter (:class:`~snoworm.simulation.guard.WorkMeter`).
 
     Returns ``(pieces per member, phases, stats)``.  Raises :class:`SolverError`, or ValueError
-    when the members of a stack ask for different intervals (they then run one by one).
+    when the members of a batch ask for different intervals (they then run one by one).
     """
     B = len(modes)
     t, T = 0.0, sim.duration_s
     y = np.concatenate([md.initial_state() for md in modes])
     pieces, phases = [[] for _ in range(B)], []
-    solver = IntervalSolver(
-        model,
-        sim,
-        name,
-        carry_history=all(getattr(md, "continue_solver", False) for md in modes),
-        progress=progress,
-        asked_steps=all(getattr(md, "steps_asked", False) for md in modes),
-    )
-    stats, stuck = solver.stats, 0
+    solve, stats = _interval_solve(models, modes, sim, name, progress)
+    stuck = 0
     while t < T - 1e-12:
         ys_b = y.reshape(B, -1)
         ivs = [md.interval(t, ys_b[b]) for b, md in enumerate(modes)]
@@ -160,7 +184,7 @@ def _integrate(model, modes, sim, name, progress=None):
             raise SolverError(f"mode of {name!r} asked for an empty interval at t = {t:.6g} s ({iv.label}).")
         ctl = iv.controls if B == 1 else Controls.stack([v.controls for v in ivs])
         t_eval = output_grid(t, t1, sim.output_dt_s, include_start=not phases)
-        ts, ys, t_next, y_next, which = solver.solve(ctl, t, t1, y, iv.events, t_eval, iv.label)
+        ts, ys, t_next, y_next, which = solve(ctl, t, t1, y, iv.events, t_eval, iv.label)
         if ts.size:
             ys_m = ys.reshape(ts.size, B, -1)
             for b in range(B):
@@ -180,11 +204,12 @@ def _integrate(model, modes, sim, name, progress=None):
     return pieces, phases, stats
 
 
-def _guarded_integrate(model, modes, sim, name, progress=None):
-    """:func:`_integrate` under :func:`~snoworm.simulation.guard.guarded`, its results checked by
-    :func:`~snoworm.simulation.guard.check_sane`."""
-    pieces, phases, stats = guarded(lambda: _integrate(model, modes, sim, name, progress), name)
-    check_sane(model, pieces, name)
+def _guarded_integrate(models, modes, sim, name, progress=None):
+    """:func:`_integrate` under :func:`~snoworm.simulation.guard.guarded`, each member's results
+    checked by :func:`~snoworm.simulation.guard.check_sane` against its own chain."""
+    pieces, phases, stats = guarded(lambda: _integrate(models, modes, sim, name, progress), name)
+    for model, piece in zip(models, pieces):
+        check_sane(model, [piece], name)
     return pieces, phases, stats
 
 
@@ -208,7 +233,7 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
     """
     wall0 = time.perf_counter()
     case = assemble(sc, allow_code=allow_code)
-    pieces, phases, stats = _guarded_integrate(case.model, [case.mode], sc.simulation, sc.name, progress)
+    pieces, phases, stats = _guarded_integrate([case.model], [case.mode], sc.simulation, sc.name, progress)
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
 
@@ -270,10 +295,14 @@ def simulate_batch(scenarios) -> list:
     ``scenarios``: Scenarios, or runs assembled already (:class:`AssembledRun`, e.g. to compute
     their :func:`batch_key` first); each is assembled once.
 
-    The members' models are stacked (:meth:`ChainModel.stack`: the same kernel with one more
-    leading axis on the parameters) and integrated together; LSODA's error test is a weighted
-    max-norm, so every member is held to the tolerance it has alone.  If the stacked solve fails,
-    each member runs alone, so one bad member does not fail the others.
+    The members are integrated together by the one stepper of many chains
+    (:class:`~snoworm.simulation.stepper.ChainStepper` under its
+    :data:`~snoworm.simulation.stepper.WHOLE_RUNS` policy: their models stacked with
+    :meth:`ChainModel.stack`, the same kernel with one more leading axis on the parameters, in one
+    stack on LSODA, whose error test is a weighted max-norm, so every member is held to the
+    tolerance it has alone).  If the stacked solve fails, or a member's states leave the physics
+    (:func:`~snoworm.simulation.guard.check_sane`, against its own chain), each member runs alone
+    from the start, so one bad member does not fail the others.
 
     Returns
     -------
@@ -300,8 +329,8 @@ def simulate_batch(scenarios) -> list:
     if len({batch_key(c) for c in cases}) != 1:
         raise ValueError(one_key)
     try:
-        big = ChainModel.stack([c.model for c in cases]) if len(cases) > 1 else cases[0].model
-        pieces, phases, stats = _guarded_integrate(big, [c.mode for c in cases], scs[0].simulation, scs[0].name)
+        models, modes = [c.model for c in cases], [c.mode for c in cases]
+        pieces, phases, stats = _guarded_integrate(models, modes, scs[0].simulation, scs[0].name)
     except (SolverError, ValueError) as exc:
         logger.info("stacked run of %d scenarios failed (%s); running them one by one", len(scs), exc)
         return [_alone(sc) for sc in scs]

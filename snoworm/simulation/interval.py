@@ -4,9 +4,10 @@
 what lasts across intervals: the solver counters (:attr:`IntervalSolver.stats`), the options of
 each method (tolerances, Jacobian), the run's :class:`~snoworm.simulation.vode.VodeStepper` and
 the work meter (:class:`~snoworm.simulation.guard.WorkMeter`).  The driver
-(:mod:`snoworm.simulation.driver`: single runs and batched stacks) and the step-by-step
-:class:`~snoworm.simulation.stepwise.Simulator` call :meth:`IntervalSolver.solve`, so every run
-integrates the same way.  An interval that fails with the configured method is retried with the
+(:mod:`snoworm.simulation.driver`: single runs) and the one stepper of one chain or many
+(:class:`~snoworm.simulation.stepper.ChainStepper`, one per stack: a batch's, the step-by-step
+:class:`~snoworm.simulation.stepwise.Simulator`'s, the environments') call
+:meth:`IntervalSolver.solve`, so every run integrates the same way.  An interval that fails with the configured method is retried with the
 implicit methods not yet tried; when every method fails, :class:`SolverError` carries the
 solvers' messages.
 """
