@@ -324,6 +324,7 @@ class ChainStepper:
         in ``ys`` (n_t, members, n_states)."""
         lay = self.model.layout
         Y = ys.reshape(ys.shape[:2] + (lay.n, lay.n_s))
-        finite = np.all(np.isfinite(Y), axis=(0, 2, 3))
-        v = np.max(np.abs(np.nan_to_num(Y[..., lay.v], nan=np.inf)), axis=(0, 2))
-        return ~finite | (v > self._vmax[members])
+        # two reductions per period (this runs after every step of the Simulator and the environments):
+        # a NaN or an infinity anywhere makes a member's sum non-finite, and a NaN speed fails ``<=``
+        v = np.abs(Y[..., lay.v]).max(axis=(0, 2))
+        return ~np.isfinite(Y.sum(axis=(0, 2, 3))) | ~(v <= self._vmax[members])
