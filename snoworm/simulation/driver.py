@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -21,7 +23,7 @@ from ..config.schema import quote
 from ..dynamics import ChainModel
 from ..model.arrays import LinkArrays, SegmentArrays
 from ..model.inputs import Controls
-from ..modes.base import build_mode
+from ..modes.base import Mode, build_mode
 from ..results.result import Result
 from .guard import SolverError, check_sane, guarded
 from .interval import IntervalSolver, output_grid
@@ -53,19 +55,19 @@ class AssembledRun:
     The mode holds what it prepared on the model (e.g. the force-control plan,
     :meth:`~snoworm.config.mode_registry.ModeConfig.prepare`)."""
 
-    scenario: object
+    scenario: Scenario
     model: ChainModel
-    mode: object
+    mode: Mode
 
 
-def _check_scenario(sc) -> None:
+def _check_scenario(sc: object) -> None:
     if not isinstance(sc, Scenario):
         raise TypeError(
             f"scenario: expected a Scenario, got {quote(sc, 60)}; read one with snoworm.load_scenario(name or path)"
         )
 
 
-def chain_model(sc) -> ChainModel:
+def chain_model(sc: Scenario) -> ChainModel:
     """A new :class:`~snoworm.dynamics.ChainModel` of a scenario's chain, built from its data.
 
     The one place a scenario's values become the kernel's arrays (per-segment parameters with
@@ -92,7 +94,7 @@ def chain_model(sc) -> ChainModel:
     )
 
 
-def assemble(sc, model: ChainModel | None = None, allow_code=()) -> AssembledRun:
+def assemble(sc: Scenario, model: ChainModel | None = None, allow_code: Iterable[str] = ()) -> AssembledRun:
     """Assemble a scenario for one run: its chain model (:func:`chain_model`, or ``model`` if the
     caller built it for this run already) and a new instance of its mode on that model (which
     prepares its plan on it, e.g. the force-control targets; :func:`snoworm.modes.base.build_mode`,
@@ -113,7 +115,7 @@ def assemble(sc, model: ChainModel | None = None, allow_code=()) -> AssembledRun
     return AssembledRun(sc, model, build_mode(sc.mode, sc, model, allow_code))
 
 
-def check_assembly(sc) -> None:
+def check_assembly(sc: Scenario) -> None:
     """The checks of :func:`assemble` without making the mode: build the chain model and the mode
     config's plan on it (:meth:`~snoworm.config.mode_registry.ModeConfig.prepare`); no user code
     runs.  ``snoworm validate`` calls it.
@@ -188,7 +190,9 @@ def _guarded_integrate(model, modes, sim, name, progress=None):
     return pieces, phases, stats
 
 
-def simulate(sc, progress=None, allow_code=()) -> Result:
+def simulate(
+    sc: Scenario, progress: Callable[[float, float], object] | None = None, allow_code: Iterable[str] = ()
+) -> Result:
     """Run a scenario and return its :class:`~snoworm.results.result.Result`.
 
     ``progress``: optional callable ``progress(t_s, duration_s)``, called after each integration
@@ -213,12 +217,12 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
     return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
 
 
-def _assembled(run) -> AssembledRun:
+def _assembled(run: Scenario | AssembledRun) -> AssembledRun:
     """``run`` if it is an :class:`AssembledRun`, else the scenario assembled (:func:`assemble`)."""
     return run if isinstance(run, AssembledRun) else assemble(run)
 
 
-def batch_key(run):
+def batch_key(run: Scenario | AssembledRun) -> tuple[Any, ...] | None:
     """A hashable key shared by the runs that can run as one stacked system, or None.
 
     ``run``: a Scenario (its chain model is built here if its mode can run in a stack) or an
@@ -258,13 +262,13 @@ class BatchMember:
     """Outcome of one member of a batched run: ``status`` ``"ok"`` with its ``result``, or
     ``"solver_failure"`` with the solver's message in ``error``."""
 
-    scenario: object
+    scenario: Scenario
     result: Result | None
     status: str
     error: str = ""
 
 
-def simulate_batch(scenarios) -> list:
+def simulate_batch(scenarios: Iterable[Scenario | AssembledRun]) -> list[BatchMember]:
     """Run scenarios of one :func:`batch_key` as ONE stacked system through the same interval driver.
 
     ``scenarios``: Scenarios, or runs assembled already (:class:`AssembledRun`, e.g. to compute
@@ -323,7 +327,7 @@ def simulate_batch(scenarios) -> list:
     ]
 
 
-def _alone(sc) -> BatchMember:
+def _alone(sc: Scenario) -> BatchMember:
     try:
         return BatchMember(sc, simulate(sc), "ok")
     except SolverError as exc:
