@@ -12,6 +12,7 @@ with :func:`register_mode` -- also from a user's own module, before the scenario
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field as dc_field
 from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
@@ -53,7 +54,7 @@ class Interval:
 
     t_end: float
     controls: Controls
-    events: list[Callable[[float, NDArray[np.float64]], float]] = dc_field(default_factory=list)
+    events: list[Callable[..., float]] = dc_field(default_factory=list)
     label: str = ""
 
 
@@ -144,7 +145,9 @@ def mode_class(cfg: ModeConfig) -> type[Mode]:
     return MODES[cfg.type]
 
 
-def build_mode(cfg: ModeConfig, scenario: Scenario, model: ChainModel, allow_code: Iterable[str] = ()) -> Mode:
+def build_mode(
+    cfg: ModeConfig, scenario: Scenario, model: ChainModel, allow_code: Iterable[str | os.PathLike[str]] = ()
+) -> Mode:
     """A new instance of the mode of ``cfg`` for one run of ``scenario`` on ``model``.
 
     ``allow_code``: the paths whose controller code the user allowed (``--allow-code``,

@@ -11,6 +11,7 @@ A failed run never returns a partial result as if it were whole.
 from __future__ import annotations
 
 import logging
+import os
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -94,7 +95,9 @@ def chain_model(sc: Scenario) -> ChainModel:
     )
 
 
-def assemble(sc: Scenario, model: ChainModel | None = None, allow_code: Iterable[str] = ()) -> AssembledRun:
+def assemble(
+    sc: Scenario, model: ChainModel | None = None, allow_code: Iterable[str | os.PathLike[str]] = ()
+) -> AssembledRun:
     """Assemble a scenario for one run: its chain model (:func:`chain_model`, or ``model`` if the
     caller built it for this run already) and a new instance of its mode on that model (which
     prepares its plan on it, e.g. the force-control targets; :func:`snoworm.modes.base.build_mode`,
@@ -191,7 +194,9 @@ def _guarded_integrate(model, modes, sim, name, progress=None):
 
 
 def simulate(
-    sc: Scenario, progress: Callable[[float, float], object] | None = None, allow_code: Iterable[str] = ()
+    sc: Scenario,
+    progress: Callable[[float, float], object] | None = None,
+    allow_code: Iterable[str | os.PathLike[str]] = (),
 ) -> Result:
     """Run a scenario and return its :class:`~snoworm.results.result.Result`.
 
