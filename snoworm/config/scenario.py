@@ -110,7 +110,7 @@ class Scenario(Config):
     #: where the scenario was read from (set by :func:`scenario_from_dict`; None if made directly)
     origin: ScenarioOrigin | None = internal()
 
-    def _check(self, path):
+    def _check(self, path: str) -> None:
         mode = self.mode
         sim = self.simulation
         n_out = (sim.duration_s / sim.output_dt_s + 1) * self.vehicle.segments
@@ -212,7 +212,7 @@ def _merge(defaults: dict, given: Any) -> Any:
 _ATOMS = (str, int, float, bool, type(None))
 
 
-def _copy_tree(data):
+def _copy_tree(data: Any) -> Any:
     """A copy of YAML-like data (nested dicts and lists of plain scalars, copied level by level;
     anything else by :func:`copy.deepcopy`), several times faster than ``copy.deepcopy`` of it."""
     if type(data) is dict:
@@ -296,7 +296,7 @@ def _resolve_mode_paths(mode: Any, base: Path) -> Any:
 _SECTIONS = {"segment": "vehicle.segment", "links": "vehicle.links", "terrain_model": "terrain.model"}
 
 
-def _text(v, path):
+def _text(v: object, path: str) -> str:
     if not isinstance(v, str):
         raise ScenarioError(f"{path}: expected text, got {quote(v)}.")
     return v

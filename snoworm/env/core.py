@@ -80,7 +80,7 @@ def _resolve(scenario: Scenario | str | os.PathLike[str]) -> Scenario:
     raise ValueError(f"scenario: expected a Scenario, a shipped scenario's name or a path, got {scenario!r}")
 
 
-def _number(name, value, rule, ok):
+def _number(name: str, value: Any, rule: str, ok: Callable[[Any], bool]) -> float:
     """``value`` as a float if finite and ``ok(value)``; else ValueError naming ``name`` and ``rule``."""
     if (
         isinstance(value, bool)
@@ -140,7 +140,7 @@ class EnvCore:
         self.single_action_space = spaces.Box(-1.0, 1.0, shape=(n_act,), dtype=np.float32)
         self.single_observation_space = spaces.Box(-OBS_LIMIT, OBS_LIMIT, shape=(n_obs,), dtype=np.float32)
 
-    def _action_bounds(self):
+    def _action_bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64], list[int]]:
         model = self.model
         seg, links, n = model.seg, model.links, model.n
         bounds = {
@@ -181,7 +181,7 @@ class EnvCore:
             "stroke": np.where(links.prismatic > 0, np.where(stroke > 0, stroke, 1.0), 1.0),
         }
 
-    def _observation_scale(self):
+    def _observation_scale(self) -> NDArray[np.float64]:
         sc, n = self.scales(), self.model.n
         sizes = {f: (n - 1 if f.startswith(("link_", "joint_")) else n) for f in OBSERVATION_FIELDS}
         return np.concatenate([np.broadcast_to(sc[OBSERVATION_SCALES[f]], (sizes[f],)) for f in OBSERVATION_FIELDS])

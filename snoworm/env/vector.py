@@ -64,6 +64,7 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike, NDArray
 
     from ..config.scenario import Scenario
+    from ..model.inputs import Controls
 
 __all__ = ["SnowormVectorEnv", "MAX_NUM_ENVS", "STACK_MAX_MEMBERS", "STACK_MAX_STATES", "stack_size"]
 
@@ -184,7 +185,7 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         self._reset_members(mask)
         return self._obs.copy(), {"t_s": self._t.copy(), "_t_s": np.ones(B, bool)}
 
-    def _reset_members(self, mask):
+    def _reset_members(self, mask: NDArray[np.bool_]) -> None:
         self._y[mask] = self._y0
         self._t[mask], self._steps[mask], self._stalled[mask] = 0.0, 0, 0.0
         self._xmean[mask], self._obs[mask], self._autoreset[mask] = self._xmean0, self._obs0, False
@@ -235,7 +236,7 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         info = self._info(energy, failed, errors)
         return self._obs.copy(), rewards.astype(float), terminated, truncated, info
 
-    def _info(self, energy, failed, errors):
+    def _info(self, energy: NDArray[np.float64], failed: NDArray[np.bool_], errors: dict[int, str]) -> dict[str, Any]:
         B = self.num_envs
         every = np.ones(B, bool)
         info = {
@@ -251,7 +252,9 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
             info["_solver_error"] = failed.copy()
         return info
 
-    def _solve(self, ctl):
+    def _solve(
+        self, ctl: Controls
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_], dict[int, str]]:
         """One period of every member (:meth:`ChainStepper.solve <snoworm.simulation.stepper.ChainStepper.solve>`):
         ``(ts, ys (n_t, B, n_states), failed (B,), errors {b: message})``."""
         t0 = self._T

@@ -91,7 +91,7 @@ class ControllerConfig(ModeConfig):
             return {**raw, "controller": resolve_spec(spec, "mode.controller", Path(base_dir))}
         return raw  # not text: validation reports it
 
-    def _check(self, path):
+    def _check(self, path: str) -> None:
         check_reference(self.controller, f"{path}.controller")  # static: nothing imported, nothing run
 
     def check_scenario(self, scenario: Scenario, path: str) -> None:

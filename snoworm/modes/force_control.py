@@ -73,7 +73,7 @@ class TargetsConfig(Config):
         None, ge=-1e6, le=1e6, unit="N", doc="net connector force on chosen segments {index: force}, forward positive"
     )
 
-    def _check(self, path):
+    def _check(self, path: str) -> None:
         given = [k for k in ("link_forces_N", "load_shares", "net_connector_N") if getattr(self, k) is not None]
         if not given:
             raise ScenarioError(

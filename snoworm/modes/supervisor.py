@@ -111,7 +111,7 @@ class SupervisorConfig(ModeConfig):
     def inching_settings(self) -> dict[str, Any]:
         return dict(self.inching)
 
-    def _check(self, path):
+    def _check(self, path: str) -> None:
         self.inching_config(path)
         if self.stuck_window_s < self.check_interval_s:
             raise ScenarioError(
@@ -188,19 +188,19 @@ class SupervisorMode(Mode):
         return self.model.initial_state(joint_extension_m=self.s0)
 
     # ------------------------------------------------------------------ helpers
-    def _x(self, y):
+    def _x(self, y: NDArray[np.float64]) -> NDArray[np.float64]:
         return self.model.field(self.model.unpack(y), "x_m")
 
-    def _leader_slip(self, y):
+    def _leader_slip(self, y: NDArray[np.float64]) -> float:
         m = self.model
         Y = m.unpack(y)
         w = Y[0, m.layout.omega] * m.seg.wheel_radius_m[0]
         return float(np.mean(terrain.slip(w, m.field(Y, "v_mps")[0], m.tp.slip_eps_mps)))
 
-    def _xt_under(self, y):
+    def _xt_under(self, y: NDArray[np.float64]) -> NDArray[np.float64]:
         return self.model.xt_at_axles(self._x(y)).mean(-1)
 
-    def _switch(self, t, y, new, kind, detail):
+    def _switch(self, t: float, y: NDArray[np.float64], new: str, kind: str, detail: str) -> None:
         self.state = new
         self.since = float(t)
         self.timeline.append((float(t), new))
@@ -213,7 +213,7 @@ class SupervisorMode(Mode):
             }
         )
 
-    def _stuck(self, t, y):
+    def _stuck(self, t: float, y: NDArray[np.float64]) -> tuple[bool, float | None, float | None]:
         """Immobilisation rule: (stuck?, mean speed over the window, leader slip)."""
         cfg = self.cfg
         if t - self.since < cfg.stuck_window_s - 1e-9:

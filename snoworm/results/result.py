@@ -10,7 +10,7 @@ import io
 import json
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -375,7 +375,9 @@ def read_back(path: str | os.PathLike[str], limit: int = MAX_READ_BYTES) -> str:
         raise ResultFileError(f"{path}: not UTF-8 text") from None
 
 
-def _read_table(path, index, columns, n_rows):
+def _read_table(
+    path: Path, index: str, columns: Iterable[str], n_rows: int
+) -> tuple[NDArray[np.float64] | None, dict[str, NDArray[np.float64]]]:
     """(t, {column: ndarray (n_t, n_rows)}) of a ``segments.csv`` / ``links.csv`` with ``n_rows``
     segments or links, every shape and value checked (ResultFileError naming the file)."""
     text = read_back(path)
@@ -480,7 +482,7 @@ def load_result(run_dir: str | os.PathLike[str]) -> Result:
     )
 
 
-def _csv(cols, data, int_cols=(), t_decimals=4):
+def _csv(cols: Sequence[str], data: NDArray[np.float64], int_cols: Sequence[int] = (), t_decimals: int = 4) -> str:
     """CSV text of ``data`` (rows of samples) under header ``cols``: time with ``t_decimals``
     decimals, ``int_cols`` as integers, the rest to 6 significant digits (as ``np.savetxt`` with
     these formats would write, in one formatting operation instead of one per row)."""

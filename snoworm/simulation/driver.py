@@ -13,9 +13,9 @@ from __future__ import annotations
 import logging
 import os
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -28,6 +28,10 @@ from ..modes.base import Mode, build_mode
 from ..results.result import Result
 from .guard import SolverError, check_sane, guarded
 from .interval import IntervalSolver, output_grid
+
+if TYPE_CHECKING:
+    from ..config.sections import SimulationConfig
+    from .guard import Piece
 
 __all__ = [
     "SolverError",
@@ -132,7 +136,13 @@ def check_assembly(sc: Scenario) -> None:
     sc.mode.prepare(sc, model)
 
 
-def _integrate(model, modes, sim, name, progress=None):
+def _integrate(
+    model: ChainModel,
+    modes: Sequence[Mode],
+    sim: SimulationConfig,
+    name: str,
+    progress: Callable[[float, float], object] | None = None,
+) -> tuple[list[list[Piece]], list[dict[str, Any]], dict[str, Any]]:
     """THE interval loop: ``modes`` (one per member) drive ``model`` (stacked if several members).
 
     ``progress(t_s, duration_s)`` is called after each interval, if given, and within long
@@ -144,7 +154,8 @@ def _integrate(model, modes, sim, name, progress=None):
     B = len(modes)
     t, T = 0.0, sim.duration_s
     y = np.concatenate([md.initial_state() for md in modes])
-    pieces, phases = [[] for _ in range(B)], []
+    pieces: list[list[Piece]] = [[] for _ in range(B)]
+    phases: list[dict[str, Any]] = []
     solver = IntervalSolver(
         model,
         sim,
@@ -185,7 +196,13 @@ def _integrate(model, modes, sim, name, progress=None):
     return pieces, phases, stats
 
 
-def _guarded_integrate(model, modes, sim, name, progress=None):
+def _guarded_integrate(
+    model: ChainModel,
+    modes: Sequence[Mode],
+    sim: SimulationConfig,
+    name: str,
+    progress: Callable[[float, float], object] | None = None,
+) -> tuple[list[list[Piece]], list[dict[str, Any]], dict[str, Any]]:
     """:func:`_integrate` under :func:`~snoworm.simulation.guard.guarded`, its results checked by
     :func:`~snoworm.simulation.guard.check_sane`."""
     pieces, phases, stats = guarded(lambda: _integrate(model, modes, sim, name, progress), name)

@@ -20,7 +20,7 @@ import math
 import os
 import shutil
 import warnings
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -79,7 +79,7 @@ def summary_columns(axes: Sequence[Axis], n_links: int) -> list[str]:
     )
 
 
-def _parse_cell(col, text, swept):
+def _parse_cell(col: str, text: str, swept: Collection[str]) -> Any:
     if col in ("case_id", "case_key", "status", "error"):
         return text
     if text == "":
@@ -270,7 +270,7 @@ def _first_of_each_case(rows: Iterable[dict[str, Any]]) -> tuple[list[dict[str, 
     return kept, twice
 
 
-def _keys_from_header(header):
+def _keys_from_header(header: list[str]) -> list[str]:
     try:
         return header[2 : header.index("status")]
     except ValueError:
@@ -505,13 +505,13 @@ def _distinct(values: Iterable[Any]) -> list:
     return out
 
 
-def _positions(values):
+def _positions(values: Sequence[Any]) -> tuple[list[float], list[str] | None]:
     if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
         return [float(v) for v in values], None
     return list(range(len(values))), [format_cell(v, FULL) for v in values]
 
 
-def _layout(table):
+def _layout(table: SweepTable) -> tuple[str, Any]:
     """("line", key) for one varying key or a zip; ("heatmap", (key_x, key_y)) for a two-key grid."""
     varying = [k for k in table.keys if len(_distinct(table.column(k))) > 1] or list(table.keys[:1])
     counts = [len(_distinct(table.column(k))) for k in varying]
