@@ -25,7 +25,7 @@ import reprlib
 import types
 import typing
 from collections.abc import Callable, Collection, Mapping
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -195,11 +195,11 @@ def domain_text(md: Mapping[str, Any]) -> str:
     return f"{left}{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}{right}"
 
 
-def _fail(path, msg):
+def _fail(path: str, msg: str) -> NoReturn:
     raise ScenarioError(f"{path}: {msg}")
 
 
-def _describe(md):
+def _describe(md: Mapping[str, Any]) -> str:
     bits = []
     if md.get("doc"):
         bits.append(md["doc"])
@@ -217,7 +217,7 @@ _BOUNDS = (
 )
 
 
-def _check_number(path, value, md, kind):
+def _check_number(path: str, value: Any, md: Mapping[str, Any], kind: type) -> Any:
     t = type(value)
     if t is not float and t is not int:  # plain YAML numbers skip straight to the checks below
         if isinstance(value, np.ndarray) and value.ndim == 0:
@@ -263,12 +263,12 @@ def _check_number(path, value, md, kind):
 
 
 @functools.cache
-def _type_info(tp):
+def _type_info(tp: Any) -> tuple[Any, tuple[Any, ...], bool]:
     """``(origin, args, is a dataclass)`` of an annotation, computed once per type."""
     return typing.get_origin(tp), typing.get_args(tp), dataclasses.is_dataclass(tp)
 
 
-def _convert(path, value, tp, md):  # noqa: C901, PLR0912 (one branch per kind of annotation: a flat dispatch)
+def _convert(path: str, value: Any, tp: Any, md: Mapping[str, Any]) -> Any:  # noqa: C901, PLR0912 (one branch per kind of annotation: a flat dispatch)
     if md.get("convert") is not None:
         return md["convert"](value, path)
     origin, args, is_dc = _type_info(tp)
@@ -352,7 +352,7 @@ class _Validated(type):
     dataclass is made, however it is made (a call, :func:`build`, :func:`dataclasses.replace`),
     so a config object is never changed after its construction."""
 
-    def __call__(cls, *args, **kwargs):
+    def __call__(cls, *args: Any, **kwargs: Any) -> Any:
         if not dataclasses.is_dataclass(cls):
             return super().__call__(*args, **kwargs)
         fields = _settings(cls)
@@ -392,11 +392,11 @@ class Config(metaclass=_Validated):
 
     _section = ""
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         path = _PATH.get()
         self._check(self._section if path is None else path)
 
-    def _check(self, path):
+    def _check(self, path: str) -> None:
         """Rules across fields (override); raise :class:`ScenarioError` naming ``path``."""
 
 

@@ -13,7 +13,7 @@ commands become the same :class:`~snoworm.model.inputs.Controls` either way (doc
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -112,7 +112,7 @@ class Observation:
         object.__setattr__(self, "_src", None)
 
     @classmethod
-    def _of_state(cls, model, y, ctl, t):
+    def _of_state(cls, model: ChainModel, y: ArrayLike, ctl: Controls, t: float) -> Observation:
         obs = cls.__new__(cls)
         object.__setattr__(obs, "_t", float(t))
         object.__setattr__(obs, "_vals", None)
@@ -133,14 +133,14 @@ class Observation:
     def t_s(self) -> float:
         return self._t
 
-    def __setattr__(self, name, value):
+    def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError(f"Observation is read-only (cannot set {name!r})")
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
         """Pickle and copy (an environment holding an Observation is then picklable and deep-copyable)."""
         return (_rebuilt_observation, (self._t, self._vals, self._src))
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return "Observation(" + ", ".join(f"{k}={getattr(self, k)!r}" for k in self.FIELDS) + ")"
 
     def as_dict(self) -> dict:
@@ -171,7 +171,7 @@ def _rebuilt_observation(t: float, vals: Mapping[str, ArrayLike] | None, src: tu
     return obs
 
 
-def _frozen(a):
+def _frozen(a: ArrayLike) -> NDArray[np.float64]:
     """A read-only float copy of ``a``."""
     a = np.array(a, float)
     a.flags.writeable = False
@@ -211,10 +211,10 @@ class CommandState:
         self.joint_value = np.zeros(max(n - 1, 0))
         self.controls = self._build()
 
-    def _sizes(self):
+    def _sizes(self) -> dict[str, int]:
         return {"N": self.model.n, "N-1": max(self.model.n - 1, 0)}
 
-    def _check(self, command):
+    def _check(self, command: object) -> dict[str, NDArray[Any]]:
         """Validated arrays of ``command`` (ValueError naming the key)."""
         if command is None:
             return {}
@@ -276,7 +276,7 @@ class CommandState:
             self.lock = new["wheel_lock"]
         if "joint_force_N" in new or "joint_length_m" in new:
             self.joint_mode = "force" if "joint_force_N" in new else "length"
-            self.joint_value = new.get("joint_force_N", new.get("joint_length_m"))
+            self.joint_value = cast("NDArray[np.float64]", new.get("joint_force_N", new.get("joint_length_m")))
         self.controls = self._build()
         return self.controls
 
