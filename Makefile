@@ -49,4 +49,4 @@ differential: $(VENV)/.installed
 	SNOWORM_DIFF_EXAMPLES=60 $(PY) -m pytest -q -p no:cacheprovider tests/test_differential.py
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis
+	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis .mypy_cache
