@@ -29,10 +29,12 @@ docs: $(VENV)/.installed
 test: $(VENV)/.installed
 	$(PY) -m pytest -q
 
-# lint and format check (rules and style in pyproject.toml [tool.ruff]); .ci/run runs it after the tests
+# lint, format check and type check (rules in pyproject.toml [tool.ruff] and [tool.mypy]: the
+# public modules); .ci/run runs it after the tests
 lint: $(VENV)/.installed
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .
+	$(VENV)/bin/mypy
 
 # The reference tests again on a second numeric path: an x86-64-v2 CPU emulated (OpenBLAS's
 # Nehalem kernels, NumPy without AVX2/AVX-512 loops), which differs from the native path on any
@@ -47,4 +49,4 @@ differential: $(VENV)/.installed
 	SNOWORM_DIFF_EXAMPLES=60 $(PY) -m pytest -q -p no:cacheprovider tests/test_differential.py
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis
+	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis .mypy_cache

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import importlib
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ._version import __version__
 
@@ -83,7 +83,7 @@ if TYPE_CHECKING:
     from .studies.sweep import SweepTable as SweepTable, load_sweep as load_sweep, run_sweep as run_sweep
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:
     """Import a public name's module on first access (``snoworm.simulate``, ``from snoworm import
     Result``) and keep the name, so later lookups are plain attribute reads."""
     if name == "modes":  # the modes package (its registries import a built-in mode when looked up)
@@ -97,7 +97,7 @@ def __getattr__(name: str):
     return value
 
 
-def __dir__():
+def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__) | {"modes"})
 
 

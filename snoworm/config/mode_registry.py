@@ -10,7 +10,9 @@ looked up (:class:`ModeRegistry`), since the modes sit above this layer.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Any, ClassVar, TypeVar
 
 from .schema import Config, ScenarioError, build, quote, suggest
 
@@ -33,25 +35,27 @@ class ModeConfig(Config):
     """
 
     _section = "mode"
-    force_loop = False
-    extra_plots = ()
+    #: the mode's name (each subclass declares it as its first field)
+    type: str
+    force_loop: ClassVar[bool] = False
+    extra_plots: ClassVar[tuple[str, ...]] = ()
 
     @classmethod
-    def resolve_paths(cls, raw: dict, base_dir):
+    def resolve_paths(cls, raw: dict, base_dir: Path) -> dict:
         """The ``mode:`` mapping ``raw`` with its relative file paths taken from ``base_dir`` (the
         scenario file's folder), before validation; default: unchanged.  Called by
         :func:`snoworm.config.scenario.scenario_from_dict`, which knows the folder."""
         return raw
 
-    def check_vehicle(self, vehicle, path):
+    def check_vehicle(self, vehicle: Any, path: str) -> None:
         """Rules that need the vehicle (e.g. one value per segment); raise ScenarioError."""
 
-    def check_scenario(self, scenario, path):
+    def check_scenario(self, scenario: Any, path: str) -> None:
         """Rules that need the whole scenario (terrain, tow) but not its chain model; raise ScenarioError.
 
         Validation calls it: it must build no chain model and run no solver (a scenario is data)."""
 
-    def prepare(self, scenario, model):
+    def prepare(self, scenario: Any, model: Any) -> Any:
         """What the mode needs of the assembled chain ``model`` (e.g. the force-control plan), or None.
 
         Called when a run is assembled (:func:`snoworm.simulation.driver.assemble`: the mode calls
@@ -61,17 +65,17 @@ class ModeConfig(Config):
         """
         return None
 
-    def rolling_speed(self):
+    def rolling_speed(self) -> float | None:
         """The wheel-speed set-point R_w*omega [m/s] this mode rolls at, or None (studies such as the
         mobility map ask it)."""
         return None
 
-    def inching_settings(self):
+    def inching_settings(self) -> dict | None:
         """The inchworm settings (keys of the inchworm mode but ``type`` and ``start_time_s``) this
         mode inches with, or None."""
         return None
 
-    def batch_signature(self):
+    def batch_signature(self) -> tuple | None:
         """A hashable description of the mode's intervals if it can run in a batched stack
         (event-free, the same intervals for every member with the same signature), else None."""
         return None
@@ -88,7 +92,10 @@ BUILT_IN_MODES = {
 }
 
 
-class ModeRegistry(Mapping):
+_T = TypeVar("_T", bound=type)
+
+
+class ModeRegistry(Mapping[str, Any]):
     """The registry of mobility modes: ``type`` -> the registered mode class.
 
     The one registry of modes: validation reads a mode's config class from it
@@ -108,29 +115,30 @@ class ModeRegistry(Mapping):
     """
 
     def __init__(self, built_in: dict):
-        self._built_in, self._d = dict(built_in), {}
+        self._built_in: dict[str, str] = dict(built_in)
+        self._d: dict[str, Any] = {}
 
-    def _load(self, key):
+    def _load(self, key: str) -> None:
         if key not in self._d and key in self._built_in:
             importlib.import_module(self._built_in[key])
 
-    def __getitem__(self, key):
+    def __getitem__(self, key: str) -> Any:
         self._load(key)
         return self._d[key]
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[str]:
         for key in self._built_in:
             self._load(key)
         # built-in modes first, in a fixed order, then the user's in registration order
         return iter([k for k in self._built_in if k in self._d] + [k for k in self._d if k not in self._built_in])
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(list(iter(self)))
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return f"ModeRegistry({dict(self.items())!r})"
 
-    def register(self, mode_cls):
+    def register(self, mode_cls: _T) -> _T:
         """Register a mode class under its ``name`` (its ``config_class`` validates the section).
 
         The modes layer checks that ``mode_cls`` is a :class:`snoworm.modes.Mode` subclass
@@ -155,7 +163,7 @@ class ModeRegistry(Mapping):
         """Remove a registered mode (a user's; a built-in one comes back when next looked up)."""
         self._d.pop(name, None)
 
-    def config_class(self, name: str):
+    def config_class(self, name: str) -> type[ModeConfig]:
         """The :class:`ModeConfig` subclass that validates ``mode: {type: name, ...}`` (KeyError if unknown)."""
         return self[name].config_class
 
@@ -165,7 +173,7 @@ class ModeRegistry(Mapping):
 MODES = ModeRegistry(BUILT_IN_MODES)
 
 
-def build_mode_config(raw, path="mode") -> ModeConfig:
+def build_mode_config(raw: Mapping[str, Any] | ModeConfig, path: str = "mode") -> ModeConfig:
     """Validate a ``mode`` mapping against the config class registered for its ``type`` (a made
     :class:`ModeConfig`, validated already, is returned as it is)."""
     if isinstance(raw, ModeConfig):

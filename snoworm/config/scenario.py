@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import copy
 import os
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -108,7 +110,7 @@ class Scenario(Config):
     #: where the scenario was read from (set by :func:`scenario_from_dict`; None if made directly)
     origin: ScenarioOrigin | None = internal()
 
-    def _check(self, path):
+    def _check(self, path: str) -> None:
         mode = self.mode
         sim = self.simulation
         n_out = (sim.duration_s / sim.output_dt_s + 1) * self.vehicle.segments
@@ -180,7 +182,7 @@ class Scenario(Config):
             out["terrain.route"] = self.terrain.route
         return out
 
-    def with_(self, changes=None, **kw) -> Scenario:
+    def with_(self, changes: Mapping[str, Any] | None = None, **kw: Any) -> Scenario:
         """A new, validated scenario with dotted-key changes applied.
 
         ``sc.with_({"tow.force_N": 150, "terrain.xt": 0.7})``; keyword arguments set top-level
@@ -199,7 +201,7 @@ class Scenario(Config):
 _TOP_KEYS = ("name", "description", "vehicle", "terrain", "tow", "mode", "simulation", "sources")
 
 
-def _merge(defaults: dict, given):
+def _merge(defaults: dict, given: Any) -> Any:
     if not isinstance(given, dict):
         return given
     out = _copy_tree(defaults)
@@ -210,7 +212,7 @@ def _merge(defaults: dict, given):
 _ATOMS = (str, int, float, bool, type(None))
 
 
-def _copy_tree(data):
+def _copy_tree(data: Any) -> Any:
     """A copy of YAML-like data (nested dicts and lists of plain scalars, copied level by level;
     anything else by :func:`copy.deepcopy`), several times faster than ``copy.deepcopy`` of it."""
     if type(data) is dict:
@@ -222,7 +224,9 @@ def _copy_tree(data):
     return copy.deepcopy(data)
 
 
-def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None, *, trust_folder: bool = True) -> Scenario:
+def scenario_from_dict(
+    raw: dict, source: str = "scenario", base_dir: str | os.PathLike[str] | None = None, *, trust_folder: bool = True
+) -> Scenario:
     """Validate a scenario mapping (as parsed from YAML) into a :class:`Scenario`.
 
     Relative file paths are taken from ``base_dir`` (default: the working directory), which is
@@ -280,7 +284,7 @@ def scenario_from_dict(raw: dict, source: str = "scenario", base_dir=None, *, tr
     return build(Scenario, raw, "", internal_values={"origin": origin})
 
 
-def _resolve_mode_paths(mode, base: Path):
+def _resolve_mode_paths(mode: Any, base: Path) -> Any:
     """The ``mode`` mapping with its file paths taken from ``base`` (:meth:`ModeConfig.resolve_paths`
     of its registered type; anything else is left for validation to report)."""
     if isinstance(mode, dict) and isinstance(mode.get("type"), str) and mode["type"] in MODES:
@@ -292,13 +296,13 @@ def _resolve_mode_paths(mode, base: Path):
 _SECTIONS = {"segment": "vehicle.segment", "links": "vehicle.links", "terrain_model": "terrain.model"}
 
 
-def _text(v, path):
+def _text(v: object, path: str) -> str:
     if not isinstance(v, str):
         raise ScenarioError(f"{path}: expected text, got {quote(v)}.")
     return v
 
 
-def parse_set_option(item: str):
+def parse_set_option(item: str) -> tuple[str, Any]:
     """Split ``dotted.key=value`` (value parsed as YAML) into ``(key, value)``."""
     if "=" not in item:
         raise ScenarioError(f"--set {quote(item)}: expected KEY=VALUE with a dotted scenario key, e.g. terrain.xt=0.5.")
@@ -313,7 +317,7 @@ def parse_set_option(item: str):
     return key, value
 
 
-def apply_overrides(raw: dict, overrides) -> dict:
+def apply_overrides(raw: dict, overrides: Iterable[tuple[str, Any]]) -> dict:
     """Return a copy of ``raw`` with each ``(dotted_key, value)`` set (sections created as needed)."""
     raw = _copy_tree(raw)
     for key, value in overrides:
@@ -329,9 +333,9 @@ def apply_overrides(raw: dict, overrides) -> dict:
                     f"--set {key}: '{'.'.join(parts[: j + 1])}' is a value, not a section; cannot set a key inside it."
                 )
             node = nxt
-        leaf = parts[-1]
-        if isinstance(node, dict) and leaf.isdigit() and int(leaf) in node:
-            leaf = int(leaf)
+        leaf: str | int = parts[-1]
+        if isinstance(node, dict) and parts[-1].isdigit() and int(parts[-1]) in node:
+            leaf = int(parts[-1])
         node[leaf] = value
         if isinstance(raw.get("sources"), dict) and parts[0] != "sources":
             raw["sources"].pop(key, None)  # a changed value's note no longer applies
@@ -345,7 +349,7 @@ def apply_overrides(raw: dict, overrides) -> dict:
     return raw
 
 
-def read_yaml(path) -> dict:
+def read_yaml(path: str | os.PathLike[str]) -> dict:
     """Parse a YAML file with the hardened reader (:func:`snoworm.config.yamlio.read_yaml`).
 
     Syntax errors, non-UTF-8 files, duplicate keys, alias bombs, deep nesting, missing or empty
@@ -372,7 +376,7 @@ def shipped_scenarios() -> dict:
     return out
 
 
-def scenario_path(name_or_path) -> Path:
+def scenario_path(name_or_path: str | os.PathLike[str]) -> Path:
     """The file of a scenario given as a path or as the name of a shipped scenario.
 
     A path that exists wins; otherwise a name such as ``inchworm6`` (or ``inchworm6.yaml``)
@@ -397,7 +401,7 @@ def scenario_path(name_or_path) -> Path:
     return path
 
 
-def read_scenario_yaml(name_or_path):
+def read_scenario_yaml(name_or_path: str | os.PathLike[str]) -> tuple[dict, Path]:
     """(parsed YAML, the file) of a scenario path or shipped name (:func:`scenario_path`)."""
     path = scenario_path(name_or_path)
     try:
@@ -411,7 +415,9 @@ def read_scenario_yaml(name_or_path):
         ) from None
 
 
-def load_scenario(path, overrides=(), *, trust_folder: bool = True) -> Scenario:
+def load_scenario(
+    path: str | os.PathLike[str], overrides: Iterable[tuple[str, Any] | str] = (), *, trust_folder: bool = True
+) -> Scenario:
     """Load, override and validate a scenario file.
 
     Parameters

@@ -24,7 +24,8 @@ import os
 import reprlib
 import types
 import typing
-from typing import Any
+from collections.abc import Callable, Collection, Mapping
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -44,6 +45,7 @@ __all__ = [
 ]
 
 _MISSING = dataclasses.MISSING
+_C = typing.TypeVar("_C")
 
 
 class ScenarioError(ValueError):
@@ -51,20 +53,20 @@ class ScenarioError(ValueError):
 
 
 def field(
-    default=_MISSING,
+    default: Any = _MISSING,
     *,
-    gt=None,
-    ge=None,
-    lt=None,
-    le=None,
-    choices=None,
-    unit="",
-    doc="",
-    default_factory=_MISSING,
-    search=None,
-    why="",
-    convert=None,
-):
+    gt: float | None = None,
+    ge: float | None = None,
+    lt: float | None = None,
+    le: float | None = None,
+    choices: Collection[Any] | None = None,
+    unit: str = "",
+    doc: str = "",
+    default_factory: Any = _MISSING,
+    search: tuple[float, float] | None = None,
+    why: str = "",
+    convert: Callable[[Any, str], Any] | None = None,
+) -> Any:
     """A dataclass field with validation metadata.
 
     Parameters
@@ -89,7 +91,7 @@ def field(
         the scenario's ``mode``, whose class depends on its ``type``).
     """
     md = dict(gt=gt, ge=ge, lt=lt, le=le, choices=choices, unit=unit, doc=doc, search=search, why=why, convert=convert)
-    kw = {"metadata": md}
+    kw: dict[str, Any] = {"metadata": md}
     if default is not _MISSING:
         kw["default"] = default
     if default_factory is not _MISSING:
@@ -121,7 +123,7 @@ UNIT_SUFFIXES = {
 }
 
 
-def split_unit(name: str):
+def split_unit(name: str) -> tuple[str, str | None]:
     """``(stem, unit)`` of a name ending in a unit suffix (``"force_N"`` -> ``("force", "N")``);
     ``(name, None)`` without one."""
     for suffix in sorted(UNIT_SUFFIXES, key=len, reverse=True):
@@ -130,7 +132,7 @@ def split_unit(name: str):
     return name, None
 
 
-def suggest(word: str, options) -> str:
+def suggest(word: str, options: Collection[Any]) -> str:
     """A ' Did you mean ...?' suffix for a misspelt key, or ''."""
     if len(str(word)) > 100:  # no key or choice is that long (and difflib would take its time)
         return ""
@@ -140,7 +142,7 @@ def suggest(word: str, options) -> str:
     return " Did you mean " + " or ".join(repr(c) for c in close) + "?"
 
 
-def short_path(path, limit: int = 200) -> str:
+def short_path(path: str | os.PathLike[str], limit: int = 200) -> str:
     """``path`` as text for a message, cut in its middle to about ``limit`` characters (its head
     and its file name kept): a 4 kB path is not echoed whole, once or several times."""
     text = os.fspath(path) if isinstance(path, os.PathLike) else str(path)
@@ -150,7 +152,7 @@ def short_path(path, limit: int = 200) -> str:
     return f"{text[: limit - tail]}...[{len(text) - limit} characters]...{text[-tail:]}"
 
 
-def quote(value, limit: int = 100) -> str:
+def quote(value: Any, limit: int = 100) -> str:
     """The repr of ``value`` cut to ``limit`` characters, for error messages.
 
     Parameters
@@ -176,13 +178,13 @@ def quote(value, limit: int = 100) -> str:
     return f"{text[:limit]}... ({len(value) if hasattr(value, '__len__') else '?'} {unit})"
 
 
-def short_key(key, limit: int = 60) -> str:
+def short_key(key: object, limit: int = 60) -> str:
     """A mapping key as written in a dotted path of a message, cut to ``limit`` characters."""
     text = str(key)
     return text if len(text) <= limit else f"{text[:limit]}..."
 
 
-def domain_text(md) -> str:
+def domain_text(md: Mapping[str, Any]) -> str:
     """The interval of a field's bounds, e.g. ``(0, 1]`` or ``[0, 1e+06]``; '' when unbounded."""
     lo = md.get("gt") if md.get("gt") is not None else md.get("ge")
     hi = md.get("lt") if md.get("lt") is not None else md.get("le")
@@ -193,11 +195,11 @@ def domain_text(md) -> str:
     return f"{left}{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}{right}"
 
 
-def _fail(path, msg):
+def _fail(path: str, msg: str) -> NoReturn:
     raise ScenarioError(f"{path}: {msg}")
 
 
-def _describe(md):
+def _describe(md: Mapping[str, Any]) -> str:
     bits = []
     if md.get("doc"):
         bits.append(md["doc"])
@@ -215,7 +217,7 @@ _BOUNDS = (
 )
 
 
-def _check_number(path, value, md, kind):
+def _check_number(path: str, value: Any, md: Mapping[str, Any], kind: type) -> Any:
     t = type(value)
     if t is not float and t is not int:  # plain YAML numbers skip straight to the checks below
         if isinstance(value, np.ndarray) and value.ndim == 0:
@@ -261,12 +263,12 @@ def _check_number(path, value, md, kind):
 
 
 @functools.cache
-def _type_info(tp):
+def _type_info(tp: Any) -> tuple[Any, tuple[Any, ...], bool]:
     """``(origin, args, is a dataclass)`` of an annotation, computed once per type."""
     return typing.get_origin(tp), typing.get_args(tp), dataclasses.is_dataclass(tp)
 
 
-def _convert(path, value, tp, md):  # noqa: C901, PLR0912 (one branch per kind of annotation: a flat dispatch)
+def _convert(path: str, value: Any, tp: Any, md: Mapping[str, Any]) -> Any:  # noqa: C901, PLR0912 (one branch per kind of annotation: a flat dispatch)
     if md.get("convert") is not None:
         return md["convert"](value, path)
     origin, args, is_dc = _type_info(tp)
@@ -324,23 +326,23 @@ def _convert(path, value, tp, md):  # noqa: C901, PLR0912 (one branch per kind o
 
 
 @functools.cache
-def _type_hints(cls):
+def _type_hints(cls: type) -> dict[str, Any]:
     """``typing.get_type_hints`` of a config class, resolved once (it compiles every annotation
     string on each call: ~10 ms per scenario before this cache, the main cost of a sweep case)."""
     return typing.get_type_hints(cls)
 
 
 #: dotted path of the config section being built by :func:`build` (for messages)
-_PATH = contextvars.ContextVar("snoworm_config_path", default=None)
+_PATH: contextvars.ContextVar[str | None] = contextvars.ContextVar("snoworm_config_path", default=None)
 
 
-def internal(default=None):
+def internal(default: Any = None) -> Any:
     """A field of a config object that is not a setting: not read from a scenario file, not
     validated, not written by :func:`dump`, not compared (e.g. where a scenario was read from)."""
     return dataclasses.field(default=default, compare=False, repr=False, metadata={"internal": True})
 
 
-def _settings(cls) -> dict:
+def _settings(cls: type) -> dict[str, dataclasses.Field]:
     """Name -> dataclass field of the settings of ``cls`` (its init fields but internal ones)."""
     return {f.name: f for f in dataclasses.fields(cls) if f.init and not f.metadata.get("internal")}
 
@@ -350,7 +352,7 @@ class _Validated(type):
     dataclass is made, however it is made (a call, :func:`build`, :func:`dataclasses.replace`),
     so a config object is never changed after its construction."""
 
-    def __call__(cls, *args, **kwargs):
+    def __call__(cls, *args: Any, **kwargs: Any) -> Any:
         if not dataclasses.is_dataclass(cls):
             return super().__call__(*args, **kwargs)
         fields = _settings(cls)
@@ -390,15 +392,15 @@ class Config(metaclass=_Validated):
 
     _section = ""
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         path = _PATH.get()
         self._check(self._section if path is None else path)
 
-    def _check(self, path):
+    def _check(self, path: str) -> None:
         """Rules across fields (override); raise :class:`ScenarioError` naming ``path``."""
 
 
-def build(cls, data: dict, path: str = "", internal_values=None):
+def build(cls: type[_C], data: dict, path: str = "", internal_values: Mapping[str, Any] | None = None) -> _C:
     """Validate ``data`` against dataclass ``cls`` and construct it.
 
     ``internal_values`` sets fields declared with :func:`internal` (never read from ``data``).
@@ -426,13 +428,13 @@ def build(cls, data: dict, path: str = "", internal_values=None):
     try:
         if issubclass(cls, Config):
             return cls(**data, **(internal_values or {}))
-        hints = _type_hints(cls)  # a plain dataclass: convert here
+        hints = _type_hints(typing.cast(type, cls))  # a plain dataclass: convert here
         return cls(**{k: _convert(f"{prefix}{k}", v, hints[k], fields[k].metadata) for k, v in data.items()})
     finally:
         _PATH.reset(token)
 
 
-def check_field(cls, name: str, value, path: str | None = None):
+def check_field(cls: type, name: str, value: object, path: str | None = None) -> Any:
     """Validate one value against the declaration of field ``name`` of config class ``cls``.
 
     The single place where a command's own option (``--xt``, ``--rolling-speed``, a calibration
@@ -455,7 +457,7 @@ def check_field(cls, name: str, value, path: str | None = None):
     return _convert(path, value, _type_hints(cls)[name], f.metadata)
 
 
-def dump(obj):
+def dump(obj: object) -> Any:
     """Plain (YAML-safe) data for a config dataclass, every field written out."""
     if dataclasses.is_dataclass(obj):
         return {name: dump(getattr(obj, name)) for name in _settings(type(obj))}

@@ -74,7 +74,7 @@ __all__ = [
 ]
 
 
-def register():
+def register() -> None:
     """Register :data:`ENV_ID` (done on import of this package; again is a no-op)."""
     if ENV_ID not in gymnasium.registry:
         gymnasium.register(

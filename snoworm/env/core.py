@@ -4,6 +4,9 @@ map from normalised actions to commands, the normalised observation and the moto
 from __future__ import annotations
 
 import math
+import os
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from gymnasium import spaces
@@ -13,6 +16,12 @@ from ..config.schema import quote
 from ..modes.command import Observation, observed_fields
 from ..simulation.driver import chain_model
 from ..simulation.stepwise import DT_MIN_S
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike, NDArray
+
+#: ``reward(prev_obs, obs, info) -> float`` (:func:`default_reward` is one).
+RewardFunction = Callable[[Observation, Observation, dict[str, Any]], float]
 
 __all__ = [
     "ENV_ID",
@@ -55,12 +64,14 @@ OBS_LIMIT = 10.0
 _PAIRS = (("wheel_speed_mps", "wheel_torque_Nm"), ("joint_force_N", "joint_length_m"))
 
 
-def default_reward(prev_obs, obs, info, energy_weight=1e-3) -> float:
+def default_reward(
+    prev_obs: Observation, obs: Observation, info: Mapping[str, Any], energy_weight: float = 1e-3
+) -> float:
     """Progress of the chain's mean position [m] minus ``energy_weight`` times the motors' energy [J]."""
     return float(np.mean(obs.x_m) - np.mean(prev_obs.x_m)) - energy_weight * info["motor_energy_J"]
 
 
-def _resolve(scenario):
+def _resolve(scenario: Scenario | str | os.PathLike[str]) -> Scenario:
     """A Scenario from a Scenario, a shipped scenario's name or a path."""
     if isinstance(scenario, Scenario):
         return scenario
@@ -69,7 +80,7 @@ def _resolve(scenario):
     raise ValueError(f"scenario: expected a Scenario, a shipped scenario's name or a path, got {scenario!r}")
 
 
-def _number(name, value, rule, ok):
+def _number(name: str, value: Any, rule: str, ok: Callable[[Any], bool]) -> float:
     """``value`` as a float if finite and ``ok(value)``; else ValueError naming ``name`` and ``rule``."""
     if (
         isinstance(value, bool)
@@ -102,13 +113,13 @@ class EnvCore:
 
     def __init__(
         self,
-        scenario,
-        dt_s=0.1,
-        action_keys=("wheel_speed_mps",),
-        energy_weight=1e-3,
-        stall_speed_mps=0.01,
-        stall_time_s=2.0,
-    ):
+        scenario: Scenario | str | os.PathLike[str],
+        dt_s: float = 0.1,
+        action_keys: str | Sequence[str] = ("wheel_speed_mps",),
+        energy_weight: float = 1e-3,
+        stall_speed_mps: float = 0.01,
+        stall_time_s: float = 2.0,
+    ) -> None:
         self.scenario = _resolve(scenario)
         self.dt_s = _number("dt_s", dt_s, f"a number of seconds >= {DT_MIN_S:g}", lambda v: v >= DT_MIN_S)
         self.energy_weight = _number("energy_weight", energy_weight, "a finite number >= 0", lambda v: v >= 0)
@@ -129,7 +140,7 @@ class EnvCore:
         self.single_action_space = spaces.Box(-1.0, 1.0, shape=(n_act,), dtype=np.float32)
         self.single_observation_space = spaces.Box(-OBS_LIMIT, OBS_LIMIT, shape=(n_obs,), dtype=np.float32)
 
-    def _action_bounds(self):
+    def _action_bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64], list[int]]:
         model = self.model
         seg, links, n = model.seg, model.links, model.n
         bounds = {
@@ -170,12 +181,12 @@ class EnvCore:
             "stroke": np.where(links.prismatic > 0, np.where(stroke > 0, stroke, 1.0), 1.0),
         }
 
-    def _observation_scale(self):
+    def _observation_scale(self) -> NDArray[np.float64]:
         sc, n = self.scales(), self.model.n
         sizes = {f: (n - 1 if f.startswith(("link_", "joint_")) else n) for f in OBSERVATION_FIELDS}
         return np.concatenate([np.broadcast_to(sc[OBSERVATION_SCALES[f]], (sizes[f],)) for f in OBSERVATION_FIELDS])
 
-    def physical_action(self, action, batch=None):
+    def physical_action(self, action: ArrayLike, batch: int | None = None) -> dict[str, NDArray[np.float64]]:
         """The command mapping of normalised actions (shape ``(n,)``, or ``(batch, n)``), clipped to [-1, 1].
 
         Raises ValueError for a wrong shape (a scalar is not broadcast), a complex or a non-finite value.
@@ -203,21 +214,23 @@ class EnvCore:
             j += size
         return cmd
 
-    def normalised(self, fields, t_s):
+    def normalised(self, fields: Mapping[str, ArrayLike], t_s: ArrayLike) -> NDArray[np.float32]:
         """The float32 observation vector(s) of ``fields`` (name -> array ``(..., N)`` or ``(..., N-1)``
         for each of :data:`OBSERVATION_FIELDS`, e.g. :func:`table_fields`) at time(s) ``t_s``."""
         v = np.concatenate([fields[f] for f in OBSERVATION_FIELDS], axis=-1) / self.scale
         t = np.broadcast_to(np.asarray(t_s, float) / self.duration_s, v.shape[:-1])[..., None]
         return np.clip(np.concatenate([v, t], axis=-1), -OBS_LIMIT, OBS_LIMIT).astype(np.float32)
 
-    def energy_J(self, ts, seg):
+    def energy_J(
+        self, ts: NDArray[np.float64], seg: Mapping[str, NDArray[np.float64]]
+    ) -> np.float64 | NDArray[np.float64]:
         """Motors' electrical energy over a step [J]: trapezoid rule on the samples ``ts`` (per member)."""
         p = seg["motor_electrical_power_W"].sum(-1)
         dt = np.diff(ts).reshape((-1,) + (1,) * (p.ndim - 1))
         return np.sum(0.5 * (p[1:] + p[:-1]) * dt, axis=0)
 
 
-def table_fields(seg, lk, row=-1) -> dict:
+def table_fields(seg: Mapping[str, Any], lk: Mapping[str, Any], row: int = -1) -> dict[str, Any]:
     """The :data:`OBSERVATION_FIELDS` arrays at sample ``row`` of output tables ``seg, lk``
     (:func:`snoworm.model.quantities.output_series`)."""
     return observed_fields(seg, lk, row)

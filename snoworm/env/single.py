@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+from typing import TYPE_CHECKING, Any, SupportsFloat, cast
+
 import gymnasium
 import numpy as np
 from gymnasium.error import ResetNeeded
@@ -9,12 +12,19 @@ from gymnasium.error import ResetNeeded
 from ..model.quantities import output_series
 from ..modes.command import Observation
 from ..simulation.stepwise import Simulator
-from .core import OBSERVATION_FIELDS, EnvCore, table_fields
+from .core import OBSERVATION_FIELDS, EnvCore, RewardFunction, table_fields
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from numpy.typing import ArrayLike, NDArray
+
+    from ..config.scenario import Scenario
 
 __all__ = ["SnowormEnv", "make_env"]
 
 
-class SnowormEnv(gymnasium.Env):
+class SnowormEnv(gymnasium.Env["NDArray[np.float32]", "ArrayLike"]):
     """A scenario's chain as a Gymnasium environment (spaces, reward and solver: :mod:`snoworm.env`).
 
     Parameters
@@ -40,17 +50,17 @@ class SnowormEnv(gymnasium.Env):
 
     def __init__(
         self,
-        scenario="tow6_uniform",
-        reward=None,
-        dt_s=0.1,
-        action_keys=("wheel_speed_mps",),
-        energy_weight=1e-3,
-        stall_speed_mps=0.01,
-        stall_time_s=2.0,
-        method="VODE",
-        record=False,
-        render_mode=None,
-    ):
+        scenario: Scenario | str | os.PathLike[str] = "tow6_uniform",
+        reward: RewardFunction | None = None,
+        dt_s: float = 0.1,
+        action_keys: str | Sequence[str] = ("wheel_speed_mps",),
+        energy_weight: float = 1e-3,
+        stall_speed_mps: float = 0.01,
+        stall_time_s: float = 2.0,
+        method: str | None = "VODE",
+        record: bool = False,
+        render_mode: str | None = None,
+    ) -> None:
         if render_mode is not None:
             raise ValueError(f"render_mode: the environment does not render; got {render_mode!r}, use None")
         if reward is not None and not callable(reward):
@@ -66,10 +76,14 @@ class SnowormEnv(gymnasium.Env):
         self.action_space = self.core.single_action_space
         self.observation_space = self.core.single_observation_space
         self.render_mode = None
-        self.observation = None
-        self._stalled_s, self._done, self._command = 0.0, None, None
+        self.observation: Observation | None = None
+        self._stalled_s = 0.0
+        self._done: bool | None = None
+        self._command: dict[str, NDArray[np.float64]] | None = None
 
-    def reset(self, *, seed=None, options=None):
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         """Back to t = 0: ``(obs, info)``.  ``seed`` seeds ``np_random`` and the action space's
         sampling (the chain itself is deterministic)."""
         super().reset(seed=seed)
@@ -79,7 +93,7 @@ class SnowormEnv(gymnasium.Env):
         self._stalled_s, self._done, self._command = 0.0, False, None
         return self.core.normalised({f: getattr(obs, f) for f in OBSERVATION_FIELDS}, 0.0), {"t_s": 0.0}
 
-    def step(self, action):
+    def step(self, action: ArrayLike) -> tuple[NDArray[np.float32], SupportsFloat, bool, bool, dict[str, Any]]:
         """Hold ``action`` for ``dt_s``: ``(obs, reward, terminated, truncated, info)``; ``info`` has
         ``t_s`` and ``motor_energy_J``, the motors' electrical energy in the step [J].
 
@@ -96,12 +110,12 @@ class SnowormEnv(gymnasium.Env):
             raise ResetNeeded("SnowormEnv.step: call reset() before the first step")
         if self._done:
             raise ResetNeeded("SnowormEnv.step: the episode has ended (terminated or truncated); call reset()")
-        prev, t0, y0 = self.observation, self.sim.t_s, self.sim.state
+        prev, t0, y0 = cast(Observation, self.observation), self.sim.t_s, self.sim.state  # set by reset()
         command = self.core.physical_action(action)
         held = self._command is not None and all(np.array_equal(command[k], self._command[k]) for k in command)
         obs_t = self.sim.step(command, self.dt_s, restart=not held).t_s
         self._command = command
-        ts, ys, ctl = self.sim.last_step
+        ts, ys, ctl = cast(tuple, self.sim.last_step)  # the step just made
         if ts[0] > t0:  # record=True: the step's samples leave out its start (the Result has it)
             ts, ys = np.append(t0, ts), np.vstack([y0, ys])
         seg, lk = output_series(self.sim.model, ys, ctl)
@@ -121,7 +135,7 @@ class SnowormEnv(gymnasium.Env):
         return self.core.normalised(fields, obs_t), float(reward), bool(terminated), bool(truncated), info
 
 
-def make_env(**kwargs):
+def make_env(**kwargs: Any) -> gymnasium.wrappers.TimeLimit:
     """The registered entry point: :class:`SnowormEnv` ``(**kwargs)`` in a ``TimeLimit`` of its
     ``max_episode_steps`` (so ``env.spec.max_episode_steps`` follows the scenario's duration)."""
     env = SnowormEnv(**kwargs)

@@ -43,6 +43,10 @@ different times of their episodes share one period.
 
 from __future__ import annotations
 
+import os
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, cast
+
 import numpy as np
 from gymnasium.error import ResetNeeded
 from gymnasium.vector import AutoresetMode, VectorEnv
@@ -56,6 +60,12 @@ from ..simulation.interval import output_grid
 from ..simulation.stepper import STACK_MAX_MEMBERS, STACK_MAX_STATES, ChainStepper, stack_size
 from .core import EnvCore, table_fields
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike, NDArray
+
+    from ..config.scenario import Scenario
+    from ..model.inputs import Controls
+
 __all__ = ["SnowormVectorEnv", "MAX_NUM_ENVS", "STACK_MAX_MEMBERS", "STACK_MAX_STATES", "stack_size"]
 
 #: Most members of a vector environment: the range over which the cost per member was measured flat
@@ -63,7 +73,7 @@ __all__ = ["SnowormVectorEnv", "MAX_NUM_ENVS", "STACK_MAX_MEMBERS", "STACK_MAX_S
 MAX_NUM_ENVS = 1024
 
 
-class SnowormVectorEnv(VectorEnv):
+class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[Any]"]):
     """``num_envs`` copies of a scenario's chain, stepped together (see the module docstring).
 
     Parameters
@@ -86,17 +96,17 @@ class SnowormVectorEnv(VectorEnv):
 
     def __init__(
         self,
-        num_envs=1,
-        scenario="tow6_uniform",
-        dt_s=0.1,
-        action_keys=("wheel_speed_mps",),
-        energy_weight=1e-3,
-        stall_speed_mps=0.01,
-        stall_time_s=2.0,
-        max_episode_steps=None,
-        method="VODE",
-        render_mode=None,
-    ):
+        num_envs: int = 1,
+        scenario: Scenario | str | os.PathLike[str] = "tow6_uniform",
+        dt_s: float = 0.1,
+        action_keys: str | Sequence[str] = ("wheel_speed_mps",),
+        energy_weight: float = 1e-3,
+        stall_speed_mps: float = 0.01,
+        stall_time_s: float = 2.0,
+        max_episode_steps: int | None = None,
+        method: str | None = "VODE",
+        render_mode: str | None = None,
+    ) -> None:
         if (
             isinstance(num_envs, bool)
             or not isinstance(num_envs, (int, np.integer))
@@ -124,7 +134,7 @@ class SnowormVectorEnv(VectorEnv):
         if method is not None and method != sc.simulation.method:
             sc = sc.with_({"simulation.method": method})
         self.scenario, self.dt_s, self.render_mode = sc, core.dt_s, None
-        self._command = None
+        self._command: dict[str, NDArray[np.float64]] | None = None
         self.single_action_space = core.single_action_space
         self.single_observation_space = core.single_observation_space
         self.action_space = batch_space(self.single_action_space, B)
@@ -142,7 +152,9 @@ class SnowormVectorEnv(VectorEnv):
         self._started = False
 
     # ------------------------------------------------------------------ reset
-    def reset(self, *, seed=None, options=None):
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         """Reset every member (or those of ``options["reset_mask"]``): ``(obs, info)``.
 
         ``seed`` (an int) seeds ``np_random`` and the action spaces' sampling."""
@@ -162,7 +174,10 @@ class SnowormVectorEnv(VectorEnv):
             if not mask.all():
                 raise ResetNeeded("SnowormVectorEnv.reset: the first reset must reset every member (no reset_mask)")
             n_s = self._y0.size
-            self._y, self._obs = np.empty((B, n_s)), np.empty((B,) + self.single_observation_space.shape, np.float32)
+            self._y, self._obs = (
+                np.empty((B, n_s)),
+                np.empty((B,) + cast("tuple[int, ...]", self.single_observation_space.shape), np.float32),
+            )
             self._t, self._steps, self._stalled = np.zeros(B), np.zeros(B, int), np.zeros(B)
             self._xmean, self._autoreset = np.zeros(B), np.zeros(B, bool)
             self._cmd = CommandState(self.model, batch=B)
@@ -170,13 +185,15 @@ class SnowormVectorEnv(VectorEnv):
         self._reset_members(mask)
         return self._obs.copy(), {"t_s": self._t.copy(), "_t_s": np.ones(B, bool)}
 
-    def _reset_members(self, mask):
+    def _reset_members(self, mask: NDArray[np.bool_]) -> None:
         self._y[mask] = self._y0
         self._t[mask], self._steps[mask], self._stalled[mask] = 0.0, 0, 0.0
         self._xmean[mask], self._obs[mask], self._autoreset[mask] = self._xmean0, self._obs0, False
 
     # ------------------------------------------------------------------ step
-    def step(self, actions):
+    def step(
+        self, actions: ArrayLike
+    ) -> tuple[NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]]:
         """One control period of every member: ``(obs, rewards, terminated, truncated, info)``.
 
         Raises ResetNeeded before the first :meth:`reset`; ValueError for a wrong action shape or a
@@ -219,7 +236,7 @@ class SnowormVectorEnv(VectorEnv):
         info = self._info(energy, failed, errors)
         return self._obs.copy(), rewards.astype(float), terminated, truncated, info
 
-    def _info(self, energy, failed, errors):
+    def _info(self, energy: NDArray[np.float64], failed: NDArray[np.bool_], errors: dict[int, str]) -> dict[str, Any]:
         B = self.num_envs
         every = np.ones(B, bool)
         info = {
@@ -235,7 +252,9 @@ class SnowormVectorEnv(VectorEnv):
             info["_solver_error"] = failed.copy()
         return info
 
-    def _solve(self, ctl):
+    def _solve(
+        self, ctl: Controls
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_], dict[int, str]]:
         """One period of every member (:meth:`ChainStepper.solve <snoworm.simulation.stepper.ChainStepper.solve>`):
         ``(ts, ys (n_t, B, n_states), failed (B,), errors {b: message})``."""
         t0 = self._T

@@ -18,13 +18,14 @@ import errno
 import os
 import secrets
 import stat
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 try:
     import fcntl
 except ImportError:  # pragma: no cover - not POSIX
-    fcntl = None
+    fcntl = None  # type: ignore[assignment]  # checked before each use
 
 from .manifest import LOCK
 
@@ -53,7 +54,7 @@ class FolderLocked(OutputError):
     """Another live process holds the folder's lock (:func:`folder_lock`)."""
 
 
-def os_error_message(exc: OSError, path=None) -> str:
+def os_error_message(exc: OSError, path: str | os.PathLike[str] | None = None) -> str:
     """``<path>: <OS reason>`` of an OSError, e.g. ``out/a.csv: No space left on device``."""
     where = exc.filename if exc.filename is not None else path
     reason = exc.strerror or str(exc) or type(exc).__name__
@@ -88,7 +89,7 @@ def _first_word(data: bytes) -> str:
     return words[0] if words else ""
 
 
-def lock_token_matches(folder, token: str) -> bool:
+def lock_token_matches(folder: str | os.PathLike[str], token: str) -> bool:
     """Whether ``folder``'s lock file holds ``token`` (:attr:`FolderLease.token`): the folder is still
     the one its holder locked.  Works where a worker cannot compare the folder's identity (another
     machine of a Dask cluster on a shared file system)."""
@@ -161,7 +162,7 @@ def _ident(st: os.stat_result) -> tuple:
 
 
 @contextmanager
-def folder_lock(folder):
+def folder_lock(folder: str | os.PathLike[str]) -> Iterator[FolderLease]:
     """Hold ``folder``'s lock (:data:`~snoworm.infra.manifest.LOCK`, with this process's PID) for
     the block; yields the :class:`FolderLease`.
 
@@ -176,13 +177,14 @@ def folder_lock(folder):
         The lock file cannot be created or locked (naming it and the reason).
     """
     lease = try_folder_lock(folder, required=True)
+    assert lease is not None  # required=True: raises rather than returning None
     try:
         yield lease
     finally:
         lease.release()
 
 
-def try_folder_lock(folder, required: bool = False) -> FolderLease | None:
+def try_folder_lock(folder: str | os.PathLike[str], required: bool = False) -> FolderLease | None:
     """Take ``folder``'s lock and return the :class:`FolderLease` (the caller releases it).
 
     With ``required`` False, a lock file that cannot be created (a read-only folder) returns None
@@ -210,7 +212,7 @@ def try_folder_lock(folder, required: bool = False) -> FolderLease | None:
         raise OutputError(f"cannot lock the folder: {os_error_message(exc, folder)}") from None
 
 
-def check_unlocked(folder) -> None:
+def check_unlocked(folder: str | os.PathLike[str]) -> None:
     """Raise :class:`FolderLocked` if another live process holds ``folder``'s lock; creates nothing.
 
     A lock file that cannot be opened (not a regular file, unreadable) is left to the writer,

@@ -9,7 +9,7 @@ built-in or the user's own.
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from . import base, command  # noqa: F401  (the registries; every run needs them)
 
@@ -73,7 +73,7 @@ if TYPE_CHECKING:
     from .uniform import UniformConfig as UniformConfig, UniformMode as UniformMode
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:
     """Import a public name's module on first access (a built-in mode's module the first time)."""
     try:
         module = _EXPORTS[name]
@@ -84,5 +84,5 @@ def __getattr__(name: str):
     return value
 
 
-def __dir__():
+def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__))

@@ -12,7 +12,10 @@ with :func:`register_mode` -- also from a user's own module, before the scenario
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field as dc_field
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
 import numpy as np
 
@@ -20,6 +23,14 @@ from ..config.mode_registry import MODES, ModeConfig
 from ..config.schema import ScenarioError
 from ..model.inputs import Controls
 from .codeload import allowed_paths
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike, NDArray
+
+    from ..config.scenario import Scenario
+    from ..model.chain import ChainModel
+
+_M = TypeVar("_M", bound="type[Mode]")
 
 __all__ = ["Mode", "Interval", "MODES", "register_mode", "mode_class", "build_mode", "start_times", "rolling_interval"]
 
@@ -43,7 +54,7 @@ class Interval:
 
     t_end: float
     controls: Controls
-    events: list = dc_field(default_factory=list)
+    events: list[Callable[..., float]] = dc_field(default_factory=list)
     label: str = ""
 
 
@@ -87,36 +98,37 @@ class Mode:
     Events worth reporting go to ``self.log`` as dicts with ``t_s``, ``kind`` and ``detail``.
     """
 
-    name = ""
-    config_class = ModeConfig
-    continue_solver = False
-    steps_asked = False
-    runs_code = False
+    name: ClassVar[str] = ""
+    config_class: ClassVar[type[ModeConfig]] = ModeConfig
+    continue_solver: ClassVar[bool] = False
+    steps_asked: ClassVar[bool] = False
+    runs_code: ClassVar[bool] = False
 
-    def __init__(self, cfg, scenario, model):
+    def __init__(self, cfg: ModeConfig, scenario: Scenario, model: ChainModel) -> None:
         self.cfg = cfg
         self.scenario = scenario
         self.model = model
-        self.log = []  # events: dicts with t_s, kind, detail
+        self.log: list[dict[str, Any]] = []  # events: dicts with t_s, kind, detail
 
-    def initial_state(self) -> np.ndarray:
+    def initial_state(self) -> NDArray[np.float64]:
         """State at t = 0 (flat); default: the chain at rest, joints at zero extension."""
         return self.model.initial_state()
 
-    def interval(self, t: float, y: np.ndarray) -> Interval:
+    def interval(self, t: float, y: NDArray[np.float64]) -> Interval:
         """The interval starting at ``t`` in state ``y``."""
         raise NotImplementedError(f"mode {self.name!r} must implement interval(t, y)")
 
-    def on_event(self, t: float, y: np.ndarray, index: int) -> None:
+    def on_event(self, t: float, y: NDArray[np.float64], index: int) -> None:
         """Event ``index`` of the current interval's events ended it at ``t`` in state ``y``."""
         raise NotImplementedError(f"mode {self.name!r} returned events but does not implement on_event")
 
-    def summary(self, result) -> dict:
-        """Mode-specific summary metrics (added to ``summary.json``)."""
+    def summary(self, result: Any) -> dict:
+        """Mode-specific summary metrics (added to ``summary.json``) of ``result``, a
+        :class:`snoworm.Result` (typed Any: the results layer sits above the modes)."""
         return {}
 
 
-def register_mode(cls):
+def register_mode(cls: _M) -> _M:
     """Register a :class:`Mode` subclass under ``cls.name`` (usable as a class decorator).
 
     Makes ``mode: {type: <name>, ...}`` in a scenario validate against ``cls.config_class`` and
@@ -128,12 +140,14 @@ def register_mode(cls):
     return MODES.register(cls)
 
 
-def mode_class(cfg):
+def mode_class(cfg: ModeConfig) -> type[Mode]:
     """The :class:`Mode` subclass registered for a validated mode config."""
     return MODES[cfg.type]
 
 
-def build_mode(cfg, scenario, model, allow_code=()):
+def build_mode(
+    cfg: ModeConfig, scenario: Scenario, model: ChainModel, allow_code: Iterable[str | os.PathLike[str]] = ()
+) -> Mode:
     """A new instance of the mode of ``cfg`` for one run of ``scenario`` on ``model``.
 
     ``allow_code``: the paths whose controller code the user allowed (``--allow-code``,
@@ -143,10 +157,12 @@ def build_mode(cfg, scenario, model, allow_code=()):
     """
     allowed = allowed_paths(allow_code)
     cls = mode_class(cfg)
-    return cls(cfg, scenario, model, allow_code=allowed) if cls.runs_code else cls(cfg, scenario, model)
+    if cls.runs_code:  # such a mode's __init__ takes allow_code (the controller mode's)
+        return cls(cfg, scenario, model, allow_code=allowed)  # type: ignore[call-arg]
+    return cls(cfg, scenario, model)
 
 
-def start_times(values, n_segments, path="mode.start_time_s"):
+def start_times(values: ArrayLike, n_segments: int, path: str = "mode.start_time_s") -> NDArray[np.float64]:
     """One start time for all segments, or one per segment, as an array of length N."""
     v = np.asarray(values, float)
     if v.size == 1:
@@ -158,7 +174,9 @@ def start_times(values, n_segments, path="mode.start_time_s"):
     return v
 
 
-def rolling_interval(t, t_start, breaks, base: Controls, label: str) -> Interval:
+def rolling_interval(
+    t: float, t_start: NDArray[np.float64], breaks: NDArray[np.float64], base: Controls, label: str
+) -> Interval:
     """Motors on from each segment's start time: ``base`` with ``motor_on`` set, until the next start.
 
     Shared by the modes whose only switches are motor start times (uniform, force control); the

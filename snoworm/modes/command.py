@@ -13,11 +13,17 @@ commands become the same :class:`~snoworm.model.inputs.Controls` either way (doc
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from ..model.inputs import Controls
 from ..model.quantities import output_series
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike, NDArray
+
+    from ..model.chain import ChainModel
 
 __all__ = ["Observation", "observe", "CommandState", "COMMAND_KEYS", "observed_fields"]
 
@@ -46,7 +52,7 @@ _SOURCES = {
 }
 
 
-def observed_fields(seg, lk, row=-1) -> dict:
+def observed_fields(seg: Mapping[str, Any], lk: Mapping[str, Any], row: int = -1) -> dict[str, Any]:
     """The observation's arrays (every field but ``t_s``, in :attr:`Observation.FIELDS` order) at
     sample ``row`` of :func:`~snoworm.model.quantities.output_series`' tables ``seg, lk``."""
     tables = (seg, lk)
@@ -77,9 +83,23 @@ class Observation:
     """
 
     __slots__ = ("_t", "_vals", "_src")
+    _t: float
+    _vals: dict[str, NDArray[np.float64]] | None
+    _src: tuple[ChainModel, NDArray[np.float64], Controls] | None
+    # the arrays (properties made from _SOURCES below), declared for type checkers
+    x_m: NDArray[np.float64]
+    v_mps: NDArray[np.float64]
+    wheel_speed_mps: NDArray[np.float64]
+    slip: NDArray[np.float64]
+    motor_torque_Nm: NDArray[np.float64]
+    xt: NDArray[np.float64]
+    grade_deg: NDArray[np.float64]
+    link_force_N: NDArray[np.float64]
+    link_length_m: NDArray[np.float64]
+    joint_extension_m: NDArray[np.float64]
     FIELDS = ("t_s",) + tuple(_SOURCES)
 
-    def __init__(self, t_s, **arrays):
+    def __init__(self, t_s: float, **arrays: ArrayLike) -> None:
         if "grade_deg" not in arrays and "x_m" in arrays:  # level ground unless given
             arrays["grade_deg"] = np.zeros(np.shape(arrays["x_m"]))
         if set(arrays) != set(_SOURCES):
@@ -92,33 +112,35 @@ class Observation:
         object.__setattr__(self, "_src", None)
 
     @classmethod
-    def _of_state(cls, model, y, ctl, t):
+    def _of_state(cls, model: ChainModel, y: ArrayLike, ctl: Controls, t: float) -> Observation:
         obs = cls.__new__(cls)
         object.__setattr__(obs, "_t", float(t))
         object.__setattr__(obs, "_vals", None)
         object.__setattr__(obs, "_src", (model, np.array(y, float), ctl))
         return obs
 
-    def _values(self) -> dict:
+    def _values(self) -> dict[str, NDArray[np.float64]]:
         if self._vals is None:
-            model, y, ctl = self._src
-            fields = observed_fields(*output_series(model, y[None, :], ctl), row=0)
-            object.__setattr__(self, "_vals", {k: _frozen(v) for k, v in fields.items()})
+            model, y, ctl = self._src  # type: ignore[misc]  # _src is set whenever _vals is None
+            seg, lk = output_series(model, y[None, :], ctl)
+            vals = {k: _frozen(v) for k, v in observed_fields(seg, lk, row=0).items()}
+            object.__setattr__(self, "_vals", vals)
             object.__setattr__(self, "_src", None)
+            return vals
         return self._vals
 
     @property
     def t_s(self) -> float:
         return self._t
 
-    def __setattr__(self, name, value):
+    def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError(f"Observation is read-only (cannot set {name!r})")
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
         """Pickle and copy (an environment holding an Observation is then picklable and deep-copyable)."""
         return (_rebuilt_observation, (self._t, self._vals, self._src))
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return "Observation(" + ", ".join(f"{k}={getattr(self, k)!r}" for k in self.FIELDS) + ")"
 
     def as_dict(self) -> dict:
@@ -126,17 +148,21 @@ class Observation:
         return {"t_s": self._t} | {k: np.array(v) for k, v in self._values().items()}
 
 
+def _field_property(name: str) -> property:
+    return property(lambda self: self._values()[name])
+
+
 for _name in _SOURCES:
-    setattr(Observation, _name, property(lambda self, _n=_name: self._values()[_n]))
+    setattr(Observation, _name, _field_property(_name))
 
 
-def observe(model, y, ctl, t) -> Observation:
+def observe(model: ChainModel, y: ArrayLike, ctl: Controls, t: float) -> Observation:
     """The :class:`Observation` of flat state ``y`` at time ``t`` reached under controls ``ctl``
     (computed from a copy of ``y`` when first read)."""
     return Observation._of_state(model, y, ctl, t)
 
 
-def _rebuilt_observation(t, vals, src) -> Observation:
+def _rebuilt_observation(t: float, vals: Mapping[str, ArrayLike] | None, src: tuple | None) -> Observation:
     """An :class:`Observation` from its pickled parts (:meth:`Observation.__reduce__`)."""
     obs = Observation.__new__(Observation)
     object.__setattr__(obs, "_t", float(t))
@@ -145,7 +171,7 @@ def _rebuilt_observation(t, vals, src) -> Observation:
     return obs
 
 
-def _frozen(a):
+def _frozen(a: ArrayLike) -> NDArray[np.float64]:
     """A read-only float copy of ``a``."""
     a = np.array(a, float)
     a.flags.writeable = False
@@ -173,7 +199,7 @@ class CommandState:
         :meth:`ChainModel.stack`.
     """
 
-    def __init__(self, model, batch=None):
+    def __init__(self, model: ChainModel, batch: int | None = None) -> None:
         self.model = model
         n = model.n
         self._lead = () if batch is None else (int(batch),)
@@ -181,14 +207,14 @@ class CommandState:
         self.speed = np.zeros(n)
         self.torque = np.zeros(n)
         self.lock = np.zeros(n, bool)
-        self.joint_mode = None  # None: joints hold; "force" or "length"
+        self.joint_mode: str | None = None  # None: joints hold; "force" or "length"
         self.joint_value = np.zeros(max(n - 1, 0))
         self.controls = self._build()
 
-    def _sizes(self):
+    def _sizes(self) -> dict[str, int]:
         return {"N": self.model.n, "N-1": max(self.model.n - 1, 0)}
 
-    def _check(self, command):
+    def _check(self, command: object) -> dict[str, NDArray[Any]]:
         """Validated arrays of ``command`` (ValueError naming the key)."""
         if command is None:
             return {}
@@ -234,7 +260,7 @@ class CommandState:
                 raise ValueError(f"command keys {a!r} and {b!r}: give one of them in a command, not both")
         return out
 
-    def apply(self, command) -> Controls:
+    def apply(self, command: Mapping[str, ArrayLike] | None) -> Controls:
         """Merge ``command`` into the held command and return the controls (the same object if
         nothing changed).  Raises ValueError naming the key (nothing is changed then)."""
         new = self._check(command)
@@ -250,7 +276,7 @@ class CommandState:
             self.lock = new["wheel_lock"]
         if "joint_force_N" in new or "joint_length_m" in new:
             self.joint_mode = "force" if "joint_force_N" in new else "length"
-            self.joint_value = new.get("joint_force_N", new.get("joint_length_m"))
+            self.joint_value = cast("NDArray[np.float64]", new.get("joint_force_N", new.get("joint_length_m")))
         self.controls = self._build()
         return self.controls
 

@@ -21,10 +21,11 @@ import math
 import os
 import time
 import traceback
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 from ..config.mode_registry import ModeConfig
 from ..config.schema import ScenarioError, field, quote
@@ -39,6 +40,13 @@ from .codeload import (
 )
 from .command import CommandState, observe
 from .watchdog import WallLimit, wall_limit
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from ..config.scenario import Scenario
+    from ..model.chain import ChainModel
 
 __all__ = [
     "ControllerConfig",
@@ -75,7 +83,7 @@ class ControllerConfig(ModeConfig):
     params: dict[str, Any] = field(default_factory=dict, doc="parameters handed to the controller's constructor")
 
     @classmethod
-    def resolve_paths(cls, raw, base_dir):
+    def resolve_paths(cls, raw: dict, base_dir: Path) -> dict:
         """A relative controller file made absolute from ``base_dir`` (the scenario file's folder),
         before validation, so that sweeps and the written ``scenario.yaml`` find it."""
         spec = raw.get("controller")
@@ -83,10 +91,10 @@ class ControllerConfig(ModeConfig):
             return {**raw, "controller": resolve_spec(spec, "mode.controller", Path(base_dir))}
         return raw  # not text: validation reports it
 
-    def _check(self, path):
+    def _check(self, path: str) -> None:
         check_reference(self.controller, f"{path}.controller")  # static: nothing imported, nothing run
 
-    def check_scenario(self, scenario, path):
+    def check_scenario(self, scenario: Scenario, path: str) -> None:
         """Each control period is an interval that ends on an output sample: the periods of the run
         times the segments stay within :data:`~snoworm.config.sections.MAX_OUTPUT_SAMPLES` (memory;
         and the work limit allows each period its own share, so their number must be bounded)."""
@@ -101,7 +109,7 @@ class ControllerConfig(ModeConfig):
             )
 
 
-def code_root(scenario) -> str | None:
+def code_root(scenario: Scenario) -> str | None:
     """The folder whose controller files ``scenario`` may run: ``scenario.origin.code_root`` (the
     scenario file's folder, resolved; None for a scenario read back from a results folder), or the
     working directory for a scenario made in Python."""
@@ -109,23 +117,28 @@ def code_root(scenario) -> str | None:
     return origin.code_root if origin is not None else os.path.realpath(os.getcwd())
 
 
-def trust_problem_of(scenario, path="mode.controller", allow_code=()) -> str | None:
+def trust_problem_of(
+    scenario: Scenario, path: str = "mode.controller", allow_code: Iterable[str | os.PathLike[str]] = ()
+) -> str | None:
     """Why ``scenario``'s controller may not run here, with the paths ``allow_code`` allowed (see
     :func:`snoworm.modes.codeload.trust_problem`)."""
-    return trust_problem(scenario.mode.controller, code_root(scenario), path, allow_code)
+    spec = cast(ControllerConfig, scenario.mode).controller
+    return trust_problem(spec, code_root(scenario), path, allow_code)
 
 
-def code_notice(scenario, allow_code=()) -> str:
+def code_notice(scenario: Scenario, allow_code: Iterable[str | os.PathLike[str]] = ()) -> str:
     """``controller code <spec> (<files>)`` for the CLI's notice; ScenarioError if ``scenario``'s
     controller may not run (with ``allow_code`` allowed too)."""
     why = trust_problem_of(scenario, allow_code=allow_code)
     if why is not None:
         raise ScenarioError(why)
-    spec = scenario.mode.controller
+    spec = cast(ControllerConfig, scenario.mode).controller
     return f"controller code {spec} ({', '.join(str(f) for f in code_files(spec))})"
 
 
-def load_controller(spec: str, path: str = "mode.controller", root=None, allow_code=()):
+def load_controller(
+    spec: str, path: str = "mode.controller", root: str | None = None, allow_code: Iterable[str | os.PathLike[str]] = ()
+) -> type:
     """Import the controller class named by ``spec`` ('file.py:Name' or 'package.module:Name'):
     this RUNS the file's or module's code.  A file must lie under ``root`` or a path of
     ``allow_code``.
@@ -139,7 +152,12 @@ def load_controller(spec: str, path: str = "mode.controller", root=None, allow_c
     return import_class(spec, root, path, allow_code)
 
 
-def construct(cfg, scenario, path="mode.controller", allow_code=()):
+def construct(
+    cfg: ControllerConfig,
+    scenario: Scenario,
+    path: str = "mode.controller",
+    allow_code: Iterable[str | os.PathLike[str]] = (),
+) -> Any:
     """A new controller instance, ``cls(params, scenario)`` (ScenarioError if the constructor fails);
     its code may run from the scenario's folder or a path of ``allow_code``."""
     cls = import_class(cfg.controller, code_root(scenario), path, allow_code)
@@ -152,7 +170,7 @@ def construct(cfg, scenario, path="mode.controller", allow_code=()):
         ) from None
 
 
-def user_traceback(exc, limit: int = 2000) -> str:
+def user_traceback(exc: BaseException, limit: int = 2000) -> str:
     """The traceback of ``exc`` keeping only the frames outside the snoworm package (the user's),
     cut to about ``limit`` characters (a 1 MB message prints its head and tail)."""
     frames = [
@@ -164,7 +182,7 @@ def user_traceback(exc, limit: int = 2000) -> str:
     return text
 
 
-def _working_directory():
+def _working_directory() -> str | None:
     try:
         return os.getcwd()
     except OSError:  # the working directory was removed
@@ -172,7 +190,7 @@ def _working_directory():
 
 
 @contextmanager
-def _guard(deadline, when: str, limit):
+def _guard(deadline: float | None, when: str, limit: float | None) -> Iterator[None]:
     """Run a user's code: past ``deadline`` (``simulation.max_wall_s``, :mod:`snoworm.modes.watchdog`)
     or on ``sys.exit`` it stops with ControllerError; the process never ends on the user's word.
     A working directory the code changed (``os.chdir``) is restored: the caller's relative paths
@@ -210,8 +228,15 @@ class ControllerMode(Mode):
     steps_asked = True  # fixed periods, at most MAX_OUTPUT_SAMPLES / segments of them (check_scenario)
 
     runs_code = True  # takes the user's allow-list (Mode.runs_code)
+    cfg: ControllerConfig
 
-    def __init__(self, cfg, scenario, model, allow_code=()):
+    def __init__(
+        self,
+        cfg: ControllerConfig,
+        scenario: Scenario,
+        model: ChainModel,
+        allow_code: Iterable[str | os.PathLike[str]] = (),
+    ) -> None:
         super().__init__(cfg, scenario, model)
         limit = scenario.simulation.max_wall_s
         self.deadline = time.perf_counter() + limit if limit is not None else None  # user code counts too
@@ -220,7 +245,7 @@ class ControllerMode(Mode):
         self.commands = CommandState(model)
         self.calls = 0
 
-    def interval(self, t, y):
+    def interval(self, t: float, y: NDArray[np.float64]) -> Interval:
         """Call the controller with the observation at ``t``; hold its command until ``t + period_s``.
 
         Raises
@@ -243,6 +268,6 @@ class ControllerMode(Mode):
             raise ControllerError(f"controller returned a bad command at t = {t:.6g} s: {exc}") from None
         return Interval(t + self.cfg.period_s, ctl, [], "controller")
 
-    def summary(self, result) -> dict:
+    def summary(self, result: Any) -> dict:
         """The controller (as resolved) and how many times it was called."""
         return {"controller": self.cfg.controller, "controller_calls": self.calls}

@@ -30,6 +30,7 @@ the scenario is validated, which builds no chain model): :mod:`snoworm.modes.for
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -37,7 +38,15 @@ from ..config.mode_registry import ModeConfig
 from ..config.schema import Config, ScenarioError, field, suggest
 from ..config.sections import FINITE_WHY
 from ..model.inputs import Controls
-from .base import Mode, register_mode, rolling_interval, start_times
+from .base import Interval, Mode, register_mode, rolling_interval, start_times
+
+if TYPE_CHECKING:
+    from numpy.typing import NDArray
+
+    from ..config.scenario import Scenario
+    from ..config.sections import VehicleConfig
+    from ..model.chain import ChainModel
+    from .force_plan import ForcePlan
 
 __all__ = ["TargetsConfig", "ForceControlConfig", "ForceControlMode", "SHARE_RULES"]
 
@@ -64,7 +73,7 @@ class TargetsConfig(Config):
         None, ge=-1e6, le=1e6, unit="N", doc="net connector force on chosen segments {index: force}, forward positive"
     )
 
-    def _check(self, path):
+    def _check(self, path: str) -> None:
         given = [k for k in ("link_forces_N", "load_shares", "net_connector_N") if getattr(self, k) is not None]
         if not given:
             raise ScenarioError(
@@ -137,9 +146,9 @@ class ForceControlConfig(ModeConfig):
     #: the state carries the outer force-loop integrators
     force_loop = True
     #: extra plots made by :func:`snoworm.plotting.plot_result` for this mode
-    extra_plots = ("force_diagram",)
+    extra_plots: ClassVar[tuple[str, ...]] = ("force_diagram",)
 
-    def check_vehicle(self, vehicle, path):
+    def check_vehicle(self, vehicle: VehicleConfig, path: str) -> None:
         n = vehicle.segments
         if n < 2:
             raise ScenarioError(
@@ -170,7 +179,7 @@ class ForceControlConfig(ModeConfig):
                     "to share the tow (or give link_forces_N)."
                 )
 
-    def prepare(self, sc, model):
+    def prepare(self, sc: Scenario, model: ChainModel) -> ForcePlan:
         """The :class:`~snoworm.modes.force_plan.ForcePlan` on ``model``, made when a run is assembled.
 
         Feasibility: every segment can pull its share, set-points within [0, v_max]; ScenarioError
@@ -181,7 +190,7 @@ class ForceControlConfig(ModeConfig):
 
         return plan(self, sc, model)
 
-    def batch_signature(self):
+    def batch_signature(self) -> tuple:
         """No state events (the plan is computed once per run): members with the same start
         times and free segment have the same intervals and loop layout (targets, gains and
         speeds may differ)."""
@@ -195,7 +204,7 @@ class ForceControlMode(Mode):
     name = "force_control"
     config_class = ForceControlConfig
 
-    def __init__(self, cfg, scenario, model):
+    def __init__(self, cfg: ForceControlConfig, scenario: Scenario, model: ChainModel) -> None:
         super().__init__(cfg, scenario, model)
         n = model.n
         self.plan = cfg.prepare(scenario, model)
@@ -215,10 +224,10 @@ class ForceControlMode(Mode):
             fc_vmax_mps=p.vmax_mps,
         )
 
-    def interval(self, t, y):
+    def interval(self, t: float, y: NDArray[np.float64]) -> Interval:
         return rolling_interval(t, self.t_start, self.breaks, self._base, "force control")
 
-    def summary(self, result) -> dict:
+    def summary(self, result: Any) -> dict:
         """Targets, predicted and final steady state, and saturation of the loops."""
         p = self.plan
         sp = result.segments["speed_setpoint_mps"]

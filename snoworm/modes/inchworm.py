@@ -48,7 +48,9 @@ backward sliding peaks shortly after motion starts and then drops off, as in Fig
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -58,6 +60,13 @@ from ..config.schema import ScenarioError, field, suggest
 from ..config.sections import FINITE_WHY
 from ..model.inputs import Controls
 from .base import Interval, Mode, register_mode
+
+if TYPE_CHECKING:
+    from numpy.typing import NDArray
+
+    from ..config.scenario import Scenario
+    from ..config.sections import VehicleConfig
+    from ..model.chain import ChainModel
 
 __all__ = ["InchwormConfig", "InchwormMode", "GAITS", "PhasePlan", "gait_plan", "progress_conditions"]
 
@@ -94,7 +103,9 @@ def _runs(indices):
     return tuple(runs)
 
 
-def gait_plan(phases, n, link_types, path="mode.gait"):
+def gait_plan(
+    phases: Sequence[Sequence[int]], n: int, link_types: Sequence[str], path: str = "mode.gait"
+) -> list[PhasePlan]:
     """Derive the joint roles of every phase and check the gait can run.
 
     Raises
@@ -159,7 +170,9 @@ def gait_plan(phases, n, link_types, path="mode.gait"):
     return plans
 
 
-def progress_conditions(F_c, Ft_front, Ftr_front, Ftr_rear, G_front=0.0, G_rear=0.0):
+def progress_conditions(
+    F_c: float, Ft_front: float, Ftr_front: float, Ftr_rear: float, G_front: float = 0.0, G_rear: float = 0.0
+) -> dict[str, float | bool]:
     """The paper's conditions for inchworm progress of a 2-segment push phase, Eqs. 4-6, with gravity.
 
     On a grade (docs/model.md section 7) gravity along the track ``G = -m g sin(theta)`` (negative
@@ -256,17 +269,18 @@ class InchwormConfig(ModeConfig):
         doc="speed control's force feed-forward: the mover's terrain resistance, or none",
     )
 
-    def inching_settings(self):
+    def inching_settings(self) -> dict[str, Any]:
         """This mode's own settings (without ``type`` and ``start_time_s``)."""
         return {
             f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in ("type", "start_time_s")
         }
 
-    def phases(self):
+    def phases(self) -> tuple[tuple[int, ...], ...]:
         """The gait as a tuple of phases (tuples of moving segment indices)."""
         if isinstance(self.gait, str):
             return GAITS[self.gait]
-        return tuple(tuple(int(k) for k in ph) for ph in self.gait)
+        gait = cast(Sequence[Sequence[int]], self.gait)  # a list of phases (checked by _check)
+        return tuple(tuple(int(k) for k in ph) for ph in gait)
 
     def _check(self, path):
         g = self.gait
@@ -293,7 +307,7 @@ class InchwormConfig(ModeConfig):
                 f"each a non-empty list of segment indices, e.g. [[0], [1], [2], [3]]; got {g!r}."
             )
 
-    def check_vehicle(self, vehicle, path):
+    def check_vehicle(self, vehicle: VehicleConfig, path: str) -> None:
         if (self.joint_control == "force") != (self.joint_force_N is not None):
             raise ScenarioError(
                 f"{path}.joint_force_N: give it exactly when joint_control is 'force' "
@@ -308,15 +322,16 @@ class InchwormMode(Mode):
 
     name = "inchworm"
     config_class = InchwormConfig
+    cfg: InchwormConfig
 
-    def __init__(self, cfg, scenario, model):
+    def __init__(self, cfg: InchwormConfig, scenario: Scenario, model: ChainModel) -> None:
         super().__init__(cfg, scenario, model)
         n = model.n
         self.plans = gait_plan(cfg.phases(), n, scenario.vehicle.link_types())
         self.phase = 0
         self.cycles_done = 0
-        self.group_done = None
-        self.phase_log = []
+        self.group_done: NDArray[np.bool_] | None = None
+        self.phase_log: list[dict[str, Any]] = []
         L = model.links
         # initial extension: the opposite end of each joint's first stroke
         s0 = np.full(n - 1, 0.5) * (L.stroke_min_m + L.stroke_max_m)
@@ -328,7 +343,7 @@ class InchwormMode(Mode):
                 s0[j] = L.stroke_max_m[j]
         self.s0 = s0
 
-    def initial_state(self):
+    def initial_state(self) -> NDArray[np.float64]:
         return self.model.initial_state(joint_extension_m=self.s0)
 
     # ------------------------------------------------------------ terrain forces for the plan
@@ -392,7 +407,7 @@ class InchwormMode(Mode):
         """Indices of the active joints of each moving group of a phase."""
         return [np.nonzero(active & (plan.group_of_joint == g))[0] for g in range(len(plan.groups))]
 
-    def interval(self, t, y):
+    def interval(self, t: float, y: NDArray[np.float64]) -> Interval:
         cfg, m = self.cfg, self.model
         n = m.n
         if t < cfg.start_time_s - 1e-12:
@@ -433,13 +448,13 @@ class InchwormMode(Mode):
         )
         events, self._event_joints = [], []
         for j in np.nonzero(active)[0]:
-            k = m.layout.flat_index(j, "s_m")  # extension of joint j (the link behind segment j)
+            k = m.layout.flat_index(int(j), "s_m")  # extension of joint j (the link behind segment j)
             sign, level = self._event_level(plan, j)
 
             def ev(t_, y_, k=k, sign=sign, level=level):
                 return sign * (y_[k] - level)
 
-            ev.direction = 1  # scipy's solve_ivp event API (rising crossings only)
+            ev.direction = 1  # type: ignore[attr-defined]  # scipy's solve_ivp event API (rising crossings only)
             events.append(ev)
             self._event_joints.append(int(j))
         label = f"phase {self.phase} (moving {[k for k in range(n) if moving[k]]})"
@@ -500,7 +515,7 @@ class InchwormMode(Mode):
                 return int(j)
         return None
 
-    def on_event(self, t, y, index):
+    def on_event(self, t: float, y: NDArray[np.float64], index: int) -> None:
         self._group_done(t, y, self._event_joints[index])
 
     def _group_done(self, t, y, j):
@@ -535,7 +550,7 @@ class InchwormMode(Mode):
             )
             self._begin_phase(t, y)
 
-    def summary(self, result):
+    def summary(self, result: Any) -> dict:
         t = result.t
         v = result.segments["v_mps"]
         held = (result.segments["speed_setpoint_mps"] == 0.0) & (t[:, None] >= self.cfg.start_time_s)

@@ -45,7 +45,9 @@ Every switch is an event in ``mode.log`` (``kind`` = ``switch_to_inching`` or
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -56,6 +58,13 @@ from ..config.sections import FINITE_WHY
 from ..model.inputs import Controls
 from .base import Interval, Mode, register_mode
 from .inchworm import InchwormConfig, InchwormMode
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike, NDArray
+
+    from ..config.scenario import Scenario
+    from ..config.sections import SegmentConfig, VehicleConfig
+    from ..model.chain import ChainModel
 
 __all__ = ["SupervisorConfig", "SupervisorMode", "chain_drawbar_surplus_N"]
 
@@ -80,7 +89,7 @@ class SupervisorConfig(ModeConfig):
     )
     inching: dict = field(doc="inchworm settings (the keys of the inchworm mode except type and start_time_s)")
 
-    def inching_config(self, path="mode") -> InchwormConfig:
+    def inching_config(self, path: str = "mode") -> InchwormConfig:
         """The :class:`InchwormConfig` used while inching (started at once: ``start_time_s = 0``)."""
         raw = self.inching
         if not isinstance(raw, dict):
@@ -96,13 +105,13 @@ class SupervisorConfig(ModeConfig):
                 )
         return build(InchwormConfig, {**raw, "type": "inchworm", "start_time_s": 0.0}, f"{path}.inching")
 
-    def rolling_speed(self):
+    def rolling_speed(self) -> float:
         return float(self.rolling_speed_mps)
 
-    def inching_settings(self):
+    def inching_settings(self) -> dict[str, Any]:
         return dict(self.inching)
 
-    def _check(self, path):
+    def _check(self, path: str) -> None:
         self.inching_config(path)
         if self.stuck_window_s < self.check_interval_s:
             raise ScenarioError(
@@ -110,11 +119,13 @@ class SupervisorConfig(ModeConfig):
                 f"got {self.stuck_window_s} s."
             )
 
-    def check_vehicle(self, vehicle, path):
+    def check_vehicle(self, vehicle: VehicleConfig, path: str) -> None:
         self.inching_config(path).check_vehicle(vehicle, f"{path}.inching")
 
 
-def chain_drawbar_surplus_N(model, segments, x_m, wheel_speed_mps) -> float:
+def chain_drawbar_surplus_N(
+    model: ChainModel, segments: Sequence[SegmentConfig], x_m: ArrayLike, wheel_speed_mps: float
+) -> float:
     """Steady drawbar the chain could develop rolling at its current position, minus the tow [N].
 
     ``sum_k sum_axles max_drawbar_N(X_t(axle), grade_k) / 2 - F_tow`` (docs/model.md section 2 per-segment
@@ -142,7 +153,7 @@ def chain_drawbar_surplus_N(model, segments, x_m, wheel_speed_mps) -> float:
             total += 0.5 * steady.max_drawbar_N(
                 float(X[k, a]), seg, model.tp, wheel_speed_mps, grade_deg=float(grade[k])
             )
-    return total - model.tow_force_N
+    return total - cast(float, model.tow_force_N)  # one chain: the supervisor never runs stacked
 
 
 @register_mode
@@ -151,8 +162,9 @@ class SupervisorMode(Mode):
 
     name = "supervisor"
     config_class = SupervisorConfig
+    cfg: SupervisorConfig
 
-    def __init__(self, cfg, scenario, model):
+    def __init__(self, cfg: SupervisorConfig, scenario: Scenario, model: ChainModel) -> None:
         super().__init__(cfg, scenario, model)
         self.inch_cfg = cfg.inching_config()
         self.segments = scenario.vehicle.segment_params()
@@ -160,34 +172,35 @@ class SupervisorMode(Mode):
         self.s0 = InchwormMode(self.inch_cfg, scenario, model).s0
         self.state = "off" if cfg.start_time_s > 0 else "rolling"
         self.since = float(cfg.start_time_s)
-        self.history_t, self.history_x = [], []
-        self.inch = None
+        self.history_t: list[float] = []
+        self.history_x: list[float] = []
+        self.inch: InchwormMode | None = None
         self.timeline = [(0.0, self.state)]
         self.cycles_total = 0
         from .. import steady  # root finding (scipy.optimize, slow to import): loaded by a run, not by validation
 
         seg0 = self.segments[0]
         self.rolling_limit_xt = steady.immobilisation_limit_xt(
-            seg0, model.tp, drawbar_N=model.tow_force_N / model.n, wheel_speed_mps=cfg.rolling_speed_mps
+            seg0, model.tp, drawbar_N=cast(float, model.tow_force_N) / model.n, wheel_speed_mps=cfg.rolling_speed_mps
         )
 
-    def initial_state(self):
+    def initial_state(self) -> NDArray[np.float64]:
         return self.model.initial_state(joint_extension_m=self.s0)
 
     # ------------------------------------------------------------------ helpers
-    def _x(self, y):
+    def _x(self, y: NDArray[np.float64]) -> NDArray[np.float64]:
         return self.model.field(self.model.unpack(y), "x_m")
 
-    def _leader_slip(self, y):
+    def _leader_slip(self, y: NDArray[np.float64]) -> float:
         m = self.model
         Y = m.unpack(y)
         w = Y[0, m.layout.omega] * m.seg.wheel_radius_m[0]
         return float(np.mean(terrain.slip(w, m.field(Y, "v_mps")[0], m.tp.slip_eps_mps)))
 
-    def _xt_under(self, y):
+    def _xt_under(self, y: NDArray[np.float64]) -> NDArray[np.float64]:
         return self.model.xt_at_axles(self._x(y)).mean(-1)
 
-    def _switch(self, t, y, new, kind, detail):
+    def _switch(self, t: float, y: NDArray[np.float64], new: str, kind: str, detail: str) -> None:
         self.state = new
         self.since = float(t)
         self.timeline.append((float(t), new))
@@ -200,7 +213,7 @@ class SupervisorMode(Mode):
             }
         )
 
-    def _stuck(self, t, y):
+    def _stuck(self, t: float, y: NDArray[np.float64]) -> tuple[bool, float | None, float | None]:
         """Immobilisation rule: (stuck?, mean speed over the window, leader slip)."""
         cfg = self.cfg
         if t - self.since < cfg.stuck_window_s - 1e-9:
@@ -211,7 +224,7 @@ class SupervisorMode(Mode):
         return (v_mean < cfg.stuck_speed_mps and s_lead > cfg.stuck_slip), v_mean, s_lead
 
     # ------------------------------------------------------------------ Mode interface
-    def interval(self, t, y):
+    def interval(self, t: float, y: NDArray[np.float64]) -> Interval:
         cfg, n = self.cfg, self.model.n
         if self.state == "off":
             if t < cfg.start_time_s - 1e-12:
@@ -236,14 +249,15 @@ class SupervisorMode(Mode):
             else:
                 ctl = Controls.rolling(n, np.ones(n), np.full(n, cfg.rolling_speed_mps))
                 return Interval(t + cfg.check_interval_s, ctl, [], "rolling")
-        iv = self.inch.interval(t, y)
+        iv = cast(InchwormMode, self.inch).interval(t, y)  # inching (made above if it was not)
         iv.label = f"inching: {iv.label}"
         return iv
 
-    def on_event(self, t, y, index):
-        before = self.inch.cycles_done
-        self.inch.on_event(t, y, index)
-        if self.inch.cycles_done == before:
+    def on_event(self, t: float, y: NDArray[np.float64], index: int) -> None:
+        inch = cast(InchwormMode, self.inch)  # events come from the gait's intervals only
+        before = inch.cycles_done
+        inch.on_event(t, y, index)
+        if inch.cycles_done == before:
             return
         self.cycles_total += 1
         surplus = chain_drawbar_surplus_N(self.model, self.segments, self._x(y), self.cfg.rolling_speed_mps)
@@ -259,7 +273,7 @@ class SupervisorMode(Mode):
             self.inch = None
             self.history_t, self.history_x = [], []
 
-    def summary(self, result):
+    def summary(self, result: Any) -> dict:
         t = result.t
         xbar = result.segments["x_m"].mean(1)
         bounds = [tt for tt, _ in self.timeline] + [float(t[-1])]

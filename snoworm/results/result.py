@@ -9,8 +9,11 @@ from __future__ import annotations
 import io
 import json
 import math
+import os
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -24,6 +27,21 @@ from ..model.quantities import output_series
 from . import frames
 from .copies import copy_inputs, input_problem
 from .energy import energy_along, energy_metrics
+
+if TYPE_CHECKING:
+    import pandas
+    import xarray
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+    from numpy.typing import NDArray
+
+    from ..config.scenario import Scenario
+    from ..model.chain import ChainModel
+    from ..model.inputs import Controls
+    from ..modes.base import Mode
+
+#: A figure size: "column", "page", "WxH" in inches or a (width, height) pair.
+FigureSize = str | tuple[float, float]
 
 __all__ = ["Result", "ResultFileError", "SEGMENT_COLUMNS", "LINK_COLUMNS", "load_result", "read_back"]
 
@@ -87,7 +105,7 @@ class Result:
         Mode-specific metrics.
     """
 
-    scenario: object
+    scenario: Scenario
     t: np.ndarray
     segments: dict
     links: dict
@@ -97,7 +115,15 @@ class Result:
     mode_summary: dict = field(default_factory=dict)
 
     @classmethod
-    def from_pieces(cls, sc, model, mode, pieces, phases, stats):
+    def from_pieces(
+        cls,
+        sc: Scenario,
+        model: ChainModel,
+        mode: Mode,
+        pieces: Sequence[tuple[NDArray[np.float64], NDArray[np.float64], Controls]],
+        phases: list[dict[str, Any]],
+        stats: dict[str, Any],
+    ) -> Result:
         seg_parts, link_parts, ts = [], [], []
         for t, ys, ctl in pieces:
             seg, lk = output_series(model, ys, ctl)
@@ -177,11 +203,11 @@ class Result:
         """``{"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS}``: quantity -> description [unit]."""
         return {"segments": SEGMENT_COLUMNS, "links": LINK_COLUMNS}
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         """A few lines (``Result.summary()``, ``.segments``, ``.scenario`` hold the detail)."""
         return frames.short_repr(self)
 
-    def to_pandas(self):
+    def to_pandas(self) -> pandas.DataFrame:
         """The run as ONE :class:`pandas.DataFrame`: a row per output time (index ``t_s``), and a
         column MultiIndex ``(kind, quantity, index)``: ``("segment", "v_mps", 0)``, ...,
         ``("link", "force_N", 0)``, ...  ``df["segment", "v_mps"]`` is a time x segment table,
@@ -193,15 +219,15 @@ class Result:
         """
         return frames.to_pandas(self)
 
-    def segments_frame(self):
+    def segments_frame(self) -> pandas.DataFrame:
         """The ``segments.csv`` table as a DataFrame (``t_s``, ``segment``, one column per quantity)."""
         return frames.frames(self)["segments"]
 
-    def links_frame(self):
+    def links_frame(self) -> pandas.DataFrame:
         """The ``links.csv`` table as a DataFrame (``t_s``, ``link``, one column per quantity)."""
         return frames.frames(self)["links"]
 
-    def to_xarray(self):
+    def to_xarray(self) -> xarray.Dataset:
         """The run as an :class:`xarray.Dataset`: dims ``time x segment`` and ``time x link``, units
         in each variable's attrs, the resolved scenario (YAML) and package versions in the
         Dataset's attrs.  Needs xarray (``pip install 'snoworm[data]'``); see
@@ -209,7 +235,14 @@ class Result:
         """
         return frames.to_xarray(self)
 
-    def plot(self, kind: str = "speeds", ax=None, fig=None, size=None, **kwargs):
+    def plot(
+        self,
+        kind: str = "speeds",
+        ax: Axes | Sequence[Axes] | None = None,
+        fig: Figure | None = None,
+        size: FigureSize | None = None,
+        **kwargs: Any,
+    ) -> Figure:
         """Draw one of the run's figures and return the :class:`~matplotlib.figure.Figure`.
 
         ``kind``: ``forces``, ``speeds``, ``positions``, ``force_diagram``, ``groups``, ``slip``,
@@ -244,11 +277,11 @@ class Result:
 
     def write(
         self,
-        out_dir,
+        out_dir: str | os.PathLike[str],
         plot: bool = True,
         plot_format: str = "png",
         overwrite: bool = False,
-        figure_size=None,
+        figure_size: FigureSize | None = None,
         *,
         command: str | None = None,
     ) -> list:
@@ -330,7 +363,7 @@ class ResultFileError(ValueError):
 MAX_READ_BYTES = 2**31
 
 
-def read_back(path, limit: int = MAX_READ_BYTES) -> str:
+def read_back(path: str | os.PathLike[str], limit: int = MAX_READ_BYTES) -> str:
     """The text of ``path``, a regular file (a FIFO or a device refused unread; ResultFileError)."""
     try:
         return read_small_file(path, limit).decode("utf-8")
@@ -342,7 +375,9 @@ def read_back(path, limit: int = MAX_READ_BYTES) -> str:
         raise ResultFileError(f"{path}: not UTF-8 text") from None
 
 
-def _read_table(path, index, columns, n_rows):
+def _read_table(
+    path: Path, index: str, columns: Iterable[str], n_rows: int
+) -> tuple[NDArray[np.float64] | None, dict[str, NDArray[np.float64]]]:
     """(t, {column: ndarray (n_t, n_rows)}) of a ``segments.csv`` / ``links.csv`` with ``n_rows``
     segments or links, every shape and value checked (ResultFileError naming the file)."""
     text = read_back(path)
@@ -377,7 +412,7 @@ def _read_table(path, index, columns, n_rows):
     return t, {c: got[c] if c in got else np.zeros((t.size, n_rows)) for c in columns}
 
 
-def _read_summary_json(path) -> dict:
+def _read_summary_json(path: Path) -> dict:
     try:
         summary = json.loads(read_back(path, 2**26))
     except (ValueError, RecursionError) as exc:
@@ -393,7 +428,7 @@ def _read_summary_json(path) -> dict:
     return summary
 
 
-def load_result(run_dir) -> Result:
+def load_result(run_dir: str | os.PathLike[str]) -> Result:
     """Read a run folder written by :meth:`Result.write` (or ``snoworm run``) back into a Result.
 
     The series come from ``segments.csv`` and ``links.csv``, so they carry the files' precision:
@@ -447,7 +482,7 @@ def load_result(run_dir) -> Result:
     )
 
 
-def _csv(cols, data, int_cols=(), t_decimals=4):
+def _csv(cols: Sequence[str], data: NDArray[np.float64], int_cols: Sequence[int] = (), t_decimals: int = 4) -> str:
     """CSV text of ``data`` (rows of samples) under header ``cols``: time with ``t_decimals``
     decimals, ``int_cols`` as integers, the rest to 6 significant digits (as ``np.savetxt`` with
     these formats would write, in one formatting operation instead of one per row)."""

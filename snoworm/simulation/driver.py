@@ -13,8 +13,11 @@ result as if it were whole.
 from __future__ import annotations
 
 import logging
+import os
 import time
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -23,11 +26,15 @@ from ..config.schema import quote
 from ..dynamics import ChainModel
 from ..model.arrays import LinkArrays, SegmentArrays
 from ..model.inputs import Controls
-from ..modes.base import build_mode
+from ..modes.base import Mode, build_mode
 from ..results.result import Result
 from .guard import SolverError, check_sane, guarded
 from .interval import IntervalSolver, output_grid
 from .stepper import WHOLE_RUNS, ChainStepper
+
+if TYPE_CHECKING:
+    from ..config.sections import SimulationConfig
+    from .guard import Piece
 
 __all__ = [
     "SolverError",
@@ -56,19 +63,19 @@ class AssembledRun:
     The mode holds what it prepared on the model (e.g. the force-control plan,
     :meth:`~snoworm.config.mode_registry.ModeConfig.prepare`)."""
 
-    scenario: object
+    scenario: Scenario
     model: ChainModel
-    mode: object
+    mode: Mode
 
 
-def _check_scenario(sc) -> None:
+def _check_scenario(sc: object) -> None:
     if not isinstance(sc, Scenario):
         raise TypeError(
             f"scenario: expected a Scenario, got {quote(sc, 60)}; read one with snoworm.load_scenario(name or path)"
         )
 
 
-def chain_model(sc) -> ChainModel:
+def chain_model(sc: Scenario) -> ChainModel:
     """A new :class:`~snoworm.dynamics.ChainModel` of a scenario's chain, built from its data.
 
     The one place a scenario's values become the kernel's arrays (per-segment parameters with
@@ -95,7 +102,9 @@ def chain_model(sc) -> ChainModel:
     )
 
 
-def assemble(sc, model: ChainModel | None = None, allow_code=()) -> AssembledRun:
+def assemble(
+    sc: Scenario, model: ChainModel | None = None, allow_code: Iterable[str | os.PathLike[str]] = ()
+) -> AssembledRun:
     """Assemble a scenario for one run: its chain model (:func:`chain_model`, or ``model`` if the
     caller built it for this run already) and a new instance of its mode on that model (which
     prepares its plan on it, e.g. the force-control targets; :func:`snoworm.modes.base.build_mode`,
@@ -116,7 +125,7 @@ def assemble(sc, model: ChainModel | None = None, allow_code=()) -> AssembledRun
     return AssembledRun(sc, model, build_mode(sc.mode, sc, model, allow_code))
 
 
-def check_assembly(sc) -> None:
+def check_assembly(sc: Scenario) -> None:
     """The checks of :func:`assemble` without making the mode: build the chain model and the mode
     config's plan on it (:meth:`~snoworm.config.mode_registry.ModeConfig.prepare`); no user code
     runs.  ``snoworm validate`` calls it.
@@ -130,7 +139,13 @@ def check_assembly(sc) -> None:
     sc.mode.prepare(sc, model)
 
 
-def _interval_solve(models, modes, sim, name, progress):
+def _interval_solve(
+    models: Sequence[ChainModel],
+    modes: Sequence[Mode],
+    sim: SimulationConfig,
+    name: str,
+    progress: Callable[[float, float], object] | None,
+) -> tuple[Callable[..., tuple[Any, ...]], dict[str, Any]]:
     """``(solve, stats)``: the interval solve of a run's members, ``solve(ctl, t, t1, y, events,
     t_eval, label) -> (ts, ys, t_next, y_next, event_index)`` as
     :meth:`IntervalSolver.solve <snoworm.simulation.interval.IntervalSolver.solve>`.
@@ -140,7 +155,7 @@ def _interval_solve(models, modes, sim, name, progress):
     :class:`~snoworm.simulation.stepper.ChainStepper` under its batched sweeps' policy
     (:data:`~snoworm.simulation.stepper.WHOLE_RUNS`: one stack of the members, the scenario's
     method, a failed stack raises :class:`SolverError`)."""
-    options = {
+    options: dict[str, Any] = {
         "carry_history": all(getattr(md, "continue_solver", False) for md in modes),
         "progress": progress,
         "asked_steps": all(getattr(md, "steps_asked", False) for md in modes),
@@ -150,14 +165,22 @@ def _interval_solve(models, modes, sim, name, progress):
         return solver.solve, solver.stats
     stepper = ChainStepper.of_members(models, sim, name, policy=WHOLE_RUNS, **options)
 
-    def solve(ctl, t, t1, y, events, t_eval, label):
+    def solve(
+        ctl: Controls, t: float, t1: float, y: np.ndarray, events: object, t_eval: np.ndarray, label: str
+    ) -> tuple[Any, ...]:
         ys, y_end, _, _ = stepper.solve(ctl, t, t1, y, t_eval, label)
         return np.asarray(t_eval, float), ys.reshape(len(t_eval), -1), t1, y_end.reshape(-1), None
 
     return solve, stepper.stats
 
 
-def _integrate(models, modes, sim, name, progress=None):
+def _integrate(
+    models: Sequence[ChainModel],
+    modes: Sequence[Mode],
+    sim: SimulationConfig,
+    name: str,
+    progress: Callable[[float, float], object] | None = None,
+) -> tuple[list[list[Piece]], list[dict[str, Any]], dict[str, Any]]:
     """THE interval loop: ``modes`` drive the chains ``models`` (one per member; several: a batch,
     stacked by :func:`_interval_solve`).
 
@@ -170,7 +193,8 @@ def _integrate(models, modes, sim, name, progress=None):
     B = len(modes)
     t, T = 0.0, sim.duration_s
     y = np.concatenate([md.initial_state() for md in modes])
-    pieces, phases = [[] for _ in range(B)], []
+    pieces: list[list[Piece]] = [[] for _ in range(B)]
+    phases: list[dict[str, Any]] = []
     solve, stats = _interval_solve(models, modes, sim, name, progress)
     stuck = 0
     while t < T - 1e-12:
@@ -204,7 +228,13 @@ def _integrate(models, modes, sim, name, progress=None):
     return pieces, phases, stats
 
 
-def _guarded_integrate(models, modes, sim, name, progress=None):
+def _guarded_integrate(
+    models: Sequence[ChainModel],
+    modes: Sequence[Mode],
+    sim: SimulationConfig,
+    name: str,
+    progress: Callable[[float, float], object] | None = None,
+) -> tuple[list[list[Piece]], list[dict[str, Any]], dict[str, Any]]:
     """:func:`_integrate` under :func:`~snoworm.simulation.guard.guarded`, each member's results
     checked by :func:`~snoworm.simulation.guard.check_sane` against its own chain."""
     pieces, phases, stats = guarded(lambda: _integrate(models, modes, sim, name, progress), name)
@@ -213,7 +243,11 @@ def _guarded_integrate(models, modes, sim, name, progress=None):
     return pieces, phases, stats
 
 
-def simulate(sc, progress=None, allow_code=()) -> Result:
+def simulate(
+    sc: Scenario,
+    progress: Callable[[float, float], object] | None = None,
+    allow_code: Iterable[str | os.PathLike[str]] = (),
+) -> Result:
     """Run a scenario and return its :class:`~snoworm.results.result.Result`.
 
     ``progress``: optional callable ``progress(t_s, duration_s)``, called after each integration
@@ -238,12 +272,12 @@ def simulate(sc, progress=None, allow_code=()) -> Result:
     return Result.from_pieces(sc, case.model, case.mode, pieces[0], phases, stats)
 
 
-def _assembled(run) -> AssembledRun:
+def _assembled(run: Scenario | AssembledRun) -> AssembledRun:
     """``run`` if it is an :class:`AssembledRun`, else the scenario assembled (:func:`assemble`)."""
     return run if isinstance(run, AssembledRun) else assemble(run)
 
 
-def batch_key(run):
+def batch_key(run: Scenario | AssembledRun) -> tuple[Any, ...] | None:
     """A hashable key shared by the runs that can run as one stacked system, or None.
 
     ``run``: a Scenario (its chain model is built here if its mode can run in a stack) or an
@@ -283,13 +317,13 @@ class BatchMember:
     """Outcome of one member of a batched run: ``status`` ``"ok"`` with its ``result``, or
     ``"solver_failure"`` with the solver's message in ``error``."""
 
-    scenario: object
+    scenario: Scenario
     result: Result | None
     status: str
     error: str = ""
 
 
-def simulate_batch(scenarios) -> list:
+def simulate_batch(scenarios: Iterable[Scenario | AssembledRun]) -> list[BatchMember]:
     """Run scenarios of one :func:`batch_key` as ONE stacked system through the same interval driver.
 
     ``scenarios``: Scenarios, or runs assembled already (:class:`AssembledRun`, e.g. to compute
@@ -352,7 +386,7 @@ def simulate_batch(scenarios) -> list:
     ]
 
 
-def _alone(sc) -> BatchMember:
+def _alone(sc: Scenario) -> BatchMember:
     try:
         return BatchMember(sc, simulate(sc), "ok")
     except SolverError as exc:

@@ -12,8 +12,22 @@ from __future__ import annotations
 
 import time
 import warnings
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import NDArray
+
+    from ..config.sections import SimulationConfig
+    from ..model.chain import ChainModel
+    from ..model.inputs import Controls
+
+    #: One solved stretch of a member: output times, states (one row per time), the controls held.
+    Piece = tuple[NDArray[np.float64], NDArray[np.float64], Controls]
+
+_T = TypeVar("_T")
 
 __all__ = [
     "SolverError",
@@ -53,7 +67,7 @@ WORK_NFEV_PER_INTERVAL = 100
 SPEED_SANITY_FACTOR = 5.0
 
 
-def work_rate(sim) -> float:
+def work_rate(sim: SimulationConfig) -> float:
     """Right-hand-side evaluations allowed per simulated second for the run's tolerances."""
     tol = min(sim.rtol, 1e-5 * sim.atol_scale)
     return WORK_NFEV_PER_S * max(1.0, (1e-5 / tol) ** 0.25)
@@ -75,28 +89,34 @@ class WorkMeter:
     hears of the time reached within long intervals, every :data:`PROGRESS_EVERY_S` of wall time.
     """
 
-    def __init__(self, sim, name, progress=None, per_interval=0):
+    def __init__(
+        self,
+        sim: SimulationConfig,
+        name: str,
+        progress: Callable[[float, float], object] | None = None,
+        per_interval: int = 0,
+    ) -> None:
         self.name, self.rate, self.max_wall_s = name, work_rate(sim), sim.max_wall_s
         #: right-hand sides allowed per interval started (:data:`WORK_NFEV_PER_INTERVAL` for steps asked)
         self.per_interval = per_interval
         self.duration_s = sim.duration_s
-        self.t0 = None
+        self.t0: float | None = None
         #: intervals started (:meth:`start`)
         self.intervals = 0
         self.wall0 = self._shown = time.perf_counter()
         self.progress = progress
 
-    def start(self, t):
+    def start(self, t: float) -> None:
         """An interval starts at ``t``: counted; simulated time counts from the first one's start."""
         if self.t0 is None:
             self.t0 = float(t)
         self.intervals += 1
 
-    def limit(self, t) -> float:
+    def limit(self, t: float) -> float:
         """Right-hand sides allowed by time ``t`` (in the current interval)."""
-        return WORK_BASE_NFEV + self.rate * (t - self.t0) + self.per_interval * self.intervals
+        return WORK_BASE_NFEV + self.rate * (t - cast(float, self.t0)) + self.per_interval * self.intervals
 
-    def check(self, nfev, t):
+    def check(self, nfev: int, t: float) -> None:
         """Raise :class:`SolverError` if ``nfev`` right-hand sides by time ``t`` exceed the limits."""
         if nfev > self.limit(t):
             raise SolverError(
@@ -119,15 +139,15 @@ class WorkMeter:
             self._shown = time.perf_counter()
             self.progress(min(t, self.duration_s), self.duration_s)
 
-    def counted(self, fun, nfev0):
+    def counted(self, fun: Callable[..., _T], nfev0: int) -> Callable[..., _T]:
         """``fun(t, y, *args)`` counting its calls from ``nfev0`` against the limits (for ``solve_ivp``);
         the count so far is the returned function's ``calls[0]``."""
-        calls, t_max = [nfev0], [self.t0]
-        check, rate, t0 = self.check, self.rate, self.t0
+        check, rate, t0 = self.check, self.rate, cast(float, self.t0)
+        calls, t_max = [nfev0], [t0]
         wall = self.max_wall_s is not None or self.progress is not None
         base = WORK_BASE_NFEV + self.per_interval * self.intervals
 
-        def f(t, y, *args):
+        def f(t: float, y: NDArray[np.float64], *args: Any) -> _T:
             n = calls[0] = calls[0] + 1
             if t > t_max[0]:
                 t_max[0] = t
@@ -135,11 +155,11 @@ class WorkMeter:
                 check(n, t_max[0])
             return fun(t, y, *args)
 
-        f.calls = calls
+        f.calls = calls  # type: ignore[attr-defined]  # a counter the interval solver reads
         return f
 
 
-def check_sane(model, pieces, name):
+def check_sane(model: ChainModel, pieces: Sequence[Sequence[Piece]], name: str) -> None:
     """Raise SolverError if a member's states are non-finite or its speeds far beyond the no-load speed."""
     lay = model.layout
     vnl = float(np.max(np.asarray(model.seg.wheel_radius_m) * np.asarray(model.seg.no_load_speed_radps)))
@@ -167,7 +187,7 @@ def check_sane(model, pieces, name):
                 )
 
 
-def guarded(fn, name):
+def guarded(fn: Callable[[], _T], name: str) -> _T:
     """``fn()`` with numpy/scipy warnings kept quiet and the solver's own breakdowns (singular
     matrices, ...) as :class:`SolverError`."""
     with np.errstate(all="ignore"), warnings.catch_warnings():

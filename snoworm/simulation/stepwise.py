@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -32,6 +34,12 @@ from .driver import assemble
 from .guard import SolverError
 from .interval import output_grid
 from .stepper import ChainStepper
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike, NDArray
+
+    from ..config.scenario import Scenario
+    from ..model.inputs import Controls
 
 __all__ = ["Simulator", "Observation", "COMMAND_KEYS", "DT_MIN_S"]
 
@@ -62,7 +70,7 @@ class Simulator:
         ``(ts, ys, controls)`` of the last step: its output times, flat states and controls.
     """
 
-    def __init__(self, scenario, record: bool = True):
+    def __init__(self, scenario: Scenario, record: bool = True) -> None:
         self.scenario, self.record = scenario, bool(record)
         case = assemble(scenario)
         self.model = case.model
@@ -74,17 +82,19 @@ class Simulator:
         self.t_s = 0.0
         self._y = self._y0.copy()
         self.commands = CommandState(self.model)
-        self._pieces, self._phases, self._samples = [], [], 0
+        self._pieces: list[tuple[NDArray[np.float64], NDArray[np.float64], Controls]] = []
+        self._phases: list[dict[str, Any]] = []
+        self._samples = 0
         # the one stepper of one chain or many (simulation.stepper); VODE (simulation.method) carries
         # its history across steps
         self._stepper = ChainStepper(self.model, self.scenario.simulation, 1, "step")
         self._stepper.carry_history = True
         self._wall_s = 0.0
-        self.last_step = None
+        self.last_step: tuple[NDArray[np.float64], NDArray[np.float64], Controls] | None = None
         return self.observation()
 
     @property
-    def state(self) -> np.ndarray:
+    def state(self) -> NDArray[np.float64]:
         """The flat state at :attr:`t_s` (a copy)."""
         return self._y.copy()
 
@@ -92,7 +102,7 @@ class Simulator:
         """The :class:`Observation` at the time reached (under the command held up to it)."""
         return observe(self.model, self._y, self.commands.controls, self.t_s)
 
-    def step(self, command, dt, restart=False) -> Observation:
+    def step(self, command: Mapping[str, ArrayLike] | None, dt: float, restart: bool = False) -> Observation:
         """Hold ``command`` for ``dt`` seconds and return the observation at the end.
 
         Parameters
@@ -143,7 +153,7 @@ class Simulator:
         self._wall_s += time.perf_counter() - wall0
         return self.observation()
 
-    def _check_dt(self, dt) -> float:
+    def _check_dt(self, dt: Any) -> float:
         """``dt`` as a float within [:data:`DT_MIN_S`, the output cap] (ValueError naming it otherwise)."""
         ok = not isinstance(dt, bool) and isinstance(dt, (int, float, np.floating, np.integer))
         try:

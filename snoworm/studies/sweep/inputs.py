@@ -100,7 +100,7 @@ def input_hashes(raw, axes, base_dir) -> dict:
     return out
 
 
-def changed_inputs(old: dict, new: dict) -> list:
+def changed_inputs(old: dict | None, new: dict | None) -> list:
     """Paths whose hash differs between two :func:`input_hashes` (added or removed ones too)."""
     old, new = old or {}, new or {}
     return sorted(p for p in set(old) | set(new) if old.get(p) != new.get(p))

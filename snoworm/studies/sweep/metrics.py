@@ -148,7 +148,7 @@ def save_case_series(result, save_dir, lock_token=None) -> dict:
     return {}
 
 
-def one_line(text: str) -> str:
+def one_line(text: object) -> str:
     """``text`` on one line (line breaks become `` | ``), cut to :data:`MAX_ERROR_CHARS`."""
     text = " | ".join(s.strip() for s in str(text).splitlines() if s.strip())
     return text if len(text) <= MAX_ERROR_CHARS else text[: MAX_ERROR_CHARS - 3] + "..."
@@ -187,7 +187,7 @@ class SweepTask:
     scenario: Scenario | None = None
     source: str = "scenario"
     base_dir: str | None = None
-    save_dir: Path | None = None
+    save_dir: str | Path | None = None
     allow_code: tuple = ()
     lock_token: str | None = None
 

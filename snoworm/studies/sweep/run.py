@@ -19,9 +19,11 @@ import json
 import logging
 import os
 import sys
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass, field as dc_field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal, Protocol, TextIO, cast
 
 from ..._version import __version__
 from ...config.scenario import Scenario, apply_overrides, read_scenario_yaml, scenario_from_dict
@@ -41,11 +43,31 @@ from .series import SERIES_FORMATS, case_series_path, cases_with_series, combine
 from .spec import as_axes, build_cases
 from .summary import SweepTable, prepare_dir, summary_columns, write_plot
 
+if TYPE_CHECKING:
+    from ...infra.locks import FolderLease
+    from ...results.result import FigureSize
+    from .spec import Axis, SweepCase
+
+    #: A sweep's base scenario: a YAML path or shipped name, a Scenario or a scenario mapping.
+    ScenarioSource = str | os.PathLike[str] | Scenario | dict
+    #: An axis: ``"KEY=SPEC"``, a ``(key, spec)`` pair or an :class:`Axis`.
+    AxisSpec = str | tuple[str, Any] | Axis
+
+
+class SweepExecutor(Protocol):
+    """Where a sweep's cases run (:func:`run_sweep`'s ``executor``): ``fn(task)`` for every task,
+    yielded in any order, and ``close()``."""
+
+    def map_unordered(self, fn: Callable[[SweepTask], dict], tasks: Iterable[SweepTask]) -> Iterator[dict]: ...
+
+    def close(self) -> None: ...
+
+
 __all__ = ["run_sweep", "SweepPlan", "KEEP_VALIDATED_MAX", "plan_sweep"]
 
 
 # ------------------------------------------------------------------------------------- the plan
-def _base(scenario):
+def _base(scenario: ScenarioSource) -> tuple[dict, str, str | None]:
     """(raw mapping, source name, base_dir) of a path or a Scenario object."""
     if isinstance(scenario, Scenario):
         bd = scenario.origin.base_dir if scenario.origin is not None else None
@@ -56,7 +78,7 @@ def _base(scenario):
     return raw, str(path), str(path.resolve().parent)
 
 
-def _definition(raw, axes, zip_, base_dir=None):
+def _definition(raw: dict, axes: list[Axis], zip_: bool, base_dir: str | None = None) -> dict:
     """The resume key: the scenario mapping, the axes, the snoworm version and the contents of
     every file they name (:mod:`snoworm.studies.sweep.inputs`)."""
     return json.loads(
@@ -92,7 +114,7 @@ class SweepPlan:
     allow_code: list = dc_field(default_factory=list)
 
     @property
-    def keys(self):
+    def keys(self) -> list[str]:
         return [a.key for a in self.axes]
 
 
@@ -102,7 +124,16 @@ class SweepPlan:
 KEEP_VALIDATED_MAX = 20_000
 
 
-def plan_sweep(scenario, sets, zip_, save_cases, out_dir, jobs, keep=False, allow_code=()) -> SweepPlan:
+def plan_sweep(
+    scenario: ScenarioSource,
+    sets: Iterable[AxisSpec],
+    zip_: bool,
+    save_cases: bool,
+    out_dir: str | os.PathLike[str] | None,
+    jobs: int,
+    keep: bool = False,
+    allow_code: Iterable[str | os.PathLike[str]] = (),
+) -> SweepPlan:
     """Parse the axes, build the cases and validate each one (about 2 ms a case).
 
     ``keep``: the cases run in this process or its own worker pool; keep their validated
@@ -114,7 +145,16 @@ def plan_sweep(scenario, sets, zip_, save_cases, out_dir, jobs, keep=False, allo
     return plan
 
 
-def _plan_cases(scenario, sets, zip_, save_cases, out_dir, jobs, keep, allow_code) -> SweepPlan:
+def _plan_cases(
+    scenario: ScenarioSource,
+    sets: Iterable[AxisSpec],
+    zip_: bool,
+    save_cases: bool,
+    out_dir: str | os.PathLike[str] | None,
+    jobs: int,
+    keep: bool,
+    allow_code: list[str],
+) -> SweepPlan:
     axes = as_axes(sets)
     raw, source, base_dir = _base(scenario)
     if not isinstance(raw, dict):
@@ -163,46 +203,46 @@ class _Progress:
     """Cases done, failures, time left: a bar on a terminal, a line per ~10 % otherwise
     (:class:`snoworm.infra.progress.Progress`)."""
 
-    def __init__(self, total, already, stream, enabled):
+    def __init__(self, total: int, already: int, stream: TextIO, enabled: bool) -> None:
         self.already, self.done, self.failed = already, 0, 0
         self.bar = Progress(total, "sweep", "cases", stream, mode="auto" if enabled else "off")
         self.bar.value = float(already)
 
-    def _info(self):
+    def _info(self) -> str:
         return f"{self.failed} failed" + (f", {self.already} resumed" if self.already else "")
 
-    def update(self, failed: bool):
+    def update(self, failed: bool) -> None:
         self.done += 1
         self.failed += int(failed)
         self.bar.set(self.already + self.done, info=self._info())
 
-    def show(self):
+    def show(self) -> None:
         self.bar.set(self.already + self.done, info=self._info())
 
-    def close(self):
+    def close(self) -> None:
         self.bar.close(info=self._info())
 
 
 # ---------------------------------------------------------------------------------- driver
 def run_sweep(
-    scenario,
-    sets,
-    out_dir=None,
+    scenario: ScenarioSource,
+    sets: Iterable[AxisSpec],
+    out_dir: str | os.PathLike[str] | None = None,
     *,
     jobs: int = 1,
-    scheduler=None,
+    scheduler: Any = None,
     zip_: bool = False,
     save_cases: bool = False,
-    progress=None,
+    progress: bool | None = None,
     plot: bool = True,
-    executor=None,
+    executor: SweepExecutor | None = None,
     batch: int = 0,
     series: str = "folders",
     plot_format: str = "png",
     overwrite: bool = False,
-    allow_code=(),
+    allow_code: Iterable[str | os.PathLike[str]] = (),
     restart: bool = False,
-    figure_size=None,
+    figure_size: FigureSize | None = None,
     command: str | None = None,
 ) -> SweepTable:
     """Run a scenario over a grid (or zip) of values and return the summary table.
@@ -277,11 +317,13 @@ def run_sweep(
     return _on_executor(plan, out, executor, (scheduler, batch, jobs), opts)
 
 
-def _on_executor(plan, out, executor, how, opts) -> SweepTable:
+def _on_executor(
+    plan: SweepPlan, out: Path | None, executor: SweepExecutor | None, how: tuple[Any, int, int], opts: _Options
+) -> SweepTable:
     """Run the planned sweep on ``executor`` (None: a new one for ``how`` = (scheduler, batch, jobs),
     closed at the end); an I/O failure becomes :class:`OutputError`."""
     own = executor is None
-    if own:  # before anything is written: an unreachable scheduler writes nothing
+    if executor is None:  # before anything is written: an unreachable scheduler writes nothing
         executor = _make_executor(*how)
     try:
         return _in_folder(plan, out, executor, own, opts)
@@ -292,7 +334,7 @@ def _on_executor(plan, out, executor, how, opts) -> SweepTable:
         ) from None
 
 
-def _new_output_folder(out_dir, overwrite):
+def _new_output_folder(out_dir: str | os.PathLike[str] | None, overwrite: bool) -> Path | None:
     """``out_dir`` as a Path (None: nothing is written), checked before any case runs unless it holds
     a sweep already (resumed or refused later, by :func:`~snoworm.studies.sweep.summary.prepare_dir`)."""
     out = Path(os.path.abspath(out_dir)) if out_dir is not None else None  # once: a chdir does not move it
@@ -323,17 +365,17 @@ def _check_series(series: str) -> bool:
 class _Options:
     """How a sweep reports and what it writes besides the table (:func:`run_sweep`'s options)."""
 
-    progress: object  # None/True: progress on stderr; False: none
+    progress: bool | None  # None/True: progress on stderr; False: none
     plot: bool
     zip_: bool
-    keep_series: object  # False, or the series format ("folders" or "netcdf")
+    keep_series: str | Literal[False]  # False, or the series format ("folders" or "netcdf")
     overwrite: bool
     plot_format: str
-    figure_size: object  # print size of the plot (None: page width)
+    figure_size: FigureSize | None  # print size of the plot (None: page width)
     command: str | None  # the command line the manifest records (None: this process's)
 
 
-def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
+def _in_folder(plan: SweepPlan, out: Path | None, executor: SweepExecutor, own: bool, opts: _Options) -> SweepTable:
     """Run the sweep with ``out`` (or None) locked and prepared."""
     with ExitStack() as stack:
         done, lease = {}, None
@@ -358,7 +400,7 @@ def _in_folder(plan, out, executor, own, opts: _Options) -> SweepTable:
         return table
 
 
-def _rerun_without_series(plan, done, out, opts: _Options) -> dict:
+def _rerun_without_series(plan: SweepPlan, done: dict[int, dict], out: Path, opts: _Options) -> dict[int, dict]:
     """``done`` without the finished ``ok`` cases whose time series are missing when this sweep
     keeps them (a resume adding ``--series netcdf`` or ``--save-cases``): those cases run again
     (their rows removed from ``summary.csv`` first), and a warning says how many."""
@@ -381,14 +423,22 @@ def _rerun_without_series(plan, done, out, opts: _Options) -> dict:
     return keep
 
 
-def _mkdir(out: Path):
+def _mkdir(out: Path) -> None:
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputError(f"cannot write results: {os_error_message(exc, out)}") from None
 
 
-def _run(plan, done, out, executor, own, opts: _Options, lease=None) -> SweepTable:
+def _run(
+    plan: SweepPlan,
+    done: dict[int, dict],
+    out: Path | None,
+    executor: SweepExecutor,
+    own: bool,
+    opts: _Options,
+    lease: FolderLease | None = None,
+) -> SweepTable:
     """Run the cases still to do, then write ``series.nc`` and the plot (``lease``: the folder's
     lock, checked before each write: a folder replaced meanwhile gets nothing)."""
     bar = _Progress(len(plan.cases), len(done), sys.stderr, opts.progress is None or bool(opts.progress))
@@ -414,7 +464,7 @@ def _run(plan, done, out, executor, own, opts: _Options, lease=None) -> SweepTab
     return table
 
 
-def _make_executor(scheduler, batch, jobs):
+def _make_executor(scheduler: Any, batch: int, jobs: int) -> SweepExecutor:
     """The executor of ``scheduler`` / ``batch`` / ``jobs`` (see :func:`run_sweep`)."""
     if scheduler is not None:
         return DaskExecutor(scheduler)
@@ -431,22 +481,24 @@ class _Recorder:
     """Turns each case's result into a row: kept in ``rows``, appended to ``summary.csv`` (one
     ``write`` and ``fsync`` per case) and counted on the progress line."""
 
-    def __init__(self, plan: SweepPlan, rows: dict, out, bar, lease=None):
+    def __init__(
+        self, plan: SweepPlan, rows: dict, out: Path | None, bar: _Progress, lease: FolderLease | None = None
+    ) -> None:
         self.plan, self.rows, self.bar, self.lease = plan, rows, bar, lease
         self.table = SweepTable(plan.columns, [], plan.keys)
         self.path = out / "summary.csv" if out is not None else None
-        self.fd = None
+        self.fd: int | None = None
 
-    def open(self):
+    def open(self) -> None:
         if self.path is not None:
             self.fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | getattr(os, "O_NOFOLLOW", 0))
 
-    def close(self):
+    def close(self) -> None:
         if self.fd is not None:
             os.close(self.fd)
             self.fd = None
 
-    def record(self, c, result):
+    def record(self, c: SweepCase, result: dict) -> None:
         if result.get("output_error"):  # the case's series could not be saved: stop, not recorded
             raise OutputError(self._unsaved(c, result["output_error"]))
         row = {"case_id": c.case_id, "case_key": c.key, **dict(zip(self.plan.keys, c.values))}
@@ -472,7 +524,7 @@ class _Recorder:
         self.rows[c.index] = row
         self.bar.update(row["status"] != "ok")
 
-    def _unsaved(self, c, why) -> str:
+    def _unsaved(self, c: SweepCase, why: object) -> str:
         where = self.path.parent if self.path is not None else "memory"
         return (
             f"cannot save the series of case {c.case_id}: {str(why).rstrip('.')}. The sweep stopped; its "
@@ -481,7 +533,13 @@ class _Recorder:
         )
 
 
-def _tasks(plan: SweepPlan, todo, out, keep_series, token=None):
+def _tasks(
+    plan: SweepPlan,
+    todo: Iterable[SweepCase],
+    out: Path | None,
+    keep_series: str | Literal[False],
+    token: str | None = None,
+) -> Iterator[SweepTask]:
     """The tasks of the cases still to run (:class:`SweepTask`, made one at a time).
 
     ``keep_series``: False, or where the cases' series go ("folders" or "netcdf"); ``token``: the
@@ -489,7 +547,7 @@ def _tasks(plan: SweepPlan, todo, out, keep_series, token=None):
     for c in todo:
         if c.index in plan.invalid:
             continue
-        save = case_series_path(out, c.case_id, keep_series) if keep_series else None
+        save = case_series_path(cast(Path, out), c.case_id, keep_series) if keep_series else None  # kept: out given
         sc = plan.scenarios.pop(c.index, None)  # validated by _plan: not again
         raw = apply_overrides(plan.raw, c.overrides(plan.axes)) if sc is None else None
         yield SweepTask(
@@ -504,7 +562,15 @@ def _tasks(plan: SweepPlan, todo, out, keep_series, token=None):
         )
 
 
-def _execute(plan: SweepPlan, todo, executor, rec: _Recorder, own: bool, out, series):
+def _execute(
+    plan: SweepPlan,
+    todo: list[SweepCase],
+    executor: SweepExecutor,
+    rec: _Recorder,
+    own: bool,
+    out: Path | None,
+    series: tuple[str | Literal[False], str | None],
+) -> None:
     """Record the invalid cases, run the others on ``executor``, record each as it finishes; then
     close the progress line, the executor (if the sweep made it) and ``summary.csv``.  ``series``:
     (the series format or False, the lock's token or None), see :func:`_tasks`."""
@@ -519,7 +585,14 @@ def _execute(plan: SweepPlan, todo, executor, rec: _Recorder, own: bool, out, se
         rec.close()
 
 
-def _run_cases(plan: SweepPlan, todo, executor, rec: _Recorder, out, series):
+def _run_cases(
+    plan: SweepPlan,
+    todo: list[SweepCase],
+    executor: SweepExecutor,
+    rec: _Recorder,
+    out: Path | None,
+    series: tuple[str | Literal[False], str | None],
+) -> None:
     by_index = {c.index: c for c in plan.cases}
     try:
         for c in todo:

@@ -20,7 +20,9 @@ import math
 import os
 import shutil
 import warnings
+from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import yaml
@@ -37,6 +39,15 @@ from .inputs import changed_inputs
 from .metrics import METRIC_COLUMNS
 from .series import SERIES_FILE, expected_dims, load_series
 from .spec import parse_scalar
+
+if TYPE_CHECKING:
+    import pandas
+    import xarray
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from ...results.result import FigureSize
+    from .spec import Axis, SweepCase
 
 __all__ = [
     "SweepTable",
@@ -56,7 +67,7 @@ MAX_SWEEP_JSON = 64 * 2**20
 MAX_SUMMARY_BYTES = 2**30
 
 
-def summary_columns(axes, n_links) -> list:
+def summary_columns(axes: Sequence[Axis], n_links: int) -> list[str]:
     """Columns of ``summary.csv``: ids, swept keys, status, metrics, link forces, wall time."""
     return (
         ["case_id", "case_key"]
@@ -68,7 +79,7 @@ def summary_columns(axes, n_links) -> list:
     )
 
 
-def _parse_cell(col, text, swept):
+def _parse_cell(col: str, text: str, swept: Collection[str]) -> Any:
     if col in ("case_id", "case_key", "status", "error"):
         return text
     if text == "":
@@ -100,29 +111,38 @@ class SweepTable:
         The sweep's output directory (None for a sweep run without one).
     """
 
-    def __init__(self, columns, rows, keys=(), out_dir=None):
+    #: the swept dimensions series.nc must have (set by load_sweep; checked when it is read)
+    series_dims: dict[str, int] | None
+
+    def __init__(
+        self,
+        columns: Iterable[str],
+        rows: Iterable[dict[str, Any]],
+        keys: Iterable[str] = (),
+        out_dir: str | os.PathLike[str] | None = None,
+    ) -> None:
         self.columns = list(columns)
         self.keys = list(keys)
         self.rows = sorted(rows, key=lambda r: r["case_id"])
         self.out_dir = Path(out_dir) if out_dir is not None else None
         self.dropped = 0  #: lines of summary.csv dropped when read back (load_sweep)
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(self.rows)
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[dict[str, Any]]:
         return iter(self.rows)
 
-    def __getitem__(self, name):
+    def __getitem__(self, name: str) -> list:
         """A column as a list (``table["mean_speed_mps"]``)."""
         return self.column(name)
 
-    def column(self, name) -> list:
+    def column(self, name: str) -> list:
         if name not in self.columns:
             raise KeyError(f"no column {name!r}; columns: {', '.join(self.columns)}")
         return [r.get(name) for r in self.rows]
 
-    def to_pandas(self):
+    def to_pandas(self) -> pandas.DataFrame:
         """The table as a :class:`pandas.DataFrame`, one row per case (sorted by case id), the
         columns of ``summary.csv`` (the swept keys under their dotted names).  Needs pandas
         (``pip install 'snoworm[data]'``)."""
@@ -131,7 +151,7 @@ class SweepTable:
         df.attrs["keys"] = list(self.keys)
         return df
 
-    def series(self):
+    def series(self) -> xarray.Dataset:
         """Every case's time series as an :class:`xarray.Dataset` (the sweep's ``series.nc``,
         written by ``run_sweep(..., series="netcdf")``; see :mod:`snoworm.studies.sweep.series`)."""
         path = self.out_dir / SERIES_FILE if self.out_dir is not None else None
@@ -142,22 +162,29 @@ class SweepTable:
             )
         return load_series(path, getattr(self, "series_dims", None))
 
-    def plot(self, metric=None, *, size=None, ax=None, fig=None):
+    def plot(
+        self,
+        metric: str | None = None,
+        *,
+        size: FigureSize | None = None,
+        ax: Axes | Sequence[Axes] | None = None,
+        fig: Figure | None = None,
+    ) -> Figure:
         """The sweep's standard figure (:func:`snoworm.studies.sweep.summary.plot_table`): ``metric``
         (default: speed, slip, link force, energy) against the swept value of a one-key sweep or a
         zip, or a heat map of ``metric`` (default mean speed) over a two-key grid.  ``size``:
         ``"column"``, ``"page"`` or ``"WxH"``; ``ax``/``fig``: yours.  Returns the Figure."""
         return plot_table(self, metric, size=size, ax=ax, fig=fig)
 
-    def failures(self) -> list:
+    def failures(self) -> list[dict[str, Any]]:
         """Rows whose status is not ``ok``."""
         return [r for r in self.rows if r["status"] != "ok"]
 
-    def csv_line(self, row) -> str:
+    def csv_line(self, row: Mapping[str, Any]) -> str:
         """One ``summary.csv`` line (with its newline) of a row."""
         return csv_line([row.get(c) for c in self.columns], FULL)
 
-    def to_csv(self, path=None) -> str:
+    def to_csv(self, path: str | os.PathLike[str] | None = None) -> str:
         """The table as CSV text (sorted by case id); written atomically to ``path`` if given."""
         text = csv_text(self.columns, self.rows, FULL)
         if path is not None:
@@ -165,17 +192,17 @@ class SweepTable:
         return text
 
     @classmethod
-    def from_csv(cls, path, keys=None):
+    def from_csv(cls, path: str | os.PathLike[str], keys: Sequence[str] | None = None) -> SweepTable:
         """Read a ``summary.csv`` (a truncated last line is ignored)."""
         header, rows, _ = read_summary(Path(path), keys)
         return cls(header, rows, keys or _keys_from_header(header))
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         ok = sum(r["status"] == "ok" for r in self.rows)
         return f"SweepTable({len(self.rows)} cases, {ok} ok, keys={self.keys})"
 
 
-def load_sweep(out_dir) -> SweepTable:
+def load_sweep(out_dir: str | os.PathLike[str]) -> SweepTable:
     """Read a sweep's output directory (``sweep.json`` and ``summary.csv``) back into a :class:`SweepTable`.
 
     The swept values are parsed as in ``--set`` (numbers stay numbers); a truncated last line of
@@ -229,9 +256,11 @@ def load_sweep(out_dir) -> SweepTable:
     return table
 
 
-def _first_of_each_case(rows) -> tuple:
+def _first_of_each_case(rows: Iterable[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[str]]:
     """(the first row of each case id, the case ids of the repeated rows dropped)."""
-    seen, kept, twice = set(), [], []
+    seen: set = set()
+    kept: list[dict[str, Any]] = []
+    twice: list[str] = []
     for r in rows:
         if r["case_id"] in seen:
             twice.append(str(r["case_id"]))
@@ -241,14 +270,14 @@ def _first_of_each_case(rows) -> tuple:
     return kept, twice
 
 
-def _keys_from_header(header):
+def _keys_from_header(header: list[str]) -> list[str]:
     try:
         return header[2 : header.index("status")]
     except ValueError:
         return []
 
 
-def read_summary(path: Path, keys=None):
+def read_summary(path: Path, keys: Sequence[str] | None = None) -> tuple[list[str], list[dict[str, Any]], int]:
     """(header, complete rows, number of dropped lines) of a summary.csv of at most
     :data:`MAX_SUMMARY_BYTES` (ResultFileError naming it otherwise)."""
     try:
@@ -323,7 +352,7 @@ def _case_entries(out: Path) -> list:
     return found
 
 
-def _clear(out: Path):
+def _clear(out: Path) -> None:
     """Remove an earlier snoworm folder's files: its manifest's (checked, see :mod:`snoworm.infra.manifest`),
     a sweep's own files and case folders; an entry snoworm did not write stops it before anything
     is removed (ScenarioError)."""
@@ -344,7 +373,7 @@ def _clear(out: Path):
         pass
 
 
-def check_resumable(out: Path):
+def check_resumable(out: Path) -> None:
     """Refuse (ScenarioError) a sweep folder whose files or case folders snoworm would write
     through: a symlink, FIFO or device at ``summary.csv``, ``sweep.json`` or the manifest, or a
     symlink at ``cases/`` or a case folder."""
@@ -358,7 +387,7 @@ def check_resumable(out: Path):
     _case_entries(out)
 
 
-def _other_sweep(out, dpath, old, new) -> str:
+def _other_sweep(out: Path, dpath: Path, old: Any, new: dict[str, Any]) -> str:
     """Why ``out``'s sweep (definition ``old``) cannot be resumed by this one (``new``)."""
     old = old if isinstance(old, dict) else {}
     if all(old.get(k) == new[k] for k in new if k not in ("inputs", "snoworm_version")):
@@ -381,7 +410,15 @@ def _other_sweep(out, dpath, old, new) -> str:
     )
 
 
-def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: bool = False) -> dict:
+def prepare_dir(
+    out: Path,
+    definition: dict[str, Any],
+    columns: Sequence[str],
+    cases: Sequence[SweepCase],
+    axes: Sequence[Axis],
+    source: str,
+    overwrite: bool = False,
+) -> dict[int, dict[str, Any]]:
     """Create or check ``out``; return the rows already finished, by case index.
 
     A folder written by another snoworm command is cleared first; one holding another sweep is
@@ -455,10 +492,11 @@ def prepare_dir(out: Path, definition, columns, cases, axes, source, overwrite: 
 SWEEP_METRICS = ("mean_speed_mps", "mean_slip", "max_link_force_N", "energy_per_m_J")
 
 
-def _distinct(values) -> list:
+def _distinct(values: Iterable[Any]) -> list:
     """Distinct values in order of first appearance (the rows are in case-id order, so a grid's
     values come back in the order of the sweep's definition)."""
-    seen, out = set(), []
+    seen: set[str] = set()
+    out: list = []
     for v in values:
         key = canonical_json(v)
         if key not in seen:
@@ -467,13 +505,13 @@ def _distinct(values) -> list:
     return out
 
 
-def _positions(values):
+def _positions(values: Sequence[Any]) -> tuple[list[float], list[str] | None]:
     if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
         return [float(v) for v in values], None
     return list(range(len(values))), [format_cell(v, FULL) for v in values]
 
 
-def _layout(table):
+def _layout(table: SweepTable) -> tuple[str, Any]:
     """("line", key) for one varying key or a zip; ("heatmap", (key_x, key_y)) for a two-key grid."""
     varying = [k for k in table.keys if len(_distinct(table.column(k))) > 1] or list(table.keys[:1])
     counts = [len(_distinct(table.column(k))) for k in varying]
@@ -488,7 +526,14 @@ def _layout(table):
     return "line", varying[0]
 
 
-def plot_table(table, metric=None, *, size=None, ax=None, fig=None):
+def plot_table(
+    table: SweepTable,
+    metric: str | None = None,
+    *,
+    size: FigureSize | None = None,
+    ax: Axes | Sequence[Axes] | None = None,
+    fig: Figure | None = None,
+) -> Figure:
     """The standard figure of a sweep: ``metric`` (default: the four of :data:`SWEEP_METRICS`)
     against the swept value for one varying key or a zip (immobilised cases crossed, failed ones
     dotted), or a heat map of ``metric`` (default ``mean_speed_mps``) over a two-key grid.
@@ -541,7 +586,7 @@ def plot_table(table, metric=None, *, size=None, ax=None, fig=None):
     )
 
 
-def write_plot(table, out, plot_format="png", size=None):
+def write_plot(table: SweepTable, out: Path, plot_format: str = "png", size: FigureSize | None = None) -> Path | None:
     """Write the sweep's standard figure (headless) as ``sweep.<fmt>`` (line) or
     ``heatmap.<fmt>`` (grid of two keys) in ``out``; nothing for a grid of more keys.
     Returns the path or None."""
