@@ -20,6 +20,9 @@ __all__ = [
     "TerrainParams",
     "smooth_sign",
     "slip",
+    "STANDSTILL_LAWS",
+    "shear_slip",
+    "shear_displacement_rate",
     "traction_force",
     "resistance_force",
     "resistance_torque",
@@ -68,6 +71,15 @@ class TerrainParams:
         ``"contact"``: ``J dw/dt = T_m - R_w (F_t - F_tr) - T_rr`` (docs/model.md default).
         ``"traction"``: ``J dw/dt = T_m - R_w F_t - T_rrB`` with
         ``T_rrB = 1.601 F_n R_w (1 - X) sgn(omega)``; same chassis motion and steady slips.
+    standstill : {"regularised", "shear"}
+        Law of the slip near rest (docs/model.md section 2, "Standstill").  ``"regularised"``:
+        Eq. 1 with the denominator floored at ``slip_eps_mps`` (:func:`slip`), a viscous law at
+        rest.  ``"shear"``: a Janosi-Hanamoto shear-displacement state ``j`` per axle
+        (:func:`shear_displacement_rate`), slip ``clip(j / K, -1, 1)`` (:func:`shear_slip`), a
+        spring at rest: a stopped wheel holds until its peak traction is exceeded.
+    shear_modulus_K_m : float or None
+        Shear deformation modulus ``K`` [m] of the ``"shear"`` law (None with ``"regularised"``,
+        which does not use it).
     """
 
     b_tF: float
@@ -79,7 +91,18 @@ class TerrainParams:
     slip_eps_mps: float
     sign_eps_mps: float
     torque_balance: str = "contact"
+    standstill: str = "regularised"
+    shear_modulus_K_m: float | None = None
 
+    def __post_init__(self):
+        if self.standstill not in STANDSTILL_LAWS:
+            raise ValueError(f"standstill must be one of {STANDSTILL_LAWS}, got {self.standstill!r}")
+        if self.standstill == "shear" and self.shear_modulus_K_m is None:
+            raise ValueError("standstill 'shear' needs shear_modulus_K_m (the shear deformation modulus K, m)")
+
+
+#: The laws of the slip near rest (:attr:`TerrainParams.standstill`).
+STANDSTILL_LAWS = ("regularised", "shear")
 
 #: Coefficient of the "traction" torque-balance convention (docs/model.md section 2).
 TRACTION_BALANCE_TAU = 1.601
@@ -119,6 +142,47 @@ def slip(wheel_speed_mps, V, eps_mps):
     """
     den = np.maximum(np.maximum(np.abs(wheel_speed_mps), np.abs(V)), eps_mps)
     return np.minimum(np.maximum((wheel_speed_mps - V) / den, _MINUS_ONE), _ONE)
+
+
+def shear_displacement_rate(wheel_speed_mps, V, j_m, K_m):
+    """Rate of the shear displacement ``j`` under a wheel [m/s] (docs/model.md section 2, "Standstill").
+
+    ``dj/dt = (R_w w - V) - max(|R_w w|, |V|) j / K``
+
+    The first term is the slip velocity of the contact: at rest it integrates into the shear
+    displacement of the snow under the wheel (Janosi & Hanamoto 1961: the shear stress builds
+    with the displacement ``j`` on the scale ``K``).  The second relaxes ``j`` over a rolling
+    distance ``K``: at any steady rolling with ``R_w w`` or ``V`` non-zero, ``j / K`` tends to
+    ``(R_w w - V) / max(|R_w w|, |V|)``, Eq. 1's slip (unclipped), whatever ``K``: the
+    steady-state results do not depend on ``K``.  At rest (``R_w w = V = 0``) ``j`` stays put,
+    so the traction it sets, Eq. 2 at ``i = clip(j / K, -1, 1)`` (:func:`shear_slip`), holds
+    like a spring.
+
+    Parameters
+    ----------
+    wheel_speed_mps : array_like
+        Wheel circumferential speed ``R_w * omega`` [m/s].
+    V : array_like
+        Longitudinal ground speed of the wheel [m/s].
+    j_m : array_like
+        Shear displacement [m].
+    K_m : float
+        Shear deformation modulus ``K`` [m].
+
+    Returns
+    -------
+    ndarray
+        ``dj/dt`` [m/s].
+    """
+    return (wheel_speed_mps - V) - np.maximum(np.abs(wheel_speed_mps), np.abs(V)) * j_m / K_m
+
+
+def shear_slip(j_m, K_m):
+    """The slip of the shear-displacement law: ``i = clip(j / K, -1, 1)`` (Eq. 1 at steady rolling).
+
+    Used in Eq. 2 in place of :func:`slip` when ``TerrainParams.standstill == "shear"``.
+    """
+    return np.minimum(np.maximum(j_m / K_m, _MINUS_ONE), _ONE)
 
 
 def traction_force(i, F_n, X, p: TerrainParams):

@@ -73,6 +73,9 @@ def random_state(m, rng):
         Y[:, m.layout.index["q_mps"]] = rng.uniform(-0.5, 0.5, m.n)
     if m.has_joints:
         Y[:, m.layout.index["s_m"]] = rng.uniform(0.0, 0.3, m.n)
+    if m.layout.j is not None:  # shear displacements on both sides of +-K (the clip of j / K)
+        K = m.tp.shear_modulus_K_m
+        Y[:, m.layout.j] = rng.uniform(-1.5 * K, 1.5 * K, (m.n, 2))
     return Y.reshape(-1)
 
 

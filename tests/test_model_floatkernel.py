@@ -104,14 +104,18 @@ GRADES = [
 ]
 
 
+@pytest.mark.parametrize("standstill", ["regularised", "shear"])
 @pytest.mark.parametrize("grade", GRADES, ids=["level", "constant grade", "elevation table and patch"])
-def test_every_branch_of_the_kernel_on_busy_controls(grade):
+def test_every_branch_of_the_kernel_on_busy_controls(grade, standstill):
     """Force loops, free joints in force and length command, direct torques, motors off, on level
     ground, a constant grade and an elevation table (gravity and normal loads, docs/model.md
-    section 7) with an X_t patch: both paths agree."""
+    section 7) with an X_t patch, with either law of the slip near rest (the shear displacements,
+    docs/model.md section 2, "Standstill"): both paths agree."""
     rng = np.random.default_rng(5)
-    for overrides in ([("vehicle.links.type", "prismatic")] + grade, grade):
+    law = [("terrain.model.standstill", standstill)]
+    for overrides in ([("vehicle.links.type", "prismatic")] + grade + law, grade + law):
         m = model_for(SCENARIOS / "tow6_uniform.yaml", overrides, force_loop=True)
+        assert (m.layout.j is not None) == (standstill == "shear")
         for k in range(20):
             ctl = busy_controls(m, rng)
             n = m.n

@@ -75,6 +75,15 @@ PARAMETER_SETS = {
             "slip_eps_mps": (0.05, "[assumed] regularisation"),
             "sign_eps_mps": (0.01, "[assumed] regularisation"),
             "torque_balance": ("contact", "[paper] section 3 (docs/model.md section 2)"),
+            "standstill": (
+                "regularised",
+                "[assumed] the paper's Eq. 1, regularised; 'shear' holds a stopped wheel (docs/model.md section 2)",
+            ),
+            "shear_modulus_K_m": (
+                0.025,
+                "[assumed] Janosi-Hanamoto shear deformation modulus of snow, the middle of the 1-5 cm "
+                "the terramechanics literature gives for snow (Wong 2010); not measured for FrostyBoy",
+            ),
         },
         "links": {
             "stiffness_N_per_m": (2.0e4, "[assumed]"),

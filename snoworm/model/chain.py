@@ -102,7 +102,9 @@ class ChainModel:
         self.n = int(np.shape(seg.mass_kg)[-1])
         self.force_loop = bool(force_loop)
         self.has_joints = bool(np.any(links.prismatic > 0))
-        self.layout = StateLayout(self.n, self.force_loop, self.has_joints, self.batch_shape)
+        #: whether the slip near rest follows the shear-displacement state (docs/model.md section 2)
+        self.shear = terrain_params.standstill == "shear"
+        self.layout = StateLayout(self.n, self.force_loop, self.has_joints, self.batch_shape, shear=self.shear)
         self.n_batch = self.layout.n_batch
         self.n_states = self.layout.size
 
@@ -146,7 +148,9 @@ class ChainModel:
         def z(v):
             return np.array(v, float)
 
-        self._tpk = replace(tp, **{k: z(getattr(tp, k)) for k in tp.__dataclass_fields__ if k != "torque_balance"})
+        # the numbers of the terrain coefficients (not the law choices, nor an unused K of None)
+        nums = {k: getattr(tp, k) for k in tp.__dataclass_fields__}
+        self._tpk = replace(tp, **{k: z(v) for k, v in nums.items() if isinstance(v, (int, float))})
         self._zero = z(0.0)
         self._Fn_k, self._G_const = self.normal_force_N, None
         if self.elevation is not None and self.elevation.is_constant:  # constant grade: constant loads
@@ -332,8 +336,10 @@ class ChainModel:
             if self.elevation is None or self._G_const is not None
             else self.grade_terms(x)[2:]
         )
-        X, i, Ft, Ftr, Trr = self._terrain(x, V, w * R, Fn)
+        wm = w * R
         dY = np.empty_like(Y)
+        i = self._slip(Y, wm, V, dY)
+        X, Ft, Ftr, Trr = self._terrain(x, V, wm, Fn, i)
         T, T_spring, damper_v = self._links(Y, x, v, ctl, cd, dY)
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
         sp = ctl.speed_sp_mps
@@ -413,13 +419,23 @@ class ChainModel:
             "normal_load_N": np.broadcast_to(Fn, Ft.shape),
         }
 
-    def _terrain(self, x, V, wm, Fn):
-        """Per-axle terrain quantities (Eqs. 1-3, resistance torque), X_t evaluated at each axle.
+    def _slip(self, Y, wm, V, dY):
+        """Slip per axle, shape ``(..., N, 2)``: Eq. 1 regularised (:func:`terrain.slip`), or with
+        ``standstill: shear`` the shear displacement's ``clip(j / K, -1, 1)``, whose rate it writes
+        into ``dY`` (:func:`terrain.shear_displacement_rate`, docs/model.md section 2, "Standstill")."""
+        tp = self._tpk
+        if not self.shear:
+            return terrain.slip(wm, V, tp.slip_eps_mps)
+        j = Y[..., self.layout.j]
+        dY[..., self.layout.j] = terrain.shear_displacement_rate(wm, V, j, tp.shear_modulus_K_m)
+        return terrain.shear_slip(j, tp.shear_modulus_K_m)
 
-        Returns ``(X, slip, F_t, F_tr, T_rr)`` per wheel, shape ``(..., N, 2)``.
+    def _terrain(self, x, V, wm, Fn, i):
+        """Per-axle terrain quantities (Eqs. 2-3, resistance torque) at slip ``i``, X_t evaluated at each axle.
+
+        Returns ``(X, F_t, F_tr, T_rr)`` per wheel, shape ``(..., N, 2)``.
         """
         tp, R = self._tpk, self._R
-        i = terrain.slip(wm, V, tp.slip_eps_mps)
         if self._coef is not None:  # X_t constant: position-independent factors precomputed
             c_t, c_r, c_q = self._coef
             X = self._Xc
@@ -431,7 +447,7 @@ class ChainModel:
         Ft = terrain.traction_from_coefficients(i, c_t)
         Ftr = terrain.resistance_from_coefficients(V, c_r, tp)
         Trr = terrain.torque_from_coefficient(wm, c_q, tp)
-        return X, i, Ft, Ftr, Trr
+        return X, Ft, Ftr, Trr
 
     def _links(self, Y, x, v, ctl, cd, dY):
         """Link forces (tension positive): spring-damper in series with the prismatic actuator.
