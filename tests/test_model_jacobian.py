@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from snoworm.dynamics import Controls
-from tests.conftest import busy_controls, model_for, random_state
+from tests.conftest import TERRAIN_LAWS, busy_controls, model_for, random_state
 
-#: the standstill laws (docs/model.md section 2): "shear" adds the shear displacements to the state
-STANDSTILL = pytest.mark.parametrize("standstill", ["regularised", "shear"])
+#: the terrain laws of docs/model.md section 2 with state of their own (shear displacement, sinkage)
+STANDSTILL = pytest.mark.parametrize("standstill", list(TERRAIN_LAWS))
 
 
 @STANDSTILL
@@ -24,11 +24,12 @@ def test_jac_sparsity_covers_finite_difference_jacobian(scenario_path, links, fo
             ("vehicle.links.type", links),
             ("vehicle.segments", n),
             ("terrain.profile", [[-5, 0.4], [5, 1.0]]),
-            ("terrain.model.standstill", standstill),
+            *TERRAIN_LAWS[standstill],
         ],
         force_loop=force_loop,
     )
-    assert (m.layout.j is not None) == (standstill == "shear")
+    assert (m.layout.j is not None) == ("shear" in standstill)
+    assert (m.layout.z is not None) == ("sinkage" in standstill)
     P = m.jac_sparsity()
     for _ in range(5):
         y = random_state(m, rng)
@@ -58,7 +59,7 @@ def test_jacobian_banded_matches_column_by_column_differences(scenario_path, lin
             ("vehicle.links.type", links),
             ("vehicle.segments", n),
             ("terrain.profile", [[-5, 0.4], [5, 1.0]]),
-            ("terrain.model.standstill", standstill),
+            *TERRAIN_LAWS[standstill],
         ],
         force_loop=force_loop,
     )

@@ -104,7 +104,11 @@ class ChainModel:
         self.has_joints = bool(np.any(links.prismatic > 0))
         #: whether the slip near rest follows the shear-displacement state (docs/model.md section 2)
         self.shear = terrain_params.standstill == "shear"
-        self.layout = StateLayout(self.n, self.force_loop, self.has_joints, self.batch_shape, shear=self.shear)
+        #: whether each axle carries a slip-sinkage state (docs/model.md section 2, "Slip-sinkage")
+        self.sinkage = terrain_params.sinkage == "slip"
+        self.layout = StateLayout(
+            self.n, self.force_loop, self.has_joints, self.batch_shape, shear=self.shear, sinkage=self.sinkage
+        )
         self.n_batch = self.layout.n_batch
         self.n_states = self.layout.size
 
@@ -340,6 +344,7 @@ class ChainModel:
         dY = np.empty_like(Y)
         i = self._slip(Y, wm, V, dY)
         X, Ft, Ftr, Trr = self._terrain(x, V, wm, Fn, i)
+        Ftr, z = self._sinkage(Y, wm, V, i, Ftr, dY)
         T, T_spring, damper_v = self._links(Y, x, v, ctl, cd, dY)
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
         sp = ctl.speed_sp_mps
@@ -392,9 +397,12 @@ class ChainModel:
             V=V,
             G=G,
             Fn=Fn,
+            z=z,
         )
 
-    def _outputs(self, *, X, i, Ft, Ftr, Trr, Tm, T, wheel_net, Fl, sp, x, w, reaction, T_spring, damper_v, V, G, Fn):
+    def _outputs(
+        self, *, X, i, Ft, Ftr, Trr, Tm, T, wheel_net, Fl, sp, x, w, reaction, T_spring, damper_v, V, G, Fn, z
+    ):
         """The named quantities of :meth:`evaluate` for the results, from its intermediates."""
         nw = self.wheels_per_axle[..., None]
         return {
@@ -417,6 +425,7 @@ class ChainModel:
             "terrain_dissipation_W": self.wheels_per_axle * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),
             "gravity_N": np.zeros(x.shape) if G is None else np.broadcast_to(G, x.shape),
             "normal_load_N": np.broadcast_to(Fn, Ft.shape),
+            "sinkage_m": np.zeros(Ft.shape) if z is None else z,
         }
 
     def _slip(self, Y, wm, V, dY):
@@ -429,6 +438,17 @@ class ChainModel:
         j = Y[..., self.layout.j]
         dY[..., self.layout.j] = terrain.shear_displacement_rate(wm, V, j, tp.shear_modulus_K_m)
         return terrain.shear_slip(j, tp.shear_modulus_K_m)
+
+    def _sinkage(self, Y, wm, V, i, Ftr, dY):
+        """``(F_tr, z)``: with ``sinkage: slip`` the resistance raised by the sinkage ``z`` of each axle,
+        whose rate it writes into ``dY`` (:func:`terrain.sinkage_rate`, docs/model.md section 2,
+        "Slip-sinkage"); otherwise ``(F_tr, None)``."""
+        if not self.sinkage:
+            return Ftr, None
+        tp, z_at = self._tpk, self.layout.z
+        z = Y[..., z_at]
+        dY[..., z_at] = terrain.sinkage_rate(wm, V, i, z, tp)
+        return Ftr * terrain.sinkage_resistance_factor(z, tp), z
 
     def _terrain(self, x, V, wm, Fn, i):
         """Per-axle terrain quantities (Eqs. 2-3, resistance torque) at slip ``i``, X_t evaluated at each axle.

@@ -40,6 +40,8 @@ ATOL = {
     "s_m": 1e-7,
     "j_front_m": 1e-7,
     "j_rear_m": 1e-7,
+    "z_front_m": 1e-7,
+    "z_rear_m": 1e-7,
 }
 
 
