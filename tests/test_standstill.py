@@ -19,7 +19,7 @@ SEG = parameter_set("frostyboy")["segment"]
 
 
 def parked(grade_deg, xt, *, standstill="shear", segments=1, duration_s=90.0, extra=()):
-    """x of the leader against t, for a chain at zero wheel-speed command (motors on from t = 0)."""
+    """``(t, x of the leader, scenario, result)`` for a chain at zero wheel-speed command (motors on from t = 0)."""
     sc = load_scenario(
         "frostyboy_case3",
         [
@@ -35,7 +35,7 @@ def parked(grade_deg, xt, *, standstill="shear", segments=1, duration_s=90.0, ex
         ],
     )
     r = simulate(sc)
-    return r.t, r.segments["x_m"][:, 0], sc
+    return r.t, r.segments["x_m"][:, 0], sc, r
 
 
 def moved_after(t, x, t0):
@@ -100,12 +100,17 @@ def test_steady_rolling_is_the_steady_state_whatever_K(K):
 def test_a_parked_chain_holds_on_10_deg_where_the_regularised_law_creeps(segments):
     """Issue 32: zero wheel-speed command on 10 deg of X_t 0.8 snow.  Once the wheel-speed PI has
     taken the load (its integral lets the wheels turn back by T / k_i, ~1.8 cm here, over ~5 s of
-    the resistance torque's smooth sign), the shear law holds: < 1 cm in the next 60 s.  The
-    regularised law creeps downhill at mm/s over the same minute."""
-    t, x, _ = parked(10.0, 0.8, segments=segments)
+    the resistance torque's smooth sign), the shear law holds: < 1 cm in the next 60 s, without
+    ringing and within the solver work of the regularised law, which creeps downhill at mm/s over
+    the same minute."""
+    t, x, _, held = parked(10.0, 0.8, segments=segments)
     assert abs(moved_after(t, x, 30.0)) < 0.01
-    t, x, _ = parked(10.0, 0.8, standstill="regularised", segments=segments)
+    # overdamped (docs/model.md section 2): no segment ever moves uphill, i.e. the hold does not ring
+    assert np.max(held.segments["v_mps"]) <= 1e-9
+    t, x, _, creep = parked(10.0, 0.8, standstill="regularised", segments=segments)
     assert moved_after(t, x, 30.0) < -0.05  # 2.6 mm/s of creep
+    # the spring at rest costs the solver no more than the viscous law (measured 220-360 against 210-550)
+    assert held.summary()["solver"]["nfev"] <= 1.5 * creep.summary()["solver"]["nfev"]
 
 
 def test_the_hold_angle_is_the_peak_traction_of_the_locked_wheels():
@@ -116,9 +121,9 @@ def test_the_hold_angle_is_the_peak_traction_of_the_locked_wheels():
     theta = hold_angle_deg(0.8, tp, com_height_m=0.0)
     assert theta == pytest.approx(np.degrees(np.arctan(0.8**2 * 0.7)), abs=1e-6)  # tan = X^d b_tF there
     flat = [("vehicle.segment.com_height_m", 0.0)]
-    t, x, _ = parked(theta - 0.1, 0.8, duration_s=300.0, extra=flat)
+    t, x, *_ = parked(theta - 0.1, 0.8, duration_s=300.0, extra=flat)
     assert abs(moved_after(t, x, 30.0)) < 0.01
-    t, x, _ = parked(theta + 0.1, 0.8, duration_s=300.0, extra=flat)
+    t, x, *_ = parked(theta + 0.1, 0.8, duration_s=300.0, extra=flat)
     assert moved_after(t, x, 30.0) < -0.1
 
 
@@ -129,7 +134,7 @@ def test_with_pitch_transfer_the_hold_angle_is_an_upper_bound():
     tp = _tp("shear")
     theta = hold_angle_deg(0.8, tp, com_height_m=SEG["com_height_m"])
     assert theta == pytest.approx(np.degrees(np.arctan(0.8**2 * 0.7)), abs=1e-6)  # the laws are linear in F_n
-    t, x, _ = parked(theta - 1.0, 0.8, duration_s=300.0)
+    t, x, *_ = parked(theta - 1.0, 0.8, duration_s=300.0)
     assert abs(moved_after(t, x, 30.0)) < 0.01
-    t, x, _ = parked(theta + 0.1, 0.8, duration_s=300.0)
+    t, x, *_ = parked(theta + 0.1, 0.8, duration_s=300.0)
     assert moved_after(t, x, 30.0) < -0.1
