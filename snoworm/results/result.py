@@ -32,7 +32,7 @@ SEGMENT_COLUMNS = {
     "x_m": "position of the segment's reference point [m]",
     "v_mps": "ground speed [m/s]",
     "wheel_speed_mps": "wheel circumferential speed R_w*omega, mean of the axles [m/s]",
-    "slip": "slip (Eq. 1, regularised), mean of the axles",
+    "slip": "slip (Eq. 1 regularised, or clip(j / K) of the shear law: docs/model.md section 2), mean of the axles",
     "traction_N": "tractive force F_t summed over the segment's wheels [N]",
     "resistance_N": "terrain resistance force F_tr summed over the segment's wheels [N]",
     "net_force_N": "traction - resistance, summed over the wheels [N]",
