@@ -138,3 +138,34 @@ def test_with_pitch_transfer_the_hold_angle_is_an_upper_bound():
     assert abs(moved_after(t, x, 30.0)) < 0.01
     t, x, *_ = parked(theta + 0.1, 0.8, duration_s=300.0)
     assert moved_after(t, x, 30.0) < -0.1
+
+
+@pytest.mark.parametrize("pull_N", [50.0, 150.0, 300.0])
+def test_a_held_segment_pulled_back_moves_by_the_janosi_displacement(pull_N):
+    """One segment on level X_t 0.8, wheels held at zero speed, pulled back by a constant tow.  At
+    rest dj/dt = -V (1 + j / K) while it slides back (w = 0, V < 0), so j = K (1 - exp(-d / K)) after
+    a slide d: the Janosi-Hanamoto shear curve.  It stops where Eq. 2 at i = j / K carries the pull:
+    d = K ln(1 / (1 - i)), plus the wheels' own turn back under the PI, R_w^2 F / (4 k_i) (a stiff
+    integral gain keeps that small; the hand value includes it)."""
+    ki = 1e5
+    sc = load_scenario(
+        "frostyboy_case3",
+        [
+            ("terrain.model.standstill", "shear"),
+            ("terrain.xt", 0.8),
+            ("mode.speed_mps", 0.0),
+            ("mode.start_time_s", 0.0),
+            ("tow.force_N", pull_N),
+            ("vehicle.segment.speed_ki_Nm_per_rad", ki),
+            ("simulation.duration_s", 20.0),
+        ],
+    )
+    tp, R = sc.terrain.model.params(), SEG["wheel_radius_m"]
+    F_n = SEG["mass_kg"] * SEG["gravity_mps2"] / 4
+    i = brentq(lambda i: terrain.traction_force(i, F_n, 0.8, tp) - pull_N / 4, 0.0, 0.43, xtol=1e-14)
+    K = tp.shear_modulus_K_m
+    hand = K * np.log(1.0 / (1.0 - i)) + R * R * pull_N / (4 * ki)
+    r = simulate(sc)
+    assert -r.segments["x_m"][-1, 0] == pytest.approx(hand, rel=1e-3)
+    assert r.segments["slip"][-1, 0] == pytest.approx(i, rel=1e-6)
+    assert -r.segments["x_m"][-1, 0] < K  # a push below the peak moves a held segment less than K
