@@ -143,7 +143,7 @@ def test_with_pitch_transfer_the_hold_angle_is_an_upper_bound():
 @pytest.mark.parametrize("pull_N", [50.0, 150.0, 300.0])
 def test_a_held_segment_pulled_back_moves_by_the_janosi_displacement(pull_N):
     """One segment on level X_t 0.8, wheels held at zero speed, pulled back by a constant tow.  At
-    rest dj/dt = -V (1 + j / K) while it slides back (w = 0, V < 0), so j = K (1 - exp(-d / K)) after
+    rest dj/dt = -V (1 - j / K) while it slides back (w = 0, V < 0), so j = K (1 - exp(-d / K)) after
     a slide d: the Janosi-Hanamoto shear curve.  It stops where Eq. 2 at i = j / K carries the pull:
     d = K ln(1 / (1 - i)), plus the wheels' own turn back under the PI, R_w^2 F / (4 k_i) (a stiff
     integral gain keeps that small; the hand value includes it)."""
