@@ -15,7 +15,8 @@ r"""Longitudinal dynamics of a chain of wheeled segments: the kernel's public fa
           (spring-damper in series with the prismatic actuator of extension s_k; s_k = 0 fixed)
 
 F_t is Eq. 2 (Magic Formula traction), F_tr Eq. 3 (terrain resistance), T_rr the fitted
-resistance torque and the slip of Eq. 1 (:mod:`snoworm.terrain`); T_m the motor torque within the
+resistance torque and the slip of Eq. 1, regularised or from the shear displacement
+(:mod:`snoworm.terrain`, docs/model.md section 2); T_m the motor torque within the
 motor's envelope (:mod:`snoworm.drivetrain`) set by the wheel-speed PI (:mod:`snoworm.feedback`);
 F_n the normal load of :func:`snoworm.terrain.normal_load_N` on the grade theta_k under the segment
 (:mod:`snoworm.slope`, docs/model.md section 7); on level ground every grade term is skipped.
@@ -26,6 +27,8 @@ fields per segment, interleaved so the Jacobian is banded::
     x_m, v_mps, omega_front, omega_rear, integral_front_Nm, integral_rear_Nm
     [, q_mps (outer force-loop integral, force-control mode)]
     [, s_m (extension of the prismatic joint in the link *behind* the segment)]
+    [, j_front_m, j_rear_m (shear displacement per axle, terrain.model.standstill: shear)]
+    [, z_front_m, z_rear_m (slip-sinkage per axle, terrain.model.sinkage: slip)]
 
 The kernel itself, :class:`ChainModel` (its parameters, the laws it evaluates, the float code it
 generates and the outputs it derives), lives in one package, :mod:`snoworm.model`

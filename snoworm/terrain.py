@@ -20,6 +20,13 @@ __all__ = [
     "TerrainParams",
     "smooth_sign",
     "slip",
+    "STANDSTILL_LAWS",
+    "shear_slip",
+    "shear_displacement_rate",
+    "SINKAGE_LAWS",
+    "SINKAGE_KEYS",
+    "sinkage_rate",
+    "sinkage_resistance_factor",
     "traction_force",
     "resistance_force",
     "resistance_torque",
@@ -68,6 +75,21 @@ class TerrainParams:
         ``"contact"``: ``J dw/dt = T_m - R_w (F_t - F_tr) - T_rr`` (docs/model.md default).
         ``"traction"``: ``J dw/dt = T_m - R_w F_t - T_rrB`` with
         ``T_rrB = 1.601 F_n R_w (1 - X) sgn(omega)``; same chassis motion and steady slips.
+    standstill : {"regularised", "shear"}
+        Law of the slip near rest (docs/model.md section 2, "Standstill").  ``"regularised"``:
+        Eq. 1 with the denominator floored at ``slip_eps_mps`` (:func:`slip`), a viscous law at
+        rest.  ``"shear"``: a Janosi-Hanamoto shear-displacement state ``j`` per axle
+        (:func:`shear_displacement_rate`), slip ``clip(j / K, -1, 1)`` (:func:`shear_slip`), a
+        spring at rest: a stopped wheel holds until its peak traction is exceeded.
+    shear_modulus_K_m : float or None
+        Shear deformation modulus ``K`` [m] of the ``"shear"`` law (None with ``"regularised"``,
+        which does not use it).
+    sinkage : {"off", "slip"}
+        ``"slip"``: a slip-sinkage state ``z`` per axle (:func:`sinkage_rate`) that raises the
+        resistance of Eq. 3 by ``1 + z / z_ref`` (docs/model.md section 2, "Slip-sinkage").
+    sinkage_rate, sinkage_onset_slip, sinkage_relax_length_m, sinkage_max_m, sinkage_ref_m : float or None
+        ``c_z`` (m of sinkage per m of slip displacement beyond the onset), ``i_0``, ``L_relax`` [m],
+        ``z_max`` [m] and ``z_ref`` [m] of the ``"slip"`` sinkage law (None with ``"off"``).
     """
 
     b_tF: float
@@ -79,7 +101,33 @@ class TerrainParams:
     slip_eps_mps: float
     sign_eps_mps: float
     torque_balance: str = "contact"
+    standstill: str = "regularised"
+    shear_modulus_K_m: float | None = None
+    sinkage: str = "off"
+    sinkage_rate: float | None = None
+    sinkage_onset_slip: float | None = None
+    sinkage_relax_length_m: float | None = None
+    sinkage_max_m: float | None = None
+    sinkage_ref_m: float | None = None
 
+    def __post_init__(self):
+        if self.standstill not in STANDSTILL_LAWS:
+            raise ValueError(f"standstill must be one of {STANDSTILL_LAWS}, got {self.standstill!r}")
+        if self.standstill == "shear" and self.shear_modulus_K_m is None:
+            raise ValueError("standstill 'shear' needs shear_modulus_K_m (the shear deformation modulus K, m)")
+        if self.sinkage not in SINKAGE_LAWS:
+            raise ValueError(f"sinkage must be one of {SINKAGE_LAWS}, got {self.sinkage!r}")
+        missing = [k for k in SINKAGE_KEYS if getattr(self, k) is None]
+        if self.sinkage == "slip" and missing:
+            raise ValueError(f"sinkage 'slip' needs {', '.join(missing)}")
+
+
+#: The laws of the slip near rest (:attr:`TerrainParams.standstill`).
+STANDSTILL_LAWS = ("regularised", "shear")
+
+#: The sinkage laws (:attr:`TerrainParams.sinkage`) and the coefficients of ``"slip"``.
+SINKAGE_LAWS = ("off", "slip")
+SINKAGE_KEYS = ("sinkage_rate", "sinkage_onset_slip", "sinkage_relax_length_m", "sinkage_max_m", "sinkage_ref_m")
 
 #: Coefficient of the "traction" torque-balance convention (docs/model.md section 2).
 TRACTION_BALANCE_TAU = 1.601
@@ -119,6 +167,79 @@ def slip(wheel_speed_mps, V, eps_mps):
     """
     den = np.maximum(np.maximum(np.abs(wheel_speed_mps), np.abs(V)), eps_mps)
     return np.minimum(np.maximum((wheel_speed_mps - V) / den, _MINUS_ONE), _ONE)
+
+
+def shear_displacement_rate(wheel_speed_mps, V, j_m, K_m):
+    """Rate of the shear displacement ``j`` under a wheel [m/s] (docs/model.md section 2, "Standstill").
+
+    ``dj/dt = (R_w w - V) - max(|R_w w|, |V|) j / K``
+
+    The first term is the slip velocity of the contact: at rest it integrates into the shear
+    displacement of the snow under the wheel (Janosi & Hanamoto 1961: the shear stress builds
+    with the displacement ``j`` on the scale ``K``).  The second relaxes ``j`` over a rolling
+    distance ``K``: at any steady rolling with ``R_w w`` or ``V`` non-zero, ``j / K`` tends to
+    ``(R_w w - V) / max(|R_w w|, |V|)``, Eq. 1's slip (unclipped), whatever ``K``: the
+    steady-state results do not depend on ``K``.  At rest (``R_w w = V = 0``) ``j`` stays put,
+    so the traction it sets, Eq. 2 at ``i = clip(j / K, -1, 1)`` (:func:`shear_slip`), holds
+    like a spring.
+
+    Parameters
+    ----------
+    wheel_speed_mps : array_like
+        Wheel circumferential speed ``R_w * omega`` [m/s].
+    V : array_like
+        Longitudinal ground speed of the wheel [m/s].
+    j_m : array_like
+        Shear displacement [m].
+    K_m : float
+        Shear deformation modulus ``K`` [m].
+
+    Returns
+    -------
+    ndarray
+        ``dj/dt`` [m/s].
+    """
+    return (wheel_speed_mps - V) - np.maximum(np.abs(wheel_speed_mps), np.abs(V)) * j_m / K_m
+
+
+def shear_slip(j_m, K_m):
+    """The slip of the shear-displacement law: ``i = clip(j / K, -1, 1)`` (Eq. 1 at steady rolling).
+
+    Used in Eq. 2 in place of :func:`slip` when ``TerrainParams.standstill == "shear"``.
+    """
+    return np.minimum(np.maximum(j_m / K_m, _MINUS_ONE), _ONE)
+
+
+def sinkage_rate(wheel_speed_mps, V, i, z_m, p: TerrainParams):
+    """Rate of the slip-sinkage ``z`` of an axle [m/s] (docs/model.md section 2, "Slip-sinkage"; assumed law).
+
+    ``dz/dt = c_z |R_w w - V| max(0, |i| - i_0) (1 - z / z_max) - z |V| / L_relax``
+
+    A wheel that slips beyond the onset ``i_0`` digs in, in proportion to the slip displacement
+    (the form of the slip-sinkage models of Lyasko 2010 and Ding et al. 2011, where sinkage grows
+    with slip); the dug-in depth saturates at ``z_max`` and is left behind as the wheel rolls on,
+    over a ground distance ``L_relax``.  Below the onset a rolling wheel keeps ``z = 0``: steady
+    states at ``|i| <= i_0`` are those without the law.
+
+    Parameters
+    ----------
+    wheel_speed_mps, V : array_like
+        Wheel circumferential speed ``R_w w`` and ground speed [m/s].
+    i : array_like
+        Slip (Eq. 1, or the shear law's).
+    z_m : array_like
+        Sinkage [m].
+    p : TerrainParams
+        Uses ``sinkage_rate`` (``c_z``), ``sinkage_onset_slip`` (``i_0``), ``sinkage_max_m`` and
+        ``sinkage_relax_length_m``.
+    """
+    dig = p.sinkage_rate * np.abs(wheel_speed_mps - V) * np.maximum(np.abs(i) - p.sinkage_onset_slip, 0.0)
+    return dig * (1.0 - z_m / p.sinkage_max_m) - z_m * np.abs(V) / p.sinkage_relax_length_m
+
+
+def sinkage_resistance_factor(z_m, p: TerrainParams):
+    """Factor ``1 + z / z_ref`` on the resistance of Eq. 3 of a wheel sunk by ``z`` (assumed law)."""
+    return 1.0 + z_m / p.sinkage_ref_m
 
 
 def traction_force(i, F_n, X, p: TerrainParams):

@@ -73,7 +73,22 @@ def random_state(m, rng):
         Y[:, m.layout.index["q_mps"]] = rng.uniform(-0.5, 0.5, m.n)
     if m.has_joints:
         Y[:, m.layout.index["s_m"]] = rng.uniform(0.0, 0.3, m.n)
+    if m.layout.j is not None:  # shear displacements on both sides of +-K (the clip of j / K)
+        K = m.tp.shear_modulus_K_m
+        Y[:, m.layout.j] = rng.uniform(-1.5 * K, 1.5 * K, (m.n, 2))
+    if m.layout.z is not None:  # slip-sinkage up to its saturation depth
+        Y[:, m.layout.z] = rng.uniform(0.0, m.tp.sinkage_max_m, (m.n, 2))
     return Y.reshape(-1)
+
+
+#: The laws of the slip near rest and of sinkage (docs/model.md section 2) as scenario overrides:
+#: the kernel tests run each of them (the shear displacement and the sinkage add state fields).
+TERRAIN_LAWS = {
+    "regularised": [],
+    "shear": [("terrain.model.standstill", "shear")],
+    "shear+sinkage": [("terrain.model.standstill", "shear"), ("terrain.model.sinkage", "slip")],
+    "sinkage": [("terrain.model.sinkage", "slip")],
+}
 
 
 def busy_controls(m, rng):

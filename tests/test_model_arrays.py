@@ -20,6 +20,12 @@ def test_layout_fields_follow_the_options():
     assert lay.fields[-2:] == ("q_mps", "s_m")
     assert (lay.q, lay.s, lay.n_s, lay.size) == (6, 7, 8, 24)
     assert StateLayout(3, False, False).q is None
+    assert StateLayout(3, False, False).j is None
+    # the shear displacement per axle (terrain.model.standstill: shear) ends the block
+    lay = StateLayout(3, True, True, shear=True)
+    assert lay.fields[-4:] == ("q_mps", "s_m", "j_front_m", "j_rear_m")
+    assert (lay.j, lay.n_s) == (slice(8, 10), 10)
+    assert StateLayout(2, False, False, shear=True).j == slice(6, 8)
 
 
 def test_flat_index_unpack_and_per_state_agree():

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from snoworm.dynamics import Controls
-from tests.conftest import SCENARIOS, busy_controls, model_for, random_state
+from tests.conftest import SCENARIOS, TERRAIN_LAWS, busy_controls, model_for, random_state
 
 
 @settings(max_examples=30, deadline=None)
@@ -22,13 +22,17 @@ def test_internal_link_forces_cancel(seed):
     assert out["link_net_N"].sum() == pytest.approx(-m.tow_force_N, abs=1e-9 * (1 + np.abs(out["link_force_N"]).sum()))
 
 
-def test_stacked_model_is_the_members_side_by_side(scenario_path):
+@pytest.mark.parametrize("standstill", list(TERRAIN_LAWS))
+def test_stacked_model_is_the_members_side_by_side(scenario_path, standstill):
     """ChainModel.stack: same derivatives and block-banded Jacobian as each member alone."""
     from snoworm.dynamics import ChainModel
 
     rng = np.random.default_rng(3)
     ms = [
-        model_for(scenario_path("tow6_uniform"), [("terrain.xt", xt), ("tow.force_N", f)])
+        model_for(
+            scenario_path("tow6_uniform"),
+            [("terrain.xt", xt), ("tow.force_N", f), *TERRAIN_LAWS[standstill]],
+        )
         for xt, f in [(0.7, 0.0), (0.9, 200.0), (1.0, 50.0)]
     ]
     big = ChainModel.stack(ms)

@@ -20,7 +20,7 @@ from snoworm.dynamics import ChainModel, Controls
 from snoworm.model import floatkernel
 from snoworm.model.floatkernel import MAX_SEGMENTS, FloatKernel
 from snoworm.simulation.driver import chain_model
-from tests.conftest import SCENARIOS, busy_controls, model_for, random_state
+from tests.conftest import SCENARIOS, TERRAIN_LAWS, busy_controls, model_for, random_state
 
 SHIPPED = sorted(p.stem for p in SCENARIOS.glob("*.yaml"))
 REL = 1e-10
@@ -104,14 +104,19 @@ GRADES = [
 ]
 
 
+@pytest.mark.parametrize("standstill", list(TERRAIN_LAWS))
 @pytest.mark.parametrize("grade", GRADES, ids=["level", "constant grade", "elevation table and patch"])
-def test_every_branch_of_the_kernel_on_busy_controls(grade):
+def test_every_branch_of_the_kernel_on_busy_controls(grade, standstill):
     """Force loops, free joints in force and length command, direct torques, motors off, on level
     ground, a constant grade and an elevation table (gravity and normal loads, docs/model.md
-    section 7) with an X_t patch: both paths agree."""
+    section 7) with an X_t patch, with either law of the slip near rest and with or without
+    slip-sinkage (state fields of their own, docs/model.md section 2): both paths agree."""
     rng = np.random.default_rng(5)
-    for overrides in ([("vehicle.links.type", "prismatic")] + grade, grade):
+    law = TERRAIN_LAWS[standstill]
+    for overrides in ([("vehicle.links.type", "prismatic")] + grade + law, grade + law):
         m = model_for(SCENARIOS / "tow6_uniform.yaml", overrides, force_loop=True)
+        assert (m.layout.j is not None) == ("shear" in standstill)
+        assert (m.layout.z is not None) == ("sinkage" in standstill)
         for k in range(20):
             ctl = busy_controls(m, rng)
             n = m.n

@@ -4,21 +4,32 @@ import numpy as np
 import pytest
 
 from snoworm.dynamics import Controls
-from tests.conftest import busy_controls, model_for, random_state
+from tests.conftest import TERRAIN_LAWS, busy_controls, model_for, random_state
+
+#: the terrain laws of docs/model.md section 2 with state of their own (shear displacement, sinkage)
+STANDSTILL = pytest.mark.parametrize("standstill", list(TERRAIN_LAWS))
 
 
+@STANDSTILL
 @pytest.mark.parametrize(
     "links,force_loop,n",
     [("fixed", False, 6), ("prismatic", False, 6), ("prismatic", True, 5), ("fixed", True, 3), ("fixed", False, 1)],
 )
-def test_jac_sparsity_covers_finite_difference_jacobian(scenario_path, links, force_loop, n):
+def test_jac_sparsity_covers_finite_difference_jacobian(scenario_path, links, force_loop, n, standstill):
     """An incomplete jac_sparsity stalls BDF/Radau (docs/performance.md): check it covers every non-zero."""
     rng = np.random.default_rng(n)
     m = model_for(
         scenario_path("tow6_uniform"),
-        [("vehicle.links.type", links), ("vehicle.segments", n), ("terrain.profile", [[-5, 0.4], [5, 1.0]])],
+        [
+            ("vehicle.links.type", links),
+            ("vehicle.segments", n),
+            ("terrain.profile", [[-5, 0.4], [5, 1.0]]),
+            *TERRAIN_LAWS[standstill],
+        ],
         force_loop=force_loop,
     )
+    assert (m.layout.j is not None) == ("shear" in standstill)
+    assert (m.layout.z is not None) == ("sinkage" in standstill)
     P = m.jac_sparsity()
     for _ in range(5):
         y = random_state(m, rng)
@@ -35,15 +46,21 @@ def test_jac_sparsity_covers_finite_difference_jacobian(scenario_path, links, fo
     assert lb < m.layout.n_s * 2 + 2 and ub < m.layout.n_s * 2 + 2
 
 
+@STANDSTILL
 @pytest.mark.parametrize(
     "links,force_loop,n", [("fixed", False, 6), ("prismatic", False, 6), ("prismatic", True, 5), ("fixed", False, 1)]
 )
-def test_jacobian_banded_matches_column_by_column_differences(scenario_path, links, force_loop, n):
+def test_jacobian_banded_matches_column_by_column_differences(scenario_path, links, force_loop, n, standstill):
     """The one-call grouped finite difference equals perturbing one column at a time (same steps)."""
     rng = np.random.default_rng(10 + n)
     m = model_for(
         scenario_path("tow6_uniform"),
-        [("vehicle.links.type", links), ("vehicle.segments", n), ("terrain.profile", [[-5, 0.4], [5, 1.0]])],
+        [
+            ("vehicle.links.type", links),
+            ("vehicle.segments", n),
+            ("terrain.profile", [[-5, 0.4], [5, 1.0]]),
+            *TERRAIN_LAWS[standstill],
+        ],
         force_loop=force_loop,
     )
     lb, ub = m.bandwidths()

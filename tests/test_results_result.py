@@ -121,7 +121,8 @@ def test_result_plot_returns_the_figure(short_run):
 
 def test_a_run_folder_written_before_the_grade_columns_reads_back_level(tmp_path):
     """segments.csv without grade_deg, elevation_m, gravity_N (written before slopes existed, so on
-    level ground) reads back with those columns zero; any other column set is refused."""
+    level ground) or without sinkage_m (written before slip-sinkage) reads back with those columns
+    zero; any other column set is refused."""
     from snoworm import load_result, load_scenario, simulate
 
     res = simulate(load_scenario("tow6_uniform", ["simulation.duration_s=1"]))
@@ -129,12 +130,18 @@ def test_a_run_folder_written_before_the_grade_columns_reads_back_level(tmp_path
     path = tmp_path / "run" / "segments.csv"
     lines = path.read_text().splitlines()
     header = lines[0].split(",")
-    keep = [j for j, c in enumerate(header) if c not in ("grade_deg", "elevation_m", "gravity_N")]
+    for older in (
+        ("grade_deg", "elevation_m", "gravity_N"),
+        ("sinkage_m",),
+        ("grade_deg", "elevation_m", "gravity_N", "sinkage_m"),
+    ):
+        keep = [j for j, c in enumerate(header) if c not in older]
+        path.write_text("\n".join(",".join(row.split(",")[j] for j in keep) for row in lines) + "\n")
+        back = load_result(tmp_path / "run")
+        np.testing.assert_array_equal(back.segments[older[-1]], 0.0)
+        np.testing.assert_allclose(back.segments["v_mps"], res.segments["v_mps"], rtol=1e-5, atol=1e-9)
+    keep = [j for j, c in enumerate(header) if c != "slip"]  # drop another column
     path.write_text("\n".join(",".join(row.split(",")[j] for j in keep) for row in lines) + "\n")
-    back = load_result(tmp_path / "run")
-    np.testing.assert_array_equal(back.segments["grade_deg"], 0.0)
-    np.testing.assert_allclose(back.segments["v_mps"], res.segments["v_mps"], rtol=1e-5, atol=1e-9)
-    path.write_text("\n".join(",".join(row.split(",")[:-1]) for row in lines) + "\n")  # drop another column
     with pytest.raises(ValueError, match="unexpected columns"):
         load_result(tmp_path / "run")
 

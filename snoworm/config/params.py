@@ -75,6 +75,24 @@ PARAMETER_SETS = {
             "slip_eps_mps": (0.05, "[assumed] regularisation"),
             "sign_eps_mps": (0.01, "[assumed] regularisation"),
             "torque_balance": ("contact", "[paper] section 3 (docs/model.md section 2)"),
+            "standstill": (
+                "regularised",
+                "[assumed] the paper's Eq. 1, regularised; 'shear' holds a stopped wheel (docs/model.md section 2)",
+            ),
+            "shear_modulus_K_m": (
+                0.025,
+                "[assumed] Janosi-Hanamoto shear deformation modulus of snow, the middle of the 1-5 cm "
+                "the terramechanics literature gives for snow (Wong 2010); not measured for FrostyBoy",
+            ),
+            "sinkage": ("off", "[assumed] the paper has no sinkage; 'slip' digs wheels in (docs/model.md section 2)"),
+            "sinkage_rate": (0.05, "[assumed] 5 cm of sinkage per metre of slip displacement beyond the onset"),
+            "sinkage_onset_slip": (
+                0.35,
+                "[assumed] above the 30 % slip FrostyBoy held steadily in the field (Table 2 case 5)",
+            ),
+            "sinkage_relax_length_m": (1.0, "[assumed] about a wheel circumference (1.67 m) or a wheelbase (1.09 m)"),
+            "sinkage_max_m": (0.2, "[assumed] most of the wheel radius (0.265 m): the hub reaches the snow"),
+            "sinkage_ref_m": (0.1, "[assumed] resistance doubled at 10 cm of sinkage"),
         },
         "links": {
             "stiffness_N_per_m": (2.0e4, "[assumed]"),

@@ -16,7 +16,15 @@ from pathlib import Path
 
 from ..model.arrays import STATE_FIELDS
 from ..slope import ElevationProfile, grade_patch_profile
-from ..terrain import STEP_WIDTH_M, TerrainParams, TerrainProfile, patch_profile, random_profile
+from ..terrain import (
+    SINKAGE_LAWS,
+    STANDSTILL_LAWS,
+    STEP_WIDTH_M,
+    TerrainParams,
+    TerrainProfile,
+    patch_profile,
+    random_profile,
+)
 from .routes import GRADE_DOMAIN, GradePatchConfig, check_grade_inputs, read_route
 from .schema import Config, ScenarioError, build, check_field, dump, field, quote, short_key, suggest
 
@@ -178,6 +186,37 @@ class TerrainModelConfig(Config):
     slip_eps_mps: float = field(gt=0, le=1, unit="m/s", doc="slip regularisation speed", why=_REG_WHY)
     sign_eps_mps: float = field(gt=0, le=1, unit="m/s", doc="smooth-sign speed scale", why=_REG_WHY)
     torque_balance: str = field(choices=("contact", "traction"), doc="wheel torque-balance convention")
+    standstill: str = field(
+        choices=STANDSTILL_LAWS,
+        doc="law of the slip near rest: 'regularised' (Eq. 1, viscous at rest) or 'shear' (Janosi shear "
+        "displacement per axle: a stopped wheel holds)",
+    )
+    shear_modulus_K_m: float = field(
+        gt=0,
+        le=1,
+        unit="m",
+        doc="shear deformation modulus K of the 'shear' standstill law",
+        why="K is the shear displacement that builds most of the traction: millimetres to centimetres in snow.",
+    )
+
+    sinkage: str = field(
+        choices=SINKAGE_LAWS,
+        doc="slip-sinkage: 'off', or 'slip' (a sinkage state per axle that grows with slip beyond "
+        "sinkage_onset_slip and raises the Eq. 3 resistance by 1 + z / sinkage_ref_m)",
+    )
+    sinkage_rate: float = field(
+        ge=0, le=100, doc="c_z: metres of sinkage per metre of slip displacement beyond the onset", why=FINITE_WHY
+    )
+    sinkage_onset_slip: float = field(
+        ge=0, lt=1, doc="i_0: the slip beyond which a wheel digs in", why="A slip lies in [0, 1)."
+    )
+    sinkage_relax_length_m: float = field(
+        gt=0, le=1e3, unit="m", doc="L_relax: ground distance over which a rolling wheel leaves its rut", why=FINITE_WHY
+    )
+    sinkage_max_m: float = field(gt=0, le=10, unit="m", doc="z_max: depth at which digging saturates", why=FINITE_WHY)
+    sinkage_ref_m: float = field(
+        gt=0, le=10, unit="m", doc="z_ref: sinkage that doubles the Eq. 3 resistance", why=FINITE_WHY
+    )
 
     def params(self) -> TerrainParams:
         """The coefficients as the laws' :class:`~snoworm.terrain.TerrainParams` (same field names)."""
@@ -455,7 +494,7 @@ class SimulationConfig(Config):
         le=1e3,
         why="At 1e3 a wheel speed's tolerance is already 1e-2 rad/s.",
         doc="per state field (x_m, v_mps, omega_front, omega_rear, integral_front_Nm, integral_rear_Nm, q_mps, "
-        "s_m): a further factor on that field's absolute tolerance (e.g. {omega_front: 10, omega_rear: 10})",
+        "s_m, j_front_m, j_rear_m, z_front_m, z_rear_m): a further factor on that field's absolute tolerance (e.g. {omega_front: 10, omega_rear: 10})",
     )
     max_step_s: float | None = field(
         None, gt=0, le=BIG_TIME_S, why=FINITE_WHY, unit="s", doc="largest solver step (none: unlimited)"

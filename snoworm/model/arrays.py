@@ -12,11 +12,32 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LinkArrays", "SegmentArrays", "STATE_FIELDS", "StateLayout"]
+__all__ = ["LinkArrays", "SegmentArrays", "SHEAR_FIELDS", "SINKAGE_FIELDS", "STATE_FIELDS", "StateLayout"]
 
 #: Every field a segment's state block may hold, in block order (``q_mps`` with a force loop,
-#: ``s_m`` with prismatic joints).
-STATE_FIELDS = ("x_m", "v_mps", "omega_front", "omega_rear", "integral_front_Nm", "integral_rear_Nm", "q_mps", "s_m")
+#: ``s_m`` with prismatic joints, ``j_front_m``/``j_rear_m`` with the shear-displacement law of
+#: the slip near rest, ``terrain.model.standstill: shear``, ``z_front_m``/``z_rear_m`` with
+#: slip-sinkage, ``terrain.model.sinkage: slip``).
+STATE_FIELDS = (
+    "x_m",
+    "v_mps",
+    "omega_front",
+    "omega_rear",
+    "integral_front_Nm",
+    "integral_rear_Nm",
+    "q_mps",
+    "s_m",
+    "j_front_m",
+    "j_rear_m",
+    "z_front_m",
+    "z_rear_m",
+)
+
+#: The fields of the shear displacement per axle (front, rear).
+SHEAR_FIELDS = ("j_front_m", "j_rear_m")
+
+#: The fields of the slip-sinkage per axle (front, rear; ``terrain.model.sinkage: slip``).
+SINKAGE_FIELDS = ("z_front_m", "z_rear_m")
 
 
 @dataclass(frozen=True)
@@ -75,6 +96,12 @@ class StateLayout:
         Whether each segment carries the outer force-loop integral ``q_mps``.
     joints : bool
         Whether each segment carries the extension ``s_m`` of the joint behind it.
+    shear : bool
+        Whether each segment carries the shear displacement of each axle, ``j_front_m`` and
+        ``j_rear_m`` (``terrain.model.standstill: shear``, docs/model.md section 2).
+    sinkage : bool
+        Whether each segment carries the slip-sinkage of each axle, ``z_front_m`` and
+        ``z_rear_m`` (``terrain.model.sinkage: slip``, docs/model.md section 2).
     batch_shape : tuple of int
         Leading shape of stacked chains (``()`` for one chain).
 
@@ -90,10 +117,21 @@ class StateLayout:
         The wheel speeds (front, rear axle) and the wheel-speed PI integrals.
     q, s : int or None
         Positions of ``q_mps`` and ``s_m`` when present.
+    j, z : slice or None
+        The shear displacements and the sinkages (front, rear axle) when present.
     """
 
-    def __init__(self, n: int, force_loop: bool, joints: bool, batch_shape=()):
-        fields = [f for f in STATE_FIELDS if (f != "q_mps" or force_loop) and (f != "s_m" or joints)]
+    def __init__(
+        self, n: int, force_loop: bool, joints: bool, batch_shape=(), shear: bool = False, sinkage: bool = False
+    ):
+        fields = [
+            f
+            for f in STATE_FIELDS
+            if (f != "q_mps" or force_loop)
+            and (f != "s_m" or joints)
+            and (f not in SHEAR_FIELDS or shear)
+            and (f not in SINKAGE_FIELDS or sinkage)
+        ]
         self.fields = tuple(fields)
         self.index = {f: j for j, f in enumerate(fields)}
         self.n = int(n)
@@ -106,6 +144,8 @@ class StateLayout:
         self.omega, self.integral = slice(2, 4), slice(4, 6)
         self.q = self.index.get("q_mps")
         self.s = self.index.get("s_m")
+        self.j = slice(self.index["j_front_m"], self.index["j_front_m"] + 2) if shear else None
+        self.z = slice(self.index["z_front_m"], self.index["z_front_m"] + 2) if sinkage else None
 
     def __kernel_key__(self):
         """What the layout is made of (it keys generated code, :mod:`snoworm.model.floatkernel`)."""

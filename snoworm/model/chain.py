@@ -102,7 +102,13 @@ class ChainModel:
         self.n = int(np.shape(seg.mass_kg)[-1])
         self.force_loop = bool(force_loop)
         self.has_joints = bool(np.any(links.prismatic > 0))
-        self.layout = StateLayout(self.n, self.force_loop, self.has_joints, self.batch_shape)
+        #: whether the slip near rest follows the shear-displacement state (docs/model.md section 2)
+        self.shear = terrain_params.standstill == "shear"
+        #: whether each axle carries a slip-sinkage state (docs/model.md section 2, "Slip-sinkage")
+        self.sinkage = terrain_params.sinkage == "slip"
+        self.layout = StateLayout(
+            self.n, self.force_loop, self.has_joints, self.batch_shape, shear=self.shear, sinkage=self.sinkage
+        )
         self.n_batch = self.layout.n_batch
         self.n_states = self.layout.size
 
@@ -146,7 +152,9 @@ class ChainModel:
         def z(v):
             return np.array(v, float)
 
-        self._tpk = replace(tp, **{k: z(getattr(tp, k)) for k in tp.__dataclass_fields__ if k != "torque_balance"})
+        # the numbers of the terrain coefficients (not the law choices, nor an unused K of None)
+        nums = {k: getattr(tp, k) for k in tp.__dataclass_fields__}
+        self._tpk = replace(tp, **{k: z(v) for k, v in nums.items() if isinstance(v, (int, float))})
         self._zero = z(0.0)
         self._Fn_k, self._G_const = self.normal_force_N, None
         if self.elevation is not None and self.elevation.is_constant:  # constant grade: constant loads
@@ -332,8 +340,11 @@ class ChainModel:
             if self.elevation is None or self._G_const is not None
             else self.grade_terms(x)[2:]
         )
-        X, i, Ft, Ftr, Trr = self._terrain(x, V, w * R, Fn)
+        wm = w * R
         dY = np.empty_like(Y)
+        i = self._slip(Y, wm, V, dY)
+        X, Ft, Ftr, Trr = self._terrain(x, V, wm, Fn, i)
+        Ftr, z = self._sinkage(Y, wm, V, i, Ftr, dY)
         T, T_spring, damper_v = self._links(Y, x, v, ctl, cd, dY)
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
         sp = ctl.speed_sp_mps
@@ -386,9 +397,12 @@ class ChainModel:
             V=V,
             G=G,
             Fn=Fn,
+            z=z,
         )
 
-    def _outputs(self, *, X, i, Ft, Ftr, Trr, Tm, T, wheel_net, Fl, sp, x, w, reaction, T_spring, damper_v, V, G, Fn):
+    def _outputs(
+        self, *, X, i, Ft, Ftr, Trr, Tm, T, wheel_net, Fl, sp, x, w, reaction, T_spring, damper_v, V, G, Fn, z
+    ):
         """The named quantities of :meth:`evaluate` for the results, from its intermediates."""
         nw = self.wheels_per_axle[..., None]
         return {
@@ -411,15 +425,37 @@ class ChainModel:
             "terrain_dissipation_W": self.wheels_per_axle * np.sum(reaction * w - (Ft - Ftr) * V, axis=-1),
             "gravity_N": np.zeros(x.shape) if G is None else np.broadcast_to(G, x.shape),
             "normal_load_N": np.broadcast_to(Fn, Ft.shape),
+            "sinkage_m": np.zeros(Ft.shape) if z is None else z,
         }
 
-    def _terrain(self, x, V, wm, Fn):
-        """Per-axle terrain quantities (Eqs. 1-3, resistance torque), X_t evaluated at each axle.
+    def _slip(self, Y, wm, V, dY):
+        """Slip per axle, shape ``(..., N, 2)``: Eq. 1 regularised (:func:`terrain.slip`), or with
+        ``standstill: shear`` the shear displacement's ``clip(j / K, -1, 1)``, whose rate it writes
+        into ``dY`` (:func:`terrain.shear_displacement_rate`, docs/model.md section 2, "Standstill")."""
+        tp = self._tpk
+        if not self.shear:
+            return terrain.slip(wm, V, tp.slip_eps_mps)
+        j = Y[..., self.layout.j]
+        dY[..., self.layout.j] = terrain.shear_displacement_rate(wm, V, j, tp.shear_modulus_K_m)
+        return terrain.shear_slip(j, tp.shear_modulus_K_m)
 
-        Returns ``(X, slip, F_t, F_tr, T_rr)`` per wheel, shape ``(..., N, 2)``.
+    def _sinkage(self, Y, wm, V, i, Ftr, dY):
+        """``(F_tr, z)``: with ``sinkage: slip`` the resistance raised by the sinkage ``z`` of each axle,
+        whose rate it writes into ``dY`` (:func:`terrain.sinkage_rate`, docs/model.md section 2,
+        "Slip-sinkage"); otherwise ``(F_tr, None)``."""
+        if not self.sinkage:
+            return Ftr, None
+        tp, z_at = self._tpk, self.layout.z
+        z = Y[..., z_at]
+        dY[..., z_at] = terrain.sinkage_rate(wm, V, i, z, tp)
+        return Ftr * terrain.sinkage_resistance_factor(z, tp), z
+
+    def _terrain(self, x, V, wm, Fn, i):
+        """Per-axle terrain quantities (Eqs. 2-3, resistance torque) at slip ``i``, X_t evaluated at each axle.
+
+        Returns ``(X, F_t, F_tr, T_rr)`` per wheel, shape ``(..., N, 2)``.
         """
         tp, R = self._tpk, self._R
-        i = terrain.slip(wm, V, tp.slip_eps_mps)
         if self._coef is not None:  # X_t constant: position-independent factors precomputed
             c_t, c_r, c_q = self._coef
             X = self._Xc
@@ -431,7 +467,7 @@ class ChainModel:
         Ft = terrain.traction_from_coefficients(i, c_t)
         Ftr = terrain.resistance_from_coefficients(V, c_r, tp)
         Trr = terrain.torque_from_coefficient(wm, c_q, tp)
-        return X, i, Ft, Ftr, Trr
+        return X, Ft, Ftr, Trr
 
     def _links(self, Y, x, v, ctl, cd, dY):
         """Link forces (tension positive): spring-damper in series with the prismatic actuator.

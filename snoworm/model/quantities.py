@@ -66,6 +66,8 @@ def output_series(model, ys, ctl):
         np.zeros(x.shape) if model.elevation is None else model.elevation.mean_elevation(x, model.seg.wheelbase_m / 2.0)
     )
     seg["gravity_N"] = np.asarray(out["gravity_N"], float)
+    # slip-sinkage (terrain.model.sinkage: slip, docs/model.md section 2); zeros without it
+    seg["sinkage_m"] = np.asarray(out["sinkage_m"], float).mean(-1)
     lk = {
         "force_N": out["link_force_N"],
         "length_m": x[..., :-1] - x[..., 1:],

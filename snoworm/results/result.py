@@ -50,7 +50,7 @@ SEGMENT_COLUMNS = {
     "x_m": "position of the segment's reference point [m]",
     "v_mps": "ground speed [m/s]",
     "wheel_speed_mps": "wheel circumferential speed R_w*omega, mean of the axles [m/s]",
-    "slip": "slip (Eq. 1, regularised), mean of the axles",
+    "slip": "slip (Eq. 1 regularised, or clip(j / K) of the shear law: docs/model.md section 2), mean of the axles",
     "traction_N": "tractive force F_t summed over the segment's wheels [N]",
     "resistance_N": "terrain resistance force F_tr summed over the segment's wheels [N]",
     "net_force_N": "traction - resistance, summed over the wheels [N]",
@@ -65,10 +65,15 @@ SEGMENT_COLUMNS = {
     "grade_deg": "grade under the segment (the chord between its axles), positive uphill [deg]",
     "elevation_m": "elevation of the segment, the mean over its wheelbase (its potential-energy height) [m]",
     "gravity_N": "gravity along the track on the segment, -m g sin(grade), forward positive [N]",
+    "sinkage_m": "slip-sinkage of the wheels, mean of the axles (terrain.model.sinkage: slip; 0 without it) [m]",
 }
 
 #: The segment columns of a run on a grade (docs/model.md section 7); zeros on level ground.
 GRADE_COLUMNS = ("grade_deg", "elevation_m", "gravity_N")
+
+#: Segment columns a folder written before them may lack (read back as zeros): the grade columns
+#: (a run before them was on level ground) and the sinkage (a run before it had none).
+OPTIONAL_COLUMNS = (*GRADE_COLUMNS, "sinkage_m")
 
 #: Columns of ``links.csv`` (after ``t_s, link``).
 LINK_COLUMNS = {
@@ -383,9 +388,10 @@ def _read_table(
     text = read_back(path)
     header = text.split("\n", 1)[0].strip().split(",")
     expected = ["t_s", index] + list(columns)
-    # a run written before the grade columns (docs/model.md section 7) was on level ground: zeros
-    level = ["t_s", index] + [c for c in columns if c not in GRADE_COLUMNS]
-    if header != expected and header != level:
+    # a run written before the grade columns (docs/model.md section 7) was on level ground, one
+    # written before the sinkage column had none: zeros
+    older = ["t_s", index] + [c for c in columns if c in header[2:]]
+    if header != expected and not (header == older and set(columns) - set(header) <= set(OPTIONAL_COLUMNS)):
         raise ResultFileError(f"{path}: unexpected columns {quote(header)}; expected {', '.join(expected)}")
     body = text.split("\n", 1)[1] if "\n" in text else ""
     if not body.strip():

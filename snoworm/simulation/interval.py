@@ -39,6 +39,10 @@ ATOL = {
     "integral_rear_Nm": 1e-4,
     "q_mps": 1e-6,
     "s_m": 1e-7,
+    "j_front_m": 1e-7,
+    "j_rear_m": 1e-7,
+    "z_front_m": 1e-7,
+    "z_rear_m": 1e-7,
 }
 
 

@@ -366,7 +366,7 @@ def terrain_model_yaml(res: CalibrationResult, source: str = "") -> str:
     values are listed in the comment header (they belong to the cases, not to the model).
     """
     tp = res.terrain_params
-    model = {k: (getattr(tp, k) if k == "torque_balance" else float(getattr(tp, k))) for k in _MODEL_KEYS}
+    model = {k: (v if isinstance(v := getattr(tp, k), str) else float(v)) for k in _MODEL_KEYS}
     head = [
         "# Terrain-model coefficients written by `snoworm calibrate`.",
         f"# Data: {source}" if source else "# Data: (in memory)",
@@ -397,8 +397,7 @@ def calibration_json(res: CalibrationResult, source: str = "", parameter_set_nam
         "correlation": [[_json_float(c) for c in row] for row in res.correlation],
         "xt": {str(c): _json_float(x) for c, x in zip([r["case"] for r in res.rows_after], res.xt)},
         "terrain_model": {
-            k: (getattr(res.terrain_params, k) if k == "torque_balance" else float(getattr(res.terrain_params, k)))
-            for k in _MODEL_KEYS
+            k: (v if isinstance(v := getattr(res.terrain_params, k), str) else float(v)) for k in _MODEL_KEYS
         },
         "residual_scales": {"torque_Nm": res.torque_scale_Nm, "slip": res.slip_scale},
         "n_residuals": res.n_residuals,
