@@ -48,6 +48,7 @@ LAZY_OK = {
     "threading",
     "concurrent",
     "snoworm.plotting",
+    "snoworm.plotting.odds",  # a module of the package above, not imported by its __init__
     "IPython",
     "snoworm.steady",
     "snoworm.modes.force_plan",

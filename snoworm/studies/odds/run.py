@@ -248,10 +248,10 @@ def _read_rows(path: Path, columns) -> dict:
 
 
 def _cell(col, text):
-    if text == "":
-        return None
     if col in ("strategy", "status", "verdict", "error"):
         return text
+    if text == "":
+        return None
     v = float(text)
     return int(v) if col in ("draw", "go", "xt_field_seed") else v
 

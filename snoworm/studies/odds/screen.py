@@ -12,7 +12,7 @@ Rolling
     at the rolling wheel speed, ``theta_k`` the chord grade under segment ``k`` (docs/model.md section 7)
     and the segments at their rest spacing behind the leader.  The first position where it is negative
     is where the chain stops.  ``D`` is tabulated once per study on a grid of X_t (step 0.02) and grade
-    (step 1.5 deg over the route's grades) and interpolated linearly.  The speed and the electrical
+    (step 1.5 deg over the route's grades) and interpolated linearly (speed and energy: X_t step 0.08).  The speed and the electrical
     energy per metre at ``x`` are those of one segment's steady state
     (:func:`snoworm.steady.steady_state`, drawbar ``F_tow / N``) at the chain's mean X_t and grade,
     tabulated the same way (where that mean segment cannot carry its share, at the nearest X_t above
@@ -55,7 +55,7 @@ from .outcome import draw_scenario
 
 __all__ = ["screen_draws", "RollingTable", "rolling_table", "InchingTable", "inching_table", "INCH_XT", "INCH_TABLE_S"]
 
-#: X_t grid of the tables (rolling drawbar; the speed/energy tables use every other point).
+#: X_t grid of the tables (rolling drawbar; the speed/energy tables use every fourth point).
 XT_GRID = np.round(np.arange(0.05, 1.0 + 1e-9, 0.02), 4)
 #: Grade step of the tables [deg].
 GRADE_STEP_DEG = 1.5
@@ -67,6 +67,8 @@ MAX_INCH_GRADES = 4
 INCH_TABLE_S = 8.0
 
 _MEMO: dict = {}
+#: Most tables kept in memory (a study drawing the tow or a coefficient makes one per draw).
+MEMO_MAX = 256
 
 
 def _grades(lo, hi, step=GRADE_STEP_DEG, most=None):
@@ -134,9 +136,16 @@ def rolling_table(seg, tp, n_segments: int, tow_N: float, wheel_speed_mps: float
     key = ("rolling", repr(seg), repr(tp), n_segments, float(tow_N), float(wheel_speed_mps), tuple(np.round(grades, 9)))
     if key in _MEMO:
         return _MEMO[key]
+    if len(_MEMO) > MEMO_MAX:
+        _MEMO.clear()
     gs = np.asarray(grades, float)
-    D = np.array([[steady.max_drawbar_N(x, seg, tp, wheel_speed_mps, grade_deg=float(g)) for g in gs] for x in XT_GRID])
-    xs_v = XT_GRID[::2]
+    dkey = ("drawbar", *key[1:3], float(wheel_speed_mps), key[-1])  # the drawbar does not depend on the tow
+    if dkey not in _MEMO:
+        _MEMO[dkey] = np.array(
+            [[steady.max_drawbar_N(x, seg, tp, wheel_speed_mps, grade_deg=float(g)) for g in gs] for x in XT_GRID]
+        )
+    D = _MEMO[dkey]
+    xs_v = XT_GRID[::4]
     n_w, _, R = steady.segment_geometry(seg)
     V = np.full((len(xs_v), len(gs)), np.nan)
     E = np.full_like(V, np.nan)
