@@ -29,7 +29,7 @@ from ...config.schema import ScenarioError, quote
 from ...infra.pool import interrupt_within
 from ...modes.controller import ControllerError
 from ...simulation.driver import SolverError, simulate
-from ...terrain import gaussian_field
+from ...terrain import TerrainProfile, gaussian_field
 from ..mobility import inching_mode_raw
 from ..sweep.metrics import IMMOBILISED_SIGN_FACTOR, IMMOBILISED_SPEED_MPS, LATE_FRACTION, one_line
 from .inputs import XT_FIELD_FLOOR
@@ -42,6 +42,7 @@ __all__ = [
     "goal_of",
     "field_span",
     "draw_scenario",
+    "field_profile",
     "outcome",
     "run_draw",
 ]
@@ -126,13 +127,20 @@ def field_span(sc, goal_m: float | None, corr_m: float) -> tuple:
     return start, end + 2 * corr_m - start
 
 
-def _with_field(raw: dict, sc, field, seed: int, goal_m):
-    """``raw`` with the X_t field of ``seed`` added to ``sc``'s X_t (a profile table), the route's
-    elevation kept as an elevation table."""
+def field_profile(sc, field, seed: int, goal_m) -> TerrainProfile:
+    """X_t along the route of one draw: ``sc``'s X_t plus the field of ``seed`` (docs/odds.md), clipped
+    to [:data:`~snoworm.studies.odds.inputs.XT_FIELD_FLOOR`, 1], on the field's grid (:func:`field_span`)."""
     start, length = field_span(sc, goal_m, field.corr_m)
     pos, g = gaussian_field(field.corr_m, seed, length, start)
     base = np.asarray(sc.terrain.compile()(pos), float)
-    xt = np.clip(base + field.sd * g, XT_FIELD_FLOOR, 1.0)
+    return TerrainProfile(tuple(pos.tolist()), tuple(np.clip(base + field.sd * g, XT_FIELD_FLOOR, 1.0).tolist()))
+
+
+def _with_field(raw: dict, sc, field, seed: int, goal_m):
+    """``raw`` with the X_t field of ``seed`` added to ``sc``'s X_t (a profile table), the route's
+    elevation kept as an elevation table."""
+    prof = field_profile(sc, field, seed, goal_m)
+    pos, xt = prof.positions_m, prof.values
     terrain = dict(raw["terrain"])
     if terrain.get("route") is not None:
         r = sc.terrain.route_data()

@@ -407,6 +407,11 @@ def _sobol_summary(plan: _Plan, by_strategy: dict, seed: int) -> dict:
     return out
 
 
+def _pct(v: float) -> str:
+    """A proportion in per cent, with a decimal where whole per cents would round it to 0 or 100."""
+    return f"{100 * v:.1f}" if (0 < v < 0.005 or 0.995 < v < 1) else f"{100 * v:.0f}"
+
+
 def summary_text(summary: dict) -> str:
     """The printed summary, in field terms (docs/odds.md)."""
     parts, n_all = [], None
@@ -416,9 +421,7 @@ def summary_text(summary: dict) -> str:
             continue
         lo, hi = st["p_go_ci"]
         n_all = st["n"]
-        parts.append(
-            f"{s} gets through in {100 * st['p_go']:.0f} % of {st['n']:,} draws ({100 * lo:.0f}-{100 * hi:.0f} %)"
-        )
+        parts.append(f"{s} gets through in {_pct(st['p_go'])} % of {st['n']:,} draws ({_pct(lo)}-{_pct(hi)} %)")
     lines = ["; ".join(parts) + "."]
     for s, st in summary["strategies"].items():
         if st.get("stop_m"):

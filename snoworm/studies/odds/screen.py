@@ -2,7 +2,7 @@
 stitched along the route (docs/odds.md, section "Steady fidelity").
 
 Rolling
-    At every leader position ``x`` (a step of ``min(0.25 m, corr / 8)``) the chain rolls when its
+    At every leader position ``x`` (a step of ``min(0.5 m, corr / 8)``, the X_t field's grid) the chain rolls when its
     steady drawbar surplus is not negative, the supervisor's resume rule
     (:func:`snoworm.modes.supervisor.chain_drawbar_surplus_N`, docs/model.md section 2)::
 
@@ -51,18 +51,20 @@ from ...results.energy import energy_metrics
 from ...simulation.driver import SolverError, simulate
 from ..mobility import inching_scenario
 from ..sweep.metrics import IMMOBILISED_SIGN_FACTOR, IMMOBILISED_SPEED_MPS
-from .outcome import draw_scenario
+from .outcome import draw_scenario, field_profile
 
 __all__ = ["screen_draws", "RollingTable", "rolling_table", "InchingTable", "inching_table", "INCH_XT", "INCH_TABLE_S"]
 
 #: X_t grid of the tables (rolling drawbar; the speed/energy tables use every fourth point).
 XT_GRID = np.round(np.arange(0.05, 1.0 + 1e-9, 0.02), 4)
+#: Step of the leader's positions along the route [m] (at most the field's grid, correlation length / 8).
+STEP_M = 0.5
 #: Grade step of the tables [deg].
 GRADE_STEP_DEG = 1.5
 #: X_t of the inching table.
-INCH_XT = (0.2, 0.35, 0.5, 0.65, 0.8, 1.0)
+INCH_XT = (0.2, 0.4, 0.6, 0.8, 1.0)
 #: Most grades of the inching table (the route's range, evenly).
-MAX_INCH_GRADES = 4
+MAX_INCH_GRADES = 3
 #: Simulated time of each inching-table run, after the motors start [s].
 INCH_TABLE_S = 8.0
 
@@ -80,22 +82,24 @@ def _grades(lo, hi, step=GRADE_STEP_DEG, most=None):
     return np.linspace(lo, hi, n)
 
 
+def _cell(grid, v):
+    """Index of the cell of the evenly spaced ``grid`` holding ``v`` (clamped) and the fraction across it."""
+    h = (grid[-1] - grid[0]) / (len(grid) - 1)
+    t = (np.clip(v, grid[0], grid[-1]) - grid[0]) / h
+    i = np.minimum(t.astype(np.intp), len(grid) - 2)
+    return i, t - i
+
+
 def _interp2(table, xs, gs, X, G):
-    """Bilinear interpolation of ``table`` (len(xs), len(gs)) at ``(X, G)`` (clamped to the grid)."""
-    X = np.clip(X, xs[0], xs[-1])
+    """Bilinear interpolation of ``table`` (len(xs), len(gs)) on evenly spaced grids at ``(X, G)`` (clamped)."""
+    X = np.asarray(X, float)
+    i, tx = _cell(xs, X)
     if len(gs) == 1:
-        return np.interp(X, xs, table[:, 0])
-    G = np.clip(G, gs[0], gs[-1])
-    i = np.clip(np.searchsorted(xs, X) - 1, 0, len(xs) - 2)
-    j = np.clip(np.searchsorted(gs, G) - 1, 0, len(gs) - 2)
-    tx = (X - xs[i]) / (xs[i + 1] - xs[i])
-    tg = (G - gs[j]) / (gs[j + 1] - gs[j])
-    return (
-        table[i, j] * (1 - tx) * (1 - tg)
-        + table[i + 1, j] * tx * (1 - tg)
-        + table[i, j + 1] * (1 - tx) * tg
-        + table[i + 1, j + 1] * tx * tg
-    )
+        return table[i, 0] * (1 - tx) + table[i + 1, 0] * tx
+    j, tg = _cell(gs, np.asarray(G, float))
+    lo = table[i, j] * (1 - tx) + table[i + 1, j] * tx
+    hi = table[i, j + 1] * (1 - tx) + table[i + 1, j + 1] * tx
+    return lo * (1 - tg) + hi * tg
 
 
 @dataclass(frozen=True)
@@ -298,13 +302,12 @@ class _Along:
     surplus_N: np.ndarray
 
 
-def _along(sc, goal_m, step, rt: RollingTable | None) -> _Along:
+def _along(sc, prof, goal_m, step, rt: RollingTable | None) -> _Along:
     seg = sc.vehicle.segment_params()[0]
     n = sc.vehicle.segments
     xs = np.arange(0.0, goal_m + step / 2, step)
     centres = xs[None, :] - float(sc.vehicle.links.rest_spacing_m) * np.arange(n)[:, None]
     half = seg.wheelbase_m / 2
-    prof = sc.terrain.compile()
     Xf, Xr = prof(centres + half), prof(centres - half)
     el = sc.terrain.elevation_profile()
     G = np.zeros_like(centres) if el is None else np.degrees(np.arcsin(np.clip(el.sin_grade(centres, half), -1, 1)))
@@ -314,8 +317,8 @@ def _along(sc, goal_m, step, rt: RollingTable | None) -> _Along:
     return _Along(xs, np.mean((Xf + Xr) / 2, axis=0), np.mean(G, axis=0), surplus)
 
 
-def _screen_one(sc, kind, goal_m, step, rt, it, thr):
-    a = _along(sc, goal_m, step, rt if kind != "inching" else None)
+def _screen_one(sc, prof, kind, goal_m, step, rt, it, thr):
+    a = _along(sc, prof, goal_m, step, rt if kind != "inching" else None)
     rolls = a.surplus_N >= 0 if kind != "inching" else np.zeros(a.xs.shape, bool)
     v = np.zeros(a.xs.shape)
     e = np.full(a.xs.shape, np.nan)
@@ -371,7 +374,7 @@ def screen_draws(plan, todo, executor=None, cache_dir=None):
             "(or a route file / elevation table)."
         )
     field = plan.unc.xt_field
-    step = min(0.25, field.corr_m / 8) if field is not None else 0.25
+    step = min(STEP_M, field.corr_m / 8) if field is not None else STEP_M
     tables = {}
     for s in plan.strategies:
         sc0 = scenario_from_dict(plan.strategy_raws[s], plan.source, base_dir=plan.base_dir)
@@ -386,15 +389,19 @@ def screen_draws(plan, todo, executor=None, cache_dir=None):
         if kind != "rolling":
             it = inching_table(sc0, _grades(lo, hi, most=MAX_INCH_GRADES), executor, cache_dir)
         thr = max(IMMOBILISED_SPEED_MPS, IMMOBILISED_SIGN_FACTOR * sc0.terrain.model.sign_eps_mps)
-        tables[s] = (kind, rt, it, thr)
+        tables[s] = (kind, rt, it, thr, sc0)
     for k, s in todo:
         values = {p: float(v[k]) for p, v in plan.values.items()}
-        sc = draw_scenario(
-            plan.strategy_raws[s], values, field, int(plan.dsg.field_seeds[k]), plan.goal_m, plan.source, plan.base_dir
+        kind, rt, it, thr, sc0 = tables[s]
+        # the drawn values validated (a few ms); the field is added here, not validated as a profile table
+        sc = (
+            draw_scenario(plan.strategy_raws[s], values, None, 0, plan.goal_m, plan.source, plan.base_dir)
+            if values
+            else sc0
         )
-        kind, rt, it, thr = tables[s]
+        prof = field_profile(sc, field, int(plan.dsg.field_seeds[k]), plan.goal_m) if field else sc.terrain.compile()
         if values and kind != "inching":  # a drawn coefficient, tow or speed changes the rolling table
             seg, tp = sc.vehicle.segment_params()[0], sc.terrain.model.params()
             lo, hi = _route_grades(sc, plan.goal_m)
             rt = rolling_table(seg, tp, sc.vehicle.segments, sc.tow.force_N, sc.mode.rolling_speed(), _grades(lo, hi))
-        yield (k, s), _screen_one(sc, kind, plan.goal_m, step, rt, it, thr)
+        yield (k, s), _screen_one(sc, prof, kind, plan.goal_m, step, rt, it, thr)
