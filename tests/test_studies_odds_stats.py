@@ -109,3 +109,36 @@ def test_sobol_of_a_constant_output_is_zero():
     dsg = design(unc, 32, "random", 0, sensitivity=True)
     res = sobol(np.ones(dsg.n_draws), dsg)
     assert all(r["first"] == 0 and r["total"] == 0 for r in res.values())
+
+
+def test_sobol_intervals_are_the_same_for_the_same_study():
+    """The bootstrap is seeded: the same outputs give the same intervals, whatever the global random state
+    (scipy's own SobolResult.bootstrap draws from fresh entropy every time)."""
+    u = Distribution("uniform", (0.0, 1.0))
+    unc = Uncertainty((ScalarInput("a", u), ScalarInput("b", u)))
+    dsg = design(unc, 64, "random", 0, sensitivity=True)
+    v = unc.values(dsg.U)
+    f = (v["a"] + 0.5 * v["b"] > 0.8).astype(float)
+    first = sobol(f, dsg)
+    np.random.seed(5)
+    assert sobol(f, dsg) == first
+
+
+def test_the_bootstrap_statistic_is_scipys_estimator():
+    """_indices on the whole design gives scipy.stats.sobol_indices's point estimates (so the intervals are
+    those of the same estimators)."""
+    from scipy.stats import sobol_indices
+
+    from snoworm.studies.odds.stats import _indices
+
+    u = Distribution("uniform", (-math.pi, math.pi))
+    unc = Uncertainty(tuple(ScalarInput(n, u) for n in ("x1", "x2", "x3")))
+    dsg = design(unc, 256, "random", 2, sensitivity=True)
+    v = unc.values(dsg.U)
+    f = np.sin(v["x1"]) + 7 * np.sin(v["x2"]) ** 2 + 0.1 * v["x3"] ** 4 * np.sin(v["x1"])
+    fA, fB = f[dsg.block("A")], f[dsg.block("B")]
+    fAB = np.stack([f[dsg.block(f"AB:{g}")] for g in dsg.groups])
+    ref = sobol_indices(func={"f_A": fA[None], "f_B": fB[None], "f_AB": fAB[:, None]}, n=256)
+    first, total = _indices(fA, fB, fAB)
+    assert np.allclose(first, ref.first_order, rtol=1e-12, atol=1e-14)
+    assert np.allclose(total, ref.total_order, rtol=1e-12, atol=1e-14)

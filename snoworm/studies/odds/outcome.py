@@ -16,7 +16,6 @@ elevation table; without one, "go" means "not immobilised by the end of the run"
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 import traceback
 from dataclasses import dataclass
@@ -56,8 +55,8 @@ OUTCOME_COLUMNS = {
     "go": "1 if the leader reached the end of the route (or, without one, was not immobilised), else 0",
     "verdict": "reached_end, moving (ran out of time) or immobilised",
     "stop_m": "where the leader stopped (immobilised) or was at the end of the run [m]; empty if it got through",
-    "stop_xt": "X_t at stop_m (the draw's field)",
-    "stop_grade_deg": "grade at stop_m [deg]",
+    "stop_xt": "mean X_t under the chain's axles where it stopped (the draw's field)",
+    "stop_grade_deg": "mean grade under the chain's segments where it stopped [deg]",
     "time_s": "time from the start until the leader reached the end [s]; empty if it did not",
     "speed_made_good_mps": "distance made good / time: to the end if it got through, else over the whole run [m/s]",
     "energy_per_m_J": "electrical energy per metre made good, up to the end (or over the run) [J/m]",
@@ -224,15 +223,19 @@ def _stop_verdict(result, goal_m=None) -> dict:
     }
 
 
-def _site(sc, x_m: float) -> tuple:
-    """(X_t, grade [deg]) at ``x_m`` of ``sc``'s route."""
-    xt = float(sc.terrain.compile()(np.array([x_m]))[0])
+def _site(result) -> tuple:
+    """(X_t, grade [deg]) where the chain stopped: the means over its axles and segments at the end of the
+    run (the chain's X_t, as the steady screen's; the leader's own X_t may not be what held it)."""
+    sc = result.scenario
+    x = result.segments["x_m"][-1]
+    half = sc.vehicle.segment_params()[0].wheelbase_m / 2
+    prof = sc.terrain.compile()
+    xt = float(np.mean((prof(x + half) + prof(x - half)) / 2))
     el = sc.terrain.elevation_profile()
     if el is None:
         return xt, 0.0
-    half = sc.vehicle.segment_params()[0].wheelbase_m / 2
-    s = float(np.asarray(el.sin_grade(np.array([x_m]), half)).reshape(-1)[0])
-    return xt, math.degrees(math.asin(max(-1.0, min(1.0, s))))
+    s = np.clip(np.asarray(el.sin_grade(x, half), float), -1.0, 1.0)
+    return xt, float(np.mean(np.degrees(np.arcsin(s))))
 
 
 def outcome(result, goal_m=None) -> dict:
@@ -257,7 +260,7 @@ def outcome(result, goal_m=None) -> dict:
     made = float(lead[-1]) - x0
     dur = float(t[-1] - t[0])
     e = float(along["total_electrical_J"][-1])
-    xt, grade = _site(result.scenario, v["x_m"])
+    xt, grade = _site(result)
     out.update(stop_m=v["x_m"], stop_xt=xt, stop_grade_deg=grade, time_s=None)
     out.update(speed_made_good_mps=made / dur if dur > 0 else 0.0, energy_per_m_J=e / made if made > 1e-6 else None)
     return out

@@ -437,12 +437,12 @@ def summary_text(summary: dict) -> str:
             )
     for s, per in (summary.get("sobol") or {}).items():
         go = per.get("go") if isinstance(per, dict) else None
-        if go:
+        if go and any(v["total"] for v in go.values()):  # no variance (all go or all stop): nothing to apportion
             top = max(go, key=lambda g: go[g]["total"] if go[g]["total"] is not None else -1)
             if go[top]["first"] is not None:
                 lines.append(
-                    f"{s}: {top} explains {100 * go[top]['first']:.0f} % of the variance of getting through"
-                    f"{_ci_text(go[top]['first_ci'])} ({100 * go[top]['total']:.0f} % with its interactions)."
+                    f"{s}: {top} explains {100 * go[top]['first']:.0f} %{_ci_text(go[top]['first_ci'])} of the "
+                    f"variance of getting through alone, {100 * go[top]['total']:.0f} % with its interactions."
                 )
     if n_all is not None and summary.get("goal_m") is None:
         lines.append("(no end of route: 'gets through' means not immobilised by the end of the run)")
@@ -452,7 +452,7 @@ def summary_text(summary: dict) -> str:
 def _ci_text(ci) -> str:
     if ci is None or any(v is None for v in ci):
         return ""
-    return f" (interval {100 * ci[0]:.0f}-{100 * ci[1]:.0f} %)"
+    return f" ({100 * ci[0]:.0f}-{100 * ci[1]:.0f} %)"
 
 
 def _summary(plan: _Plan, rows: dict) -> dict:
@@ -660,9 +660,11 @@ def convergence(rows, strategies, independent) -> dict:
 def _write_figures(res: OddsResult, plan: _Plan, out: Path, plot_format: str) -> list:
     from ...plotting import odds as odds_plots  # lazy: matplotlib is imported only when figures are drawn
 
-    route = route_data(plan.sc, plan.goal_m, res.rows)
-    curves = convergence(res.rows, plan.strategies, plan.dsg.independent)
-    return odds_plots.write_odds_figures(res.rows, res.summary, route, curves, out, plot_format)
+    indep = plan.dsg.independent
+    rows = [r for r in res.rows if indep[r["draw"]]]  # Saltelli's AB blocks are not independent draws
+    route = route_data(plan.sc, plan.goal_m, rows)
+    curves = convergence(rows, plan.strategies, indep)
+    return odds_plots.write_odds_figures(rows, res.summary, route, curves, out, plot_format)
 
 
 def load_odds(out_dir) -> dict:

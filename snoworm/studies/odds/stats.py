@@ -21,7 +21,7 @@ import math
 import warnings
 
 import numpy as np
-from scipy.stats import norm, sobol_indices
+from scipy.stats import bootstrap, norm, sobol_indices
 
 __all__ = ["wilson", "percentiles", "sobol", "PERCENTILES", "draws_for_half_width"]
 
@@ -63,9 +63,27 @@ def percentiles(values, q=PERCENTILES) -> dict | None:
     return {f"p{p}": float(np.percentile(v, p)) for p in q}
 
 
+def _indices(fA, fB, fAB):
+    """First-order (Saltelli et al. 2010) and total (Jansen 1999) indices, as ``scipy.stats.sobol_indices``
+    computes them: outputs centred on the mean of A and B, ``S_i = mean(f_B (f_ABi - f_A)) / V`` and
+    ``S_Ti = mean((f_A - f_ABi)^2) / 2V`` with ``V`` the variance of A and B together."""
+    m = np.mean(np.concatenate([fA, fB]))
+    fA, fB, fAB = fA - m, fB - m, fAB - m
+    var = np.var(np.concatenate([fA, fB]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        first = np.mean(fB * (fAB - fA), axis=-1) / var
+        total = 0.5 * np.mean((fA - fAB) ** 2, axis=-1) / var
+    return np.where(np.isfinite(first), first, 0.0), np.where(np.isfinite(total), total, 0.0)
+
+
 def sobol(f, dsg, confidence: float = 0.95, n_resamples: int = 999, seed: int = 0) -> dict:
     """First-order and total Sobol indices of the output ``f`` (one value per draw of the Saltelli
     design ``dsg``) per input group, with bootstrap intervals.
+
+    The point estimates are ``scipy.stats.sobol_indices``'s; the intervals are its bootstrap (BCa over
+    the ``n`` rows of the design, the same estimators, :func:`_indices`) made with
+    ``scipy.stats.bootstrap`` and a generator seeded by ``seed``: ``SobolResult.bootstrap`` draws its
+    resamples from fresh OS entropy, so the same study would not give the same intervals twice.
 
     Returns
     -------
@@ -75,24 +93,32 @@ def sobol(f, dsg, confidence: float = 0.95, n_resamples: int = 999, seed: int = 
         (every resample without variance) is None.
     """
     f = np.asarray(f, dtype=float)
-    fA, fB = f[dsg.block("A")][None, :], f[dsg.block("B")][None, :]
-    fAB = np.stack([f[dsg.block(f"AB:{g}")][None, :] for g in dsg.groups])
-    with warnings.catch_warnings():  # a bootstrap resample of a 0/1 output may have no variance: NaN, reported as None
+    fA, fB = f[dsg.block("A")], f[dsg.block("B")]
+    fAB = np.stack([f[dsg.block(f"AB:{g}")] for g in dsg.groups])
+    k = len(dsg.groups)
+    with warnings.catch_warnings():  # a bootstrap resample of a 0/1 output may have no variance: reported as None
         warnings.simplefilter("ignore")
-        res = sobol_indices(func={"f_A": fA, "f_B": fB, "f_AB": fAB}, n=dsg.n, rng=np.random.default_rng(seed))
+        res = sobol_indices(func={"f_A": fA[None, :], "f_B": fB[None, :], "f_AB": fAB[:, None, :]}, n=dsg.n)
         first, total = np.atleast_1d(res.first_order), np.atleast_1d(res.total_order)
-        if np.var(np.concatenate([fA[0], fB[0]])) == 0:
-            lo_f = hi_f = lo_t = hi_t = np.zeros(len(dsg.groups))
+        if np.var(np.concatenate([fA, fB])) == 0:
+            lo = hi = np.zeros(2 * k)
         else:
-            boot = res.bootstrap(confidence_level=confidence, n_resamples=n_resamples)  # resamples with the rng above
-            lo_f, hi_f = (np.atleast_1d(v) for v in boot.first_order.confidence_interval)
-            lo_t, hi_t = (np.atleast_1d(v) for v in boot.total_order.confidence_interval)
+            boot = bootstrap(
+                [np.arange(dsg.n)],
+                lambda idx: np.concatenate(_indices(fA[idx], fB[idx], fAB[:, idx])),
+                vectorized=False,
+                method="BCa",
+                n_resamples=n_resamples,
+                confidence_level=confidence,
+                rng=np.random.default_rng(seed),
+            )
+            lo, hi = boot.confidence_interval.low, boot.confidence_interval.high
     return {
         g: {
             "first": _finite(first[j]),
             "total": _finite(total[j]),
-            "first_ci": [_finite(lo_f[j]), _finite(hi_f[j])],
-            "total_ci": [_finite(lo_t[j]), _finite(hi_t[j])],
+            "first_ci": [_finite(lo[j]), _finite(hi[j])],
+            "total_ci": [_finite(lo[k + j]), _finite(hi[k + j])],
         }
         for j, g in enumerate(dsg.groups)
     }
