@@ -163,3 +163,25 @@ def test_cli_bad_input_exits_2_naming_the_field(tmp_path, args, words):
     assert r.exit_code == 2, r.output
     assert words in r.output and "Traceback" not in r.output
     assert not (tmp_path / "o").exists()
+
+
+def test_a_controller_that_may_not_run_refuses_the_study(tmp_path):
+    """A scenario whose controller lies outside its folder and --allow-code: refused before any draw runs
+    (as a sweep is), naming --allow-code; allowed, its draws run."""
+    raw, _ = read_scenario_yaml("tow6_uniform")
+    ctl = tmp_path / "code" / "ctl.py"
+    ctl.parent.mkdir()
+    ctl.write_text(
+        "class C:\n    def __init__(self, params, scenario):\n        self.n = scenario.vehicle.segments\n"
+        "    def __call__(self, obs):\n        return {'wheel_speed_mps': [1.0] * self.n}\n"
+    )
+    raw["mode"] = {"type": "controller", "controller": f"{ctl}:C", "period_s": 0.1}
+    raw["simulation"]["duration_s"] = 1.0
+    (tmp_path / "sc").mkdir()
+    path = tmp_path / "sc" / "s.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    kw = dict(vary=["terrain.xt=normal:0.9:0.01"], samples=1, progress=False)
+    with pytest.raises(ScenarioError, match="--allow-code"):
+        odds(str(path), **kw)
+    res = odds(str(path), allow_code=[ctl.parent], **kw)
+    assert res.rows[0]["status"] == "ok"

@@ -39,6 +39,8 @@ from ...infra.folders import (
     write_manifest,
 )
 from ...infra.progress import Progress
+from ...modes.codeload import allowed_paths
+from ...modes.controller import trust_problem_of
 from ..sweep.executors import DaskExecutor, ProcessExecutor, SerialExecutor, SweepExecutionError
 from ..sweep.metrics import one_line
 from ..sweep.run import _base
@@ -562,7 +564,11 @@ def odds(  # noqa: PLR0913 - the options of `snoworm odds`, one keyword each
         goal_m,
         rolling_speed,
     )
-    plan.allow_code = tuple(str(Path(p).resolve()) for p in allow_code)
+    plan.allow_code = tuple(str(p) for p in allowed_paths(allow_code))  # ScenarioError for an empty path
+    if plan.sc.mode.type == "controller" and "scenario" in plan.strategies:  # refused before anything runs
+        why = trust_problem_of(plan.sc, allow_code=plan.allow_code)
+        if why is not None:
+            raise ScenarioError(why)
     out = Path(os.path.abspath(out_dir)) if out_dir is not None else None
     if out is not None and not (out / DEFINITION_FILE).exists():
         check_output_folder(out, overwrite)
