@@ -64,3 +64,11 @@ def test_sensitivity_needs_two_inputs():
         design(_unc(1), 16, "random", 0, sensitivity=True)
     with pytest.raises(ScenarioError, match="--method"):
         uniforms("halton", 4, 1, 0)
+
+
+def test_sobol_points_come_in_powers_of_two():
+    """scipy only warns that n Sobol' points lose their balance unless n is a power of 2; odds refuses,
+    naming the two nearest counts."""
+    with pytest.raises(ScenarioError, match="--samples 100 with --method sobol.*--samples 64 or 128"):
+        uniforms("sobol", 100, 2, 0)
+    assert uniforms("sobol", 128, 2, 0).shape == (128, 2)

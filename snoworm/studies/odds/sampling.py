@@ -41,6 +41,12 @@ def uniforms(method: str, n: int, d: int, seed: int) -> np.ndarray:
     if method == "random":
         return np.random.default_rng(seed).random((n, d))
     if method == "sobol":
+        if n & (n - 1):
+            lo = 1 << (n.bit_length() - 1)
+            raise ScenarioError(
+                f"--samples {n} with --method sobol: Sobol' points keep their balance only in blocks of a power of "
+                f"2; use --samples {lo} or {2 * lo} (or --method lhs / random for any number)."
+            )
         return qmc.Sobol(d, scramble=True, seed=seed).random(n)
     return qmc.LatinHypercube(d, seed=seed).random(n)
 
