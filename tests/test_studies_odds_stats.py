@@ -142,3 +142,10 @@ def test_the_bootstrap_statistic_is_scipys_estimator():
     first, total = _indices(fA, fB, fAB)
     assert np.allclose(first, ref.first_order, rtol=1e-12, atol=1e-14)
     assert np.allclose(total, ref.total_order, rtol=1e-12, atol=1e-14)
+
+
+def test_wilson_ends_are_exact_at_zero_and_all():
+    """With every draw a success (or none) the interval ends exactly at 1 (or 0): the summary printed
+    "99-100.0 %" when rounding left 1 - 1e-16."""
+    for n in (7, 60, 1024):
+        assert wilson(n, n)[1] == 1.0 and wilson(0, n)[0] == 0.0

@@ -45,7 +45,9 @@ def wilson(k: int, n: int, confidence: float = 0.95) -> tuple:
     den = 1 + z * z / n
     centre = (p + z * z / (2 * n)) / den
     half = z / den * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    lo = 0.0 if k == 0 else max(0.0, centre - half)  # exactly 0 and 1 there (rounding would leave 1 - 1e-16)
+    hi = 1.0 if k == n else min(1.0, centre + half)
+    return (lo, hi)
 
 
 def draws_for_half_width(p: float, half_width: float, confidence: float = 0.95) -> int:
