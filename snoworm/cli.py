@@ -10,6 +10,7 @@ paper) are in :mod:`snoworm.commands.studies`.
 from __future__ import annotations
 
 import os
+import sys
 
 import click
 
@@ -335,7 +336,7 @@ def odds(scenario, out_dir, vary, xt_field, calibration, sets, strategy, no_plot
             **options,
         )
     except KeyboardInterrupt as exc:
-        sweep_interrupted(exc, out_dir)
+        _odds_interrupted(exc, out_dir)
     except Exception as exc:
         from .studies.sweep import SweepExecutionError  # lazy: start-up
 
@@ -344,6 +345,15 @@ def odds(scenario, out_dir, vary, xt_field, calibration, sets, strategy, no_plot
         raise
     click.echo(res.text)
     click.echo(f"wrote {out_dir}: odds.json, samples.csv" + ("" if no_plot else ", figures"))
+
+
+def _odds_interrupted(exc, out_dir):
+    """An interrupted odds study: where its finished draws are, exit 130 (143 on SIGTERM)."""
+    from .commands.common import Terminated  # lazy: start-up
+
+    how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+    click.echo(f"{how}: finished draws are in {out_dir}/samples.csv; run the same command again to resume.", err=True)
+    sys.exit(143 if isinstance(exc, Terminated) else 130)
 
 
 for _command in STUDY_COMMANDS:

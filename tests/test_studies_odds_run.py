@@ -185,3 +185,17 @@ def test_a_controller_that_may_not_run_refuses_the_study(tmp_path):
         odds(str(path), **kw)
     res = odds(str(path), allow_code=[ctl.parent], **kw)
     assert res.rows[0]["status"] == "ok"
+
+
+def test_cli_interrupted_says_where_the_finished_draws_are(tmp_path, monkeypatch):
+    import snoworm.studies.odds as odds_pkg
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(odds_pkg, "odds", interrupted)
+    r = CliRunner().invoke(
+        main, ["odds", "climb", "--out", str(tmp_path / "o"), "--vary", "terrain.xt=normal:0.8:0.05"]
+    )
+    assert r.exit_code == 130
+    assert "samples.csv" in r.output and "run the same command again to resume" in r.output
