@@ -123,3 +123,28 @@ def test_inching_table_is_computed_once_and_cached_in_the_folder(tmp_path, monke
     again = odds("climb", out_dir=tmp_path / "b", overwrite=True, **kw)
     assert [r["go"] for r in again.rows] == [r["go"] for r in first.rows]
     assert all(math.isfinite(r["time_s"]) for r in first.rows if r["go"])
+
+
+def test_supervisor_screen_moves_wherever_rolling_or_inching_moves(monkeypatch):
+    """weak_climb, the same draws: the supervisor's screen gets through whenever rolling or inching does, and
+    no slower than inching alone (it rolls, faster, wherever rolling works)."""
+    monkeypatch.setattr(screen, "INCH_XT", (0.5, 0.9))
+    monkeypatch.setattr(screen, "INCH_TABLE_S", 3.0)
+    screen._MEMO.clear()
+    res = odds(
+        "weak_climb",
+        samples=30,
+        seed=4,
+        strategies=["rolling", "inching", "supervisor"],
+        fidelity="steady",
+        progress=False,
+    )
+    by = {}
+    for r in res.rows:
+        by.setdefault(r["draw"], {})[r["strategy"]] = r
+    assert any(not d["rolling"]["go"] for d in by.values())  # the draws test something
+    for d in by.values():
+        assert d["supervisor"]["go"] >= max(d["rolling"]["go"], d["inching"]["go"])
+        if d["supervisor"]["go"] and d["inching"]["go"]:
+            assert d["supervisor"]["time_s"] <= d["inching"]["time_s"] + 1e-9
+    screen._MEMO.clear()
