@@ -199,3 +199,10 @@ def test_cli_interrupted_says_where_the_finished_draws_are(tmp_path, monkeypatch
     )
     assert r.exit_code == 130
     assert "samples.csv" in r.output and "run the same command again to resume" in r.output
+
+
+def test_python_api_takes_single_strings_as_the_cli_does():
+    kw = {k: v for k, v in STEADY.items() if k not in ("vary", "strategies")}
+    a = odds("climb", vary="terrain.xt=normal:0.75:0.05", strategies="rolling", **kw)
+    b = odds("climb", **STEADY)
+    assert a.rows == b.rows

@@ -529,7 +529,7 @@ def odds(  # noqa: PLR0913 - the options of `snoworm odds`, one keyword each
         Monte Carlo or quasi-Monte Carlo points (:mod:`~snoworm.studies.odds.sampling`).
     seed : int
         Seed of the points and of the X_t fields: the same seed gives the same draws.
-    strategies : sequence of str
+    strategies : sequence of str, or a comma-separated str
         Of ``scenario`` (default), ``rolling``, ``inching``, ``supervisor``: the same draws for each.
     sensitivity : bool
         Also first-order and total Sobol indices of the go indicator and of the speed made good.
@@ -549,6 +549,9 @@ def odds(  # noqa: PLR0913 - the options of `snoworm odds`, one keyword each
     -------
     OddsResult
     """
+    vary, sets = _listed(vary), _listed(sets)  # one string is one item, as on the command line
+    if isinstance(strategies, str):
+        strategies = [t.strip() for t in strategies.split(",") if t.strip()]
     plan = _plan(
         scenario,
         sets,
@@ -629,6 +632,10 @@ def _finish(plan: _Plan, rows: dict, out, lease, opts) -> OddsResult:
             res.figures = _write_figures(res, plan, out, plot_format)
         write_manifest(out, command, status="complete")
     return res
+
+
+def _listed(items) -> list:
+    return [items] if isinstance(items, str) else list(items or ())
 
 
 def _json(v):
