@@ -206,3 +206,16 @@ def test_python_api_takes_single_strings_as_the_cli_does():
     a = odds("climb", vary="terrain.xt=normal:0.75:0.05", strategies="rolling", **kw)
     b = odds("climb", **STEADY)
     assert a.rows == b.rows
+
+
+def test_set_cannot_fix_one_of_the_jointly_drawn_coefficients(tmp_path):
+    doc = {
+        "parameters": [{"name": "b_tF", "value": 0.9, "stderr": 0.05}, {"name": "A", "value": 1.2, "stderr": 0.02}],
+        "correlation": [[1.0, -0.5], [-0.5, 1.0]],
+    }
+    (tmp_path / "calibration.json").write_text(json.dumps(doc))
+    kw = {k: v for k, v in STEADY.items() if k != "vary"}
+    with pytest.raises(ScenarioError, match="--set terrain.model.A: --calibration draws this coefficient jointly"):
+        odds("climb", calibration=str(tmp_path), sets=["terrain.model.A=1.0"], **kw)
+    res = odds("climb", calibration=str(tmp_path), **{**kw, "samples": 8})
+    assert {"terrain.model.b_tF", "terrain.model.A"} <= set(res.columns)

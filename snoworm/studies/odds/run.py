@@ -139,6 +139,12 @@ def _uncertainty(sc, section, base_dir, vary, xt_field, calibration, fixed) -> U
         fld.check_mean(float(np.min(vals)), float(np.max(vals)))
     cal = calibration if calibration is not None else sec["calibration"]
     cal = read_calibration(cal) if isinstance(cal, (str, os.PathLike)) else cal
+    clash = sorted(f"terrain.model.{n}" for n in (cal.names if cal else ()) if f"terrain.model.{n}" in fixed)
+    if clash:  # fixing one of jointly drawn coefficients would change the others' distribution too
+        raise ScenarioError(
+            f"--set {clash[0]}: --calibration draws this coefficient jointly with {', '.join(cal.names)}; fixing it "
+            "alone is not the calibration's distribution. Leave it out of --set, or calibrate without fitting it."
+        )
     unc = Uncertainty(tuple(scalars), fld, cal)
     if unc.is_empty():
         raise ScenarioError(
