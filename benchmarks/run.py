@@ -56,6 +56,8 @@ TARGETS = {
     "inching_sweep_speedup": (">=", 4.0, "inchworm6 sweep 100 x 30 s: current -j 2 / baseline serial cases/s"),
     "paper_s": ("<=", 8.0, "`snoworm paper` whole process [s]"),
     "mobility_map_s": ("<=", 8.0, "`snoworm mobility-map` traverse_patch 9 x 3, -j 2, whole process [s]"),
+    "odds_steady_1000_s": ("<=", 60.0, "odds --fidelity steady, 1 km X_t field, 1,000 draws x 2 gaits, -j 2 [s]"),
+    "odds_transient_throughput": (">=", 0.9, "odds --fidelity transient / plain sweep of the same cases (cases/s)"),
 }
 
 #: Whole-process commands timed by :func:`bench_processes` (``{out}``: a fresh temporary directory).
@@ -561,6 +563,65 @@ def verdict(key, value):
     return ("PASS" if ok else "MISS"), f"{op} {target:g}"
 
 
+# ------------------------------------------------------------------------------ odds (issue 33)
+def _km_route():
+    """A 1 km route for the odds benchmark: traverse_patch's chain (supervisor: rolling speed and inching gait)
+    on X_t 0.8, level, a 5 deg climb of 100 m, 300 m plateau, a 5 deg descent."""
+    from snoworm.config.scenario import read_scenario_yaml
+
+    raw, _ = read_scenario_yaml("traverse_patch")
+    raw = dict(raw, name="km_route")
+    elev = [[0.0, 0.0], [300.0, 0.0], [400.0, 8.7], [700.0, 8.7], [800.0, 0.0], [1000.0, 0.0]]
+    raw["terrain"] = {"xt": 0.8, "elevation": elev}
+    return raw
+
+
+def bench_odds(quick, report):
+    """Issue 33: ``snoworm odds``.  Steady fidelity: draws of a 1 km route with a random X_t field
+    (sd 0.05, correlation 5 m), rolling and inching, ``-j 2``, cold (the inching table computed in the run).
+    Transient: the same tow6_uniform cases as an odds study (X_t drawn) and as a plain sweep over the drawn
+    values (serial, interleaved, best of two), cases per second."""
+    from snoworm.studies.odds import odds, screen
+
+    out = {}
+    n = 200 if quick else 1000
+    screen._MEMO.clear()
+    t0 = time.perf_counter()
+    res = odds(
+        _km_route(),
+        xt_field="sd=0.05,corr=5",
+        samples=n,
+        strategies=["rolling", "inching"],
+        fidelity="steady",
+        jobs=2,
+        progress=False,
+    )
+    wall = time.perf_counter() - t0
+    out["steady"] = {"draws": n, "wall_s": wall, "text": res.text}
+    report(f"  steady, {n} draws x 2 gaits, 1 km, -j 2 (cold): {wall:6.1f} s;  {res.text.splitlines()[0]}")
+    if quick:
+        out["steady"]["wall_s_1000"] = wall * 1000 / n  # the draws scale linearly; the tables are a fixed cost
+    m = 12 if quick else 40
+    kw = dict(vary=["terrain.xt=uniform:0.6:1.0"], sets=["simulation.duration_s=10"], samples=m, progress=False)
+    best = {"odds": float("inf"), "sweep": float("inf")}
+    for _ in range(2):
+        t0 = time.perf_counter()
+        r = odds(SC / "tow6_uniform.yaml", **kw)
+        best["odds"] = min(best["odds"], time.perf_counter() - t0)
+        xts = ",".join(repr(row["terrain.xt"]) for row in r.rows)
+        t0 = time.perf_counter()
+        run_sweep(
+            SC / "tow6_uniform.yaml", [f"terrain.xt={xts}", "simulation.duration_s=10"], plot=False, progress=False
+        )
+        best["sweep"] = min(best["sweep"], time.perf_counter() - t0)
+    out["transient"] = {"cases": m, **{f"{k}_s": v for k, v in best.items()}, "ratio": best["sweep"] / best["odds"]}
+    report(
+        f"  transient, {m} cases of tow6_uniform 10 s: odds {m / best['odds']:.1f} cases/s, sweep "
+        f"{m / best['sweep']:.1f} cases/s (ratio {best['sweep'] / best['odds']:.2f})"
+    )
+    return out
+
+
 #: the sections of a run, in order (``--only`` picks some)
 SECTIONS = (
     "scenarios",
@@ -573,6 +634,7 @@ SECTIONS = (
     "controllers",
     "startup",
     "rl",
+    "odds",
 )
 
 
@@ -612,6 +674,10 @@ def _values(res) -> dict:
         v.update(startup_values(res["startup"]))
     if "rl" in res:
         v.update(rl_values(res["rl"]))
+    if "odds" in res:
+        st = res["odds"]["steady"]
+        v["odds_steady_1000_s"] = st.get("wall_s_1000", st["wall_s"])
+        v["odds_transient_throughput"] = res["odds"]["transient"]["ratio"]
     return v
 
 
@@ -689,6 +755,11 @@ def main(argv=None):
             "Gymnasium environments (issue 27: tow6_uniform, dt 0.1 s, random actions, interleaved, best of "
             f"{repeats} rounds):",
             lambda: bench_rl(repeats, report, args.baseline),
+        ),
+        (
+            "odds",
+            "Odds of getting through (issue 33: steady screen of a 1 km route; transient against a plain sweep):",
+            lambda: bench_odds(args.quick, report),
         ),
     ]
     for key, title, fn in steps:

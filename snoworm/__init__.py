@@ -12,6 +12,7 @@ load_result(run_dir)                -> Result read back from a run folder
 Result.to_pandas(), .to_xarray()    -> tidy DataFrames / an xarray Dataset (pip install 'snoworm[data]')
 Result.plot(kind, ax=None)          -> a matplotlib Figure (the backend is never changed)
 run_sweep(scenario, sets, ...)      -> SweepTable (``.to_pandas()``); load_sweep(out_dir) reads one back
+odds(scenario, vary=..., ...)       -> OddsResult: P(go) per strategy with its interval, samples, Sobol indices
 Mode, ModeConfig, register_mode     -> add a mobility mode of your own
 Simulator(scenario)                 -> reset() / step(command, dt) -> Observation; result() -> Result
 mode: {type: controller, ...}       -> your own discrete-time controller (docs/controllers.md)
@@ -57,6 +58,8 @@ _EXPORTS = {
     "SweepTable": "studies.sweep",
     "load_sweep": "studies.sweep",
     "run_sweep": "studies.sweep",
+    "odds": "studies.odds",
+    "OddsResult": "studies.odds",
 }
 
 __all__ = ["__version__", *sorted(_EXPORTS)]
@@ -80,6 +83,7 @@ if TYPE_CHECKING:
     from .simulation.driver import BatchMember as BatchMember, simulate as simulate, simulate_batch as simulate_batch
     from .simulation.guard import SolverError as SolverError
     from .simulation.stepwise import Observation as Observation, Simulator as Simulator
+    from .studies.odds import OddsResult as OddsResult, odds as odds
     from .studies.sweep import SweepTable as SweepTable, load_sweep as load_sweep, run_sweep as run_sweep
 
 

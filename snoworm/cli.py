@@ -10,6 +10,7 @@ paper) are in :mod:`snoworm.commands.studies`.
 from __future__ import annotations
 
 import os
+import sys
 
 import click
 
@@ -212,6 +213,147 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
     except KeyboardInterrupt as exc:
         sweep_interrupted(exc, out_dir)
     echo_sweep(table, out_dir)
+
+
+# ------------------------------------------------------------------------------ snoworm odds (issue 33)
+@main.command()
+@click.argument("scenario", type=click.Path(dir_okay=False))
+@out_option("Directory for odds.json, samples.csv and the figures. Re-running the same command resumes there.")
+@click.option(
+    "--vary",
+    multiple=True,
+    metavar="PATH=DIST:PARAMS",
+    help="An uncertain numeric scenario field and its distribution: normal:MEAN:SD, lognormal:MEAN:SD (of the "
+    "value), uniform:LOW:HIGH, triangular:LOW:MODE:HIGH, truncnormal:MEAN:SD:LOW:HIGH; e.g. "
+    "--vary terrain.xt=normal:0.8:0.05 (repeatable; adds to the scenario's uncertainty: section).",
+)
+@click.option(
+    "--xt-field",
+    metavar="sd=SD,corr=METRES",
+    default=None,
+    help="A spatially random X_t field around the route's X_t (standard deviation, correlation length), "
+    "clipped to [0.05, 1]; each draw has the same field for every strategy.",
+)
+@click.option(
+    "--calibration",
+    type=click.Path(file_okay=False),
+    default=None,
+    help="A `snoworm calibrate` output folder: its fitted coefficients drawn jointly with their covariance.",
+)
+@click.option(
+    "--set",
+    "sets",
+    multiple=True,
+    metavar="KEY=VALUE",
+    help="Fix a scenario value for every draw (a fixed key is not uncertain).",
+)
+@click.option(
+    "--samples",
+    default=1000,
+    show_default=True,
+    type=int,
+    help="Number of draws (with --sensitivity: the base size n; n (k + 2) draws for k inputs).",
+)
+@click.option(
+    "--method",
+    type=click.Choice(["random", "sobol", "lhs"]),
+    default="random",
+    show_default=True,
+    help="Monte Carlo, scrambled Sobol' points or Latin hypercube.",
+)
+@click.option(
+    "--seed", default=0, show_default=True, type=click.IntRange(min=0), help="Seed of the draws and of the X_t fields."
+)
+@click.option(
+    "--strategy",
+    "strategy",
+    default="scenario",
+    show_default=True,
+    metavar="LIST",
+    help="Comma-separated strategies run on the same draws: scenario (the mode as written), rolling, inching, supervisor.",
+)
+@click.option(
+    "--sensitivity", is_flag=True, help="Also first-order and total Sobol indices (with bootstrap intervals)."
+)
+@click.option(
+    "--fidelity",
+    type=click.Choice(["transient", "steady"]),
+    default="transient",
+    show_default=True,
+    help="transient: simulate every draw; steady: screen each route element at its steady state (fast, docs/odds.md).",
+)
+@click.option(
+    "--goal-m",
+    type=float,
+    default=None,
+    help="The leader's distance that counts as the end of the route [m] (default: the route's last point).",
+)
+@click.option(
+    "--rolling-speed",
+    type=float,
+    default=None,
+    help="Wheel speed of the rolling strategy when the scenario's mode does not roll [m/s].",
+)
+@click.option("-j", "--jobs", default=1, show_default=True, type=click.IntRange(min=1), help="Local worker processes.")
+@click.option(
+    "--scheduler",
+    metavar="ADDRESS",
+    default=None,
+    help="Run the draws on a Dask scheduler (tcp://host:port); overrides -j.",
+)
+@click.option("--no-plot", is_flag=True, help="Skip the figures.")
+@plot_format_option
+@click.option(
+    "--overwrite", is_flag=True, help="Replace another odds study (or a folder snoworm did not write) in --out."
+)
+@allow_code_option
+@handle_errors
+def odds(scenario, out_dir, vary, xt_field, calibration, sets, strategy, no_plot, **options):
+    """The odds that SCENARIO gets through with uncertain snow: P(go) per strategy with its 95 % interval.
+
+    \b
+    Writes to --out: odds.json (per strategy p_go, p_go_ci (Wilson), n, percentiles 5/50/95 of time, speed
+    made good and energy per metre, where draws stop; the inputs, seed and method; with --sensitivity the
+    Sobol indices), samples.csv (one row per draw and strategy, appended as each finishes), and the figures
+    odds.png, stops.png, convergence.png (and sobol.png).  Model error is not sampled (docs/odds.md).
+    Exit status: 0 done (even with failed draws), 2 bad input, 1 if a worker or the cluster fails, 130
+    when interrupted (re-run to resume).
+    """
+    from .studies.odds import odds as run_odds  # lazy: start-up
+
+    strategies = [s.strip() for s in strategy.split(",") if s.strip()]
+    try:
+        res = run_odds(
+            scenario,
+            vary=vary,
+            xt_field=xt_field,
+            calibration=calibration,
+            sets=sets,
+            strategies=strategies,
+            out_dir=out_dir,
+            plot=not no_plot,
+            command=command_line(),
+            **options,
+        )
+    except KeyboardInterrupt as exc:
+        _odds_interrupted(exc, out_dir)
+    except Exception as exc:
+        from .studies.sweep import SweepExecutionError  # lazy: start-up
+
+        if isinstance(exc, SweepExecutionError):
+            fail(str(exc), EXIT_SOLVER)
+        raise
+    click.echo(res.text)
+    click.echo(f"wrote {out_dir}: odds.json, samples.csv" + ("" if no_plot else ", figures"))
+
+
+def _odds_interrupted(exc, out_dir):
+    """An interrupted odds study: where its finished draws are, exit 130 (143 on SIGTERM)."""
+    from .commands.common import Terminated  # lazy: start-up
+
+    how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+    click.echo(f"{how}: finished draws are in {out_dir}/samples.csv; run the same command again to resume.", err=True)
+    sys.exit(143 if isinstance(exc, Terminated) else 130)
 
 
 for _command in STUDY_COMMANDS:

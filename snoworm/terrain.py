@@ -43,6 +43,7 @@ __all__ = [
     "STEP_WIDTH_M",
     "patch_profile",
     "random_profile",
+    "gaussian_field",
 ]
 
 
@@ -489,6 +490,24 @@ def random_profile(
     start_m : float
         Position of the first grid point [m].
     """
+    pos, field_ = gaussian_field(correlation_length_m, seed, length_m, start_m)
+    xt = np.clip(mean + std * field_, min_xt, 1.0)
+    return TerrainProfile(tuple(pos.tolist()), tuple(xt.tolist()))
+
+
+def gaussian_field(correlation_length_m: float, seed: int, length_m: float, start_m: float = 0.0):
+    """The generator of :func:`random_profile`: a stationary Gaussian field of zero mean and unit variance.
+
+    White noise on a grid of spacing ``correlation_length_m / 8`` convolved with a Gaussian kernel of
+    standard deviation ``correlation_length_m / 2`` (correlation ``exp(-r^2 / correlation_length_m^2)``),
+    seeded by ``numpy.random.default_rng(seed)``.  ``snoworm odds`` adds it, scaled, to a route's X_t
+    (docs/odds.md).
+
+    Returns
+    -------
+    pos, values : ndarray
+        Grid positions from ``start_m`` [m] and the field's values there.
+    """
     dx = correlation_length_m / 8.0
     n = int(np.ceil(length_m / dx)) + 1
     sigma_k = correlation_length_m / 2.0
@@ -498,7 +517,4 @@ def random_profile(
     r = np.arange(-half, half + 1) * dx
     kern = np.exp(-0.5 * (r / sigma_k) ** 2)
     kern /= np.sqrt(np.sum(kern**2))  # unit variance of the filtered noise
-    field_ = np.convolve(noise, kern, mode="valid")[:n]
-    xt = np.clip(mean + std * field_, min_xt, 1.0)
-    pos = start_m + dx * np.arange(n)
-    return TerrainProfile(tuple(pos.tolist()), tuple(xt.tolist()))
+    return start_m + dx * np.arange(n), np.convolve(noise, kern, mode="valid")[:n]

@@ -20,6 +20,8 @@ ENTRY_POINTS = {
     "studies/sweep/plan.py",
     "studies/sweep/run.py",
     "studies/sweep/metrics.py",
+    "studies/odds/run.py",
+    "studies/odds/outcome.py",
 }
 
 

@@ -198,7 +198,7 @@ class Scenario(Config):
         )
 
 
-_TOP_KEYS = ("name", "description", "vehicle", "terrain", "tow", "mode", "simulation", "sources")
+_TOP_KEYS = ("name", "description", "vehicle", "terrain", "tow", "mode", "simulation", "sources", "uncertainty")
 
 
 def _merge(defaults: dict, given: Any) -> Any:
@@ -260,6 +260,7 @@ def scenario_from_dict(
     entries, veh["parameter_set"] = parameter_entries(veh.get("parameter_set"), base_dir)
     ps = {sec: {k: v for k, (v, _) in items.items()} for sec, items in entries.items()}
     notes = source_notes(raw.pop("sources", None) or {})
+    raw.pop("uncertainty", None)  # read (and checked) by `snoworm odds` only: a run uses the nominal values
     veh["segment"] = _merge(ps["segment"], veh.get("segment", {}))
     veh["links"] = _merge(ps["links"], veh.get("links", {}))
     if isinstance(raw["terrain"], dict):
