@@ -1,6 +1,7 @@
 """The CLI contract of issue 2: files, exit codes, messages (click.testing.CliRunner)."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -43,6 +44,32 @@ def test_run_writes_contract_files(tmp_path):
     s2 = json.loads((tmp_path / "o2" / "summary.json").read_text())
     assert s2["final_link_forces_N"] == pytest.approx(s["final_link_forces_N"], rel=1e-9)
     assert not (tmp_path / "o2" / "forces.png").exists()
+    assert (
+        r.output.splitlines()[-1]
+        == s["status_reason"]
+        == f"moving at the end (t = 8.0 s, x = {s_x(out):.1f} m, " + (f"mean speed {s['mean_speed_mps']:.2f} m/s)")
+    )
+
+
+def s_x(out):
+    """The leader's last position in a run folder's segments.csv."""
+    rows = [r.split(",") for r in (out / "segments.csv").read_text().splitlines()[1:]]
+    return float([r for r in rows if r[1] == "0"][-1][2])
+
+
+def test_run_ends_with_the_verdict(tmp_path):
+    """The last line of `snoworm run` says where, when and why the chain stopped (issue 32)."""
+    r = run("run", SCENARIOS / "rolling6_xt025.yaml", "--out", tmp_path / "o", "--no-plot")
+    assert r.exit_code == 0, r.output
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert s["status"] == "immobilised" and s["immobilised_at_m"] == pytest.approx(0.0, abs=0.05)
+    assert r.output.splitlines()[-1] == s["status_reason"]
+    m = re.fullmatch(
+        r"immobilised at x = 0\.0 m, t = (\S+) s \(X_t 0\.25, grade 0\.0 deg, slip (\S+)\)", s["status_reason"]
+    )
+    assert m, s["status_reason"]
+    assert 0.5 <= float(m[1]) <= 0.5 + 0.05 + 0.05  # the motors start at 0.5 s (one output step, rounding)
+    assert float(m[2]) > 0.8  # the wheels spin
 
 
 @pytest.mark.parametrize(

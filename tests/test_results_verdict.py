@@ -80,14 +80,13 @@ def test_a_weak_patch_immobilises_the_chain_where_the_steady_limit_says(patch_ru
 
 def test_the_stall_starts_where_the_chain_stops_advancing(patch_run):
     """t is the start of the first window of window_s over which the centre advances less than
-    speed_mps per second: one output step earlier, the window still sees progress."""
+    speed_mps per second: one output step earlier, the window still sees that much progress."""
     v = verdict(patch_run)
     t, centre = patch_run.t, patch_run.segments["x_m"].mean(axis=1)
     crit = v.criteria
     k = int(np.searchsorted(t, v.t_s))
-    advance = np.interp(t[k - 1] + crit.window_s, t, centre) - centre[k - 1]
-    assert advance >= crit.speed_mps * crit.window_s * (1 - 1e-6) or advance >= (1 - crit.slip) * WHEEL_SPEED_MPS
-    assert np.interp(v.t_s + crit.window_s, t, centre) - centre[k] < crit.speed_mps * crit.window_s
+    assert np.interp(t[k - 1] + crit.window_s, t, centre) - centre[k - 1] >= crit.speed_mps * crit.window_s
+    assert np.interp(t[k] + crit.window_s, t, centre) - centre[k] < crit.speed_mps * crit.window_s
 
 
 def test_a_level_run_is_moving():
@@ -101,11 +100,13 @@ def test_a_level_run_is_moving():
 
 
 def test_rolling_on_weak_snow_is_immobilised_from_the_start():
-    """rolling6_xt025 (X_t 0.25, below the rolling limit): the wheels spin from the start."""
+    """rolling6_xt025 (X_t 0.25, below the rolling limit): the wheels spin from the moment the
+    motors start (mode.start_time_s), which is when the chain is immobilised."""
     res = shipped_result("rolling6_xt025")
     v = verdict(res)
     assert v.status == "immobilised"
-    assert v.t_s <= max(res.scenario.mode.start_time_s)
+    start = max(res.scenario.mode.start_time_s)
+    assert start <= v.t_s <= start + res.scenario.simulation.output_dt_s
     assert v.xt == pytest.approx(0.25)
 
 

@@ -7,7 +7,9 @@ output series alone; ``snoworm run``'s last line, ``summary.json`` (``status``,
 and the odds all call it, so they apply the same test.
 
 Immobilised
-    From the first output time ``t`` after which, over the window ``[t, t + window_s]``,
+    From the first output time ``t`` after which, over the window ``[t, t + window_s]``
+    (reported from the first time in that window at which the wheels are driven: a chain whose
+    motors start at 0.5 s is immobilised at 0.5 s),
 
     * the wheels are driven: the chain's *driven travel* ``C``, the integral over the window of the
       mean over the segments of ``max(v_sp, R_w w, 0)`` (wheel-speed set-point or wheel speed,
@@ -98,8 +100,8 @@ class Verdict:
         ``"moving"`` (ran the whole duration, not immobilised, no end reached), ``"reached_end"``
         (the leader passed the goal) or ``"immobilised"``.
     t_s : float
-        When: the start of the first stalled window (immobilised; or the time the sinkage
-        limit was reached), the time the leader passed the goal (reached_end), the run's last
+        When: the start of the first stalled window, or the first time in it at which the wheels
+        are driven (immobilised; or the time the sinkage limit was reached), the time the leader passed the goal (reached_end), the run's last
         output time (moving) [s].
     x_m : float
         Where: the leader's (segment 0's) position at ``t_s`` [m].
@@ -205,7 +207,9 @@ def _stalled_windows(t, centre, driven, crit):
     hit = np.flatnonzero(stuck)
     if hit.size == 0:
         return None, None
-    return int(i[hit[0]]), int(j[hit[0]])
+    first, last = int(i[hit[0]]), int(j[hit[0]])
+    first += int(np.argmax(driven[first : last + 1] > 0))  # from when the wheels are driven (motors started)
+    return first, last
 
 
 def _sunk(segments, crit):
