@@ -191,7 +191,7 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
     verdict: the run's verdict, as `snoworm run` prints it: moving, reached_end (the leader passed
     simulation.goal_m or the route's last point) or immobilised (for simulation.immobilised.window_s,
     5 s, the wheels driven but the chain's centre slower than max(0.05 m/s, 5 *
-    terrain.model.sign_eps_mps) and covering less than a fifth of the wheels' travel; for a
+    terrain.model.sign_eps_mps) and covering less than a tenth of the wheels' travel; for a
     free-rolling FrostyBoy: X_t below about 0.586); immobilised_at_m: the leader's position then.
 
     A failing case is recorded and the sweep goes on. Re-running the same command skips the

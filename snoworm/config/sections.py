@@ -455,7 +455,7 @@ class ImmobilisedConfig(Config):
         why=FINITE_WHY,
     )
     slip: float = field(
-        0.8,
+        0.9,
         gt=0,
         le=1,
         doc="the chain covers less than (1 - slip) of its wheels' travel over the window",

@@ -20,11 +20,15 @@ Immobilised
     * the wheels slip: ``P < (1 - slip) C``, the chain covers less than ``1 - slip`` of its wheels'
       travel.
 
+    and it never gets out: no later window sees the chain advance ``speed_mps * window`` (a
+    stall the chain gets out of, as when a paper Fig 7 chain waits for its rear motors to start,
+    or a supervisor inches out of a patch, is not an immobilisation).
+
     The chain's centre is used for progress, not a segment: an inching gait stops its anchor
     segments by design and advances the chain's centre phase by phase, and its anchors' set-points
     (0) do not count as driven.  A chain parked with its wheels at rest is not driven, so never
     immobilised.  The first condition makes the third meaningful only for slow commands: a chain
-    commanded at a fifth of ``speed_mps`` is not stalled by following it slowly.  With a sinkage
+    commanded at a tenth of ``speed_mps`` is not stalled by following it slowly.  With a sinkage
     series (``sinkage_m`` in ``Result.segments``) the chain is also immobilised from the first
     output time at which the mean sinkage of its segments reaches ``sinkage_m`` (dug in).
 
@@ -114,7 +118,9 @@ class Verdict:
     grade_deg : float or None
         Immobilised: the grade under the chain at ``t_s`` (mean over the segments) [deg].
     slip : float or None
-        Immobilised: the wheels' slip (Eq. 1, mean over the segments and the stalled window).
+        Immobilised: the chain's slip over the stalled window, ``1 - P / C`` (the quantity the
+        criterion judges: 1 when the chain does not advance at all, above 1 when it slides back);
+        dug in: the wheels' slip (Eq. 1) then, mean over the segments.
     cause : str or None
         Immobilised: ``"slip"`` (stalled with the wheels driven) or ``"sinkage"`` (dug in).
     sinkage_m : float or None
@@ -185,13 +191,12 @@ def criteria_of(scenario, **changes) -> Criteria:
     return dataclasses.replace(crit, **changes) if changes else crit
 
 
-def _stalled_windows(t, centre, driven, crit):
-    """``(first stalled window's start index or None, its end index)`` (module docstring)."""
+def _stalled_windows(t, centre, driven, travel, crit):
+    """``(first stalled window's start index or None, its end index)`` (module docstring);
+    ``travel``: the driven travel from the start (the cumulative trapezoid of ``driven``)."""
     n = t.size
     if n < 2 or t[-1] - t[0] < crit.window_s * (1 - 1e-9):
         return None, None
-    # driven travel: the cumulative trapezoid of the driven speed
-    travel = np.concatenate(([0.0], np.cumsum(0.5 * (driven[1:] + driven[:-1]) * np.diff(t))))
     end = np.searchsorted(t, t + crit.window_s * (1 - 1e-9))  # first sample a full window later
     ok = end < n
     i = np.nonzero(ok)[0]
@@ -199,11 +204,10 @@ def _stalled_windows(t, centre, driven, crit):
     span = t[j] - t[i]
     progress = centre[j] - centre[i]
     driven_travel = travel[j] - travel[i]
-    stuck = (
-        (driven_travel >= crit.speed_mps * span)
-        & (progress < crit.speed_mps * span)
-        & (progress < (1.0 - crit.slip) * driven_travel)
-    )
+    moves = progress >= crit.speed_mps * span
+    stuck = (driven_travel >= crit.speed_mps * span) & ~moves & (progress < (1.0 - crit.slip) * driven_travel)
+    if moves.any():  # a stall the chain got out of (a later window advances) is not an immobilisation
+        stuck &= i > i[moves][-1]
     hit = np.flatnonzero(stuck)
     if hit.size == 0:
         return None, None
@@ -267,7 +271,8 @@ def verdict(result, criteria=None) -> Verdict:
     motors_on = np.asarray(seg["motor_torque_Nm"]) != 0.0  # a motor switched off gives exactly no torque
     commanded = np.where(motors_on, seg["speed_setpoint_mps"], 0.0)
     driven = np.maximum(np.maximum(commanded, seg["wheel_speed_mps"]), 0.0).mean(axis=1)
-    i_stall, j_stall = _stalled_windows(t, centre, driven, crit)
+    travel = np.concatenate(([0.0], np.cumsum(0.5 * (driven[1:] + driven[:-1]) * np.diff(t))))
+    i_stall, j_stall = _stalled_windows(t, centre, driven, travel, crit)
     i_sunk = _sunk(seg, crit)
     t_goal = _goal_time(t, leader, crit.goal_m)
     candidates = []
@@ -286,8 +291,10 @@ def verdict(result, criteria=None) -> Verdict:
         )
     if stop is not None:
         t_s, cause, i = stop
-        j = j_stall if cause == "slip" else i
-        slip = float(np.mean(np.asarray(seg["slip"], float)[i : j + 1]))
+        if cause == "slip":  # the chain's slip over the stalled window: 1 - progress / driven travel
+            slip = 1.0 - float(centre[j_stall] - centre[i]) / float(travel[j_stall] - travel[i])
+        else:  # dug in: the wheels' slip (Eq. 1) then, mean over the segments
+            slip = float(np.mean(seg["slip"][i]))
         xt = float(np.mean(seg["xt"][i]))
         grade = float(np.mean(seg["grade_deg"][i]))
         z = seg.get("sinkage_m")

@@ -4,7 +4,7 @@ The ``verdict``, ``immobilised`` and ``immobilised_at_m`` columns are the run's 
 (:func:`snoworm.results.verdict.verdict`, the same test as ``snoworm run``'s last line and
 ``summary.json``'s ``status``): ``immobilised`` when, over ``simulation.immobilised.window_s``
 (5 s), the chain's wheels are driven yet its centre advances less than ``speed_mps`` per second
-(by default ``max(0.05 m/s, 5 terrain.model.sign_eps_mps)``) and less than ``1 - slip`` (0.2) of
+(by default ``max(0.05 m/s, 5 terrain.model.sign_eps_mps)``) and less than ``1 - slip`` (0.1) of
 its wheels' travel.  The smooth sign of the terrain resistance (``tanh(V / sign_eps_mps)``) lets a
 stuck vehicle creep: with the default ``sign_eps_mps = 0.01 m/s`` a free-rolling FrostyBoy creeps
 at 0.006 m/s at X_t = 0.5 and 0.032 m/s at X_t = 0.586, while at X_t = 0.59 it already rolls at
