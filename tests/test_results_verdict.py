@@ -235,3 +235,46 @@ def test_a_stall_the_chain_gets_out_of_is_not_an_immobilisation():
     assert centre[-1] - centre[-101] > 5 * crit.speed_mps * crit.window_s  # then it rolls
     v = verdict(res)
     assert v.status == "moving" and v.t_s == t[-1]
+
+
+def test_a_run_past_the_routes_last_point_reaches_the_end():
+    """ramp_drift without goal_m, run long enough: reached_end when the leader passes the route
+    file's last distance (220 m), the time interpolated between the samples by hand."""
+    res = simulate(load_scenario(SCENARIOS / "ramp_drift.yaml", ["simulation.duration_s=150"]))
+    leader = res.segments["x_m"][:, 0]
+    end = res.scenario.terrain.route_data().distance_m[-1]
+    assert leader[-1] > end
+    k = int(np.argmax(leader >= end))
+    t_by_hand = res.t[k - 1] + (res.t[k] - res.t[k - 1]) * (end - leader[k - 1]) / (leader[k] - leader[k - 1])
+    v = verdict(res)
+    assert v.status == "reached_end" and v.x_m == end
+    assert v.t_s == pytest.approx(t_by_hand, abs=1e-9)
+    assert res.summary()["status"] == "reached_end" and res.summary()["immobilised_at_m"] is None
+
+
+UNIFORM_LEVEL = sorted(
+    p.stem
+    for p in SCENARIOS.glob("*.yaml")
+    if (sc := load_scenario(p)).mode.type == "uniform"
+    and sc.terrain.xt is not None
+    and not sc.terrain.patches
+    and sc.terrain.elevation_profile() is None
+)
+
+
+@pytest.mark.parametrize("name", UNIFORM_LEVEL)
+def test_shipped_rolling_runs_are_immobilised_exactly_below_the_steady_limit(name):
+    """Every shipped scenario rolling at one wheel speed on uniform level snow: immobilised when
+    X_t is below the steady limit for its share of the tow (snoworm.steady), moving above it."""
+    res = shipped_result(name)
+    sc = res.scenario
+    seg, tp = sc.vehicle.segment_params()[0], sc.terrain.model.params()
+    limit = steady.immobilisation_limit_xt(
+        seg, tp, wheel_speed_mps=sc.mode.rolling_speed(), drawbar_N=sc.tow.force_N / sc.vehicle.segments
+    )
+    assert abs(sc.terrain.xt - limit) > 0.05  # clear of the limit: the verdict must not hang on a margin
+    assert verdict(res).status == ("immobilised" if sc.terrain.xt < limit else "moving")
+
+
+def test_the_shipped_rolling_cases_span_both_sides_of_the_limit():
+    assert {"rolling6_xt025", "tow6_uniform", "tow6_staggered"} <= set(UNIFORM_LEVEL)
