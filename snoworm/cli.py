@@ -66,6 +66,12 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
     end, with a manifest (.snoworm-manifest.json); nothing is written if the scenario is
     invalid (exit 2), the solver fails (exit 1) or the run is interrupted.  Progress in
     simulated time goes to stderr, and so does which controller code runs (if any).
+
+    The last line is the run's verdict (also in summary.json: status, immobilised_at_m,
+    status_reason): "reached the end of the route ... at t = ..." (the leader passed
+    simulation.goal_m or the route's last point), "immobilised at x = ..., t = ... (X_t, grade,
+    slip there)" (stalled for good with the wheels driven: simulation.immobilised) or "moving at
+    the end (...)".
     """
     from .config.scenario import load_scenario  # lazy: start-up
     from .infra.folders import check_output_folder  # lazy: start-up
