@@ -215,7 +215,9 @@ def test_default_stall_speed_follows_the_smooth_sign():
     assert (crit.speed_mps, crit.window_s, crit.slip) == (0.02, 3.0, 0.9)
 
 
-def test_bad_criteria_name_the_field():
+def test_bad_criteria_name_the_field(patch_run):
+    with pytest.raises(ValueError, match="unknown 'windows'; give some of speed_mps, window_s"):
+        verdict(patch_run, {"windows": 3})
     raw = rolling_raw()
     raw["simulation"]["immobilised"] = {"slip": 1.5}
     with pytest.raises(ScenarioError, match=r"simulation\.immobilised\.slip: must be at most 1"):

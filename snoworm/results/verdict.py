@@ -173,7 +173,8 @@ def criteria_of(scenario, **changes) -> Criteria:
     resolved to numbers, with ``changes`` (fields of :class:`Criteria`) applied.
 
     ``speed_mps`` unset: ``max(IMMOBILISED_SPEED_MPS, IMMOBILISED_SIGN_FACTOR * sign_eps_mps)``.
-    ``sinkage_m`` unset: the terrain model's ``z_max_m`` if it has one, else None.
+    ``sinkage_m`` unset: the terrain model's ``z_max_m`` if it has one, else None.  An unknown
+    name in ``changes`` raises ValueError naming the known ones.
     """
     cfg = scenario.simulation.immobilised
     model = scenario.terrain.model
@@ -188,6 +189,12 @@ def criteria_of(scenario, **changes) -> Criteria:
         sinkage_m=None if sinkage is None else float(sinkage),
         goal_m=goal_of(scenario),
     )
+    unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(Criteria)})
+    if unknown:
+        raise ValueError(
+            f"verdict criteria: unknown {', '.join(map(repr, unknown))}; give some of "
+            f"{', '.join(f.name for f in dataclasses.fields(Criteria))}"
+        )
     return dataclasses.replace(crit, **changes) if changes else crit
 
 
