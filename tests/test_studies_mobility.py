@@ -381,3 +381,7 @@ def test_a_gait_that_hangs_after_its_first_phase_does_not_inch():
     assert abs(centre[-1] - np.interp(4.0, t, centre)) < 0.005  # by hand: nothing in the last 4 s
     cell = mobility._inch_run(raw)
     assert cell["inching"] is False and cell["inching_note"] == res.verdict().reason
+    # a goal the scenario carries does not apply to a cell (uniform snow has no end): still immobile
+    with_goal = load_scenario(SCENARIOS / "traverse_patch.yaml", ["simulation.goal_m=0.1"])
+    assert res.segments["x_m"][-1, 0] > 0.1  # the leader passes it before the gait hangs
+    assert mobility._inch_run(inching_scenario(with_goal, 0.3, 100.0, 8.0))["inching"] is False

@@ -338,7 +338,8 @@ def _inch_run(raw):
     e = energy_metrics(res)
     dur = float(res.t[-1] - res.t[0])
     speed = e["distance_m"] / dur
-    v = verdict(res, {"window_s": min(res.scenario.simulation.immobilised.window_s, dur)})
+    # a cell is uniform snow without an end: a goal_m the scenario may carry does not apply
+    v = verdict(res, {"window_s": min(res.scenario.simulation.immobilised.window_s, dur), "goal_m": None})
     ok = v.status != "immobilised"
     return {
         "inching": bool(ok),
