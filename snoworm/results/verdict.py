@@ -1,5 +1,5 @@
 """The verdict of a run: did the chain reach the end of its route, is it still moving, or is it
-immobilised, and where, when and why (docs/model.md section "Immobilisation verdict").
+immobilised, and where, when and why (docs/model.md section 8, "Immobilisation verdict").
 
 One function, :func:`verdict`, judges a finished :class:`~snoworm.results.result.Result` from its
 output series alone; ``snoworm run``'s last line, ``summary.json`` (``status``,
@@ -27,8 +27,10 @@ Immobilised
     The chain's centre is used for progress, not a segment: an inching gait stops its anchor
     segments by design and advances the chain's centre phase by phase, and its anchors' set-points
     (0) do not count as driven.  A chain parked with its wheels at rest is not driven, so never
-    immobilised.  The first condition makes the third meaningful only for slow commands: a chain
-    commanded at a tenth of ``speed_mps`` is not stalled by following it slowly.  With a sinkage
+    immobilised.  The third condition matters for slow commands only: a chain commanded at less
+    than ``speed_mps / (1 - slip)`` (0.5 m/s by default) may follow its command slower than
+    ``speed_mps``; it is stalled only if it covers less than ``1 - slip`` of its wheels' travel.
+    With a sinkage
     series (``sinkage_m`` in ``Result.segments``) the chain is also immobilised from the first
     output time at which the mean sinkage of its segments reaches ``sinkage_m`` (dug in).
 
