@@ -67,6 +67,12 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
     end, with a manifest (.snoworm-manifest.json); nothing is written if the scenario is
     invalid (exit 2), the solver fails (exit 1) or the run is interrupted.  Progress in
     simulated time goes to stderr, and so does which controller code runs (if any).
+
+    The last line is the run's verdict (also in summary.json: status, immobilised_at_m,
+    status_reason): "reached the end of the route ... at t = ..." (the leader passed
+    simulation.goal_m or the route's last point), "immobilised at x = ..., t = ... (X_t, grade,
+    slip there)" (stalled for good with the wheels driven: simulation.immobilised) or "moving at
+    the end (...)".
     """
     from .config.scenario import load_scenario  # lazy: start-up
     from .infra.folders import check_output_folder  # lazy: start-up
@@ -188,10 +194,12 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
       n_segments, distance_m, mean_speed_mps, late_speed_mps (mean forward speed over the
       last 25 % of the run), mean_slip and max_slip (signed slip over the segments and the
       second half of the run), max_link_force_N (largest |force| over the run),
-      final_link_force_<j>_N, energy_per_m_J, immobilised, wall_time_s.
-    immobilised: late_speed_mps < max(0.05 m/s, 5 * terrain.model.sign_eps_mps), i.e. only the
-    creep allowed by the smooth sign of the terrain resistance is left (for a free-rolling
-    FrostyBoy: X_t below about 0.586).
+      final_link_force_<j>_N, energy_per_m_J, immobilised, verdict, immobilised_at_m, wall_time_s.
+    verdict: the run's verdict, as `snoworm run` prints it: moving, reached_end (the leader passed
+    simulation.goal_m or the route's last point) or immobilised (for simulation.immobilised.window_s,
+    5 s, the wheels driven but the chain's centre slower than max(0.05 m/s, 5 *
+    terrain.model.sign_eps_mps) and covering less than a tenth of the wheels' travel; for a
+    free-rolling FrostyBoy: X_t below about 0.586); immobilised_at_m: the leader's position then.
 
     A failing case is recorded and the sweep goes on. Re-running the same command skips the
     cases already in summary.csv; a different sweep in the same --out is refused (exit 2)

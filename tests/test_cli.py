@@ -1,6 +1,8 @@
 """The CLI contract of issue 2: files, exit codes, messages (click.testing.CliRunner)."""
 
+import functools
 import json
+import re
 
 import numpy as np
 import pytest
@@ -43,6 +45,32 @@ def test_run_writes_contract_files(tmp_path):
     s2 = json.loads((tmp_path / "o2" / "summary.json").read_text())
     assert s2["final_link_forces_N"] == pytest.approx(s["final_link_forces_N"], rel=1e-9)
     assert not (tmp_path / "o2" / "forces.png").exists()
+    assert (
+        r.output.splitlines()[-1]
+        == s["status_reason"]
+        == f"moving at the end (t = 8.0 s, x = {s_x(out):.1f} m, " + (f"mean speed {s['mean_speed_mps']:.2f} m/s)")
+    )
+
+
+def s_x(out):
+    """The leader's last position in a run folder's segments.csv."""
+    rows = [r.split(",") for r in (out / "segments.csv").read_text().splitlines()[1:]]
+    return float([r for r in rows if r[1] == "0"][-1][2])
+
+
+def test_run_ends_with_the_verdict(tmp_path):
+    """The last line of `snoworm run` says where, when and why the chain stopped (issue 32)."""
+    r = run("run", SCENARIOS / "rolling6_xt025.yaml", "--out", tmp_path / "o", "--no-plot")
+    assert r.exit_code == 0, r.output
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert s["status"] == "immobilised" and s["immobilised_at_m"] == pytest.approx(0.0, abs=0.05)
+    assert r.output.splitlines()[-1] == s["status_reason"]
+    m = re.fullmatch(
+        r"immobilised at x = 0\.0 m, t = (\S+) s \(X_t 0\.25, grade 0\.0 deg, slip (\S+)\)", s["status_reason"]
+    )
+    assert m, s["status_reason"]
+    assert 0.5 <= float(m[1]) <= 0.5 + 0.05 + 0.05  # the motors start at 0.5 s (one output step, rounding)
+    assert float(m[2]) > 0.8  # the wheels spin
 
 
 @pytest.mark.parametrize(
@@ -228,3 +256,54 @@ def test_figure_size_column_pdfs_for_journals(tmp_path):
     r = run("run", SCENARIOS / "pi3_equal.yaml", "--out", tmp_path / "x", "--figure-size", "half")
     assert r.exit_code == 2 and "--figure-size" in r.output and "column, page or WxH" in r.output
     assert "Traceback" not in r.output and not (tmp_path / "x").exists()
+
+
+def test_a_route_with_a_weak_patch_ends_immobilised_where_the_steady_limit_says(tmp_path):
+    """Issue 32: three segments roll at 1.8 m/s along a route file whose X_t drops from 0.9 to 0.35
+    (below the rolling limit) at 15 m; `snoworm run` ends "immobilised at x = ..." within one segment
+    length of where the steady laws stop the chain: the first leader position at which the sum over
+    its axles of max_drawbar_N(X_t under the axle) / 2 is no longer positive (route X_t interpolated
+    here by hand)."""
+    import yaml
+
+    from snoworm import load_scenario, steady
+
+    dist, xt = [0.0, 14.9, 15.0, 60.0, 60.1, 100.0], [0.9, 0.9, 0.35, 0.35, 0.9, 0.9]
+    (tmp_path / "weak.csv").write_text(
+        "distance_m,elevation_m,xt\n" + "".join(f"{d},0,{x}\n" for d, x in zip(dist, xt))
+    )
+    scenario = {
+        "name": "weak_route",
+        "vehicle": {"parameter_set": "frostyboy", "segments": 3, "links": {"type": "fixed"}},
+        "terrain": {"route": "weak.csv"},
+        "tow": {"force_N": 0},
+        "mode": {"type": "uniform", "speed_mps": 1.8, "start_time_s": 0.5},
+        "simulation": {"duration_s": 30, "output_dt_s": 0.05},
+    }
+    (tmp_path / "weak.yaml").write_text(yaml.safe_dump(scenario))
+    out = tmp_path / "o"
+    r = run("run", tmp_path / "weak.yaml", "--out", out, "--no-plot")
+    assert r.exit_code == 0, r.output
+    m = re.fullmatch(
+        r"immobilised at x = (\S+) m, t = (\S+) s \(X_t (\S+), grade 0\.0 deg, slip (\S+)\)", r.output.splitlines()[-1]
+    )
+    assert m, r.output
+    rows = [list(map(float, ln.split(","))) for ln in (out / "segments.csv").read_text().splitlines()[1:4]]
+    x0 = np.array([row[2] for row in rows])  # the segments' positions at t = 0
+    spacing = x0[0] - x0[1]
+    sc = load_scenario(tmp_path / "weak.yaml")
+    seg, tp = sc.vehicle.segment_params()[0], sc.terrain.model.params()
+    half = seg.wheelbase_m / 2.0
+    pull = functools.cache(lambda X: steady.max_drawbar_N(X, seg, tp, 1.8))
+    stop = next(
+        s
+        for s in np.arange(0.0, 60.0, 0.01)
+        if sum(
+            pull(round(float(np.interp(a, dist, xt)), 4)) for a in np.r_[s + x0 - x0[0] + half, s + x0 - x0[0] - half]
+        )
+        <= 0
+    )
+    assert abs(float(m[1]) - stop) <= spacing, (m[1], stop)
+    assert 0.35 < float(m[3]) < 0.9 and float(m[4]) > 0.9
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "immobilised" and abs(s["immobilised_at_m"] - stop) <= spacing

@@ -228,3 +228,22 @@ def test_csv_text_is_what_numpy_savetxt_writes():
     np.savetxt(buf, data, fmt=["%.4f", "%d", "%.6g", "%.6g", "%.6g"], delimiter=",")
     assert _csv(["t", "i", "a", "b", "c"], data, int_cols=(1,)) == "t,i,a,b,c\n" + buf.getvalue()
     assert _csv(["t", "i"], np.empty((0, 2)), int_cols=(1,)) == "t,i\n"
+
+
+def test_summary_carries_the_verdict(tmp_path):
+    """summary.json's status, immobilised_at_m and status_reason are the run's verdict; a folder
+    read back gives the same verdict (they are not taken for the mode's metrics)."""
+    res = simulate(load_scenario(SCENARIOS / "rolling6_xt025.yaml", ["simulation.duration_s=8"]))
+    v = res.verdict()
+    s = res.summary()
+    assert v.status == "immobilised"
+    assert (s["status"], s["immobilised_at_m"], s["status_reason"]) == (v.status, v.x_m, v.reason)
+    assert v.x_m == res.segments["x_m"][int(np.searchsorted(res.t, v.t_s)), 0]
+    res.write(tmp_path, plot=False)
+    back = load_result(tmp_path)
+    assert not {"status", "immobilised_at_m", "status_reason"} & set(back.mode_summary)
+    assert back.summary()["status"] == "immobilised"
+    assert back.summary()["immobilised_at_m"] == pytest.approx(v.x_m, abs=1e-5)
+    moving = simulate(load_scenario(SCENARIOS / "tow6_uniform.yaml", ["simulation.duration_s=8"])).summary()
+    assert moving["status"] == "moving" and moving["immobilised_at_m"] is None
+    assert moving["status_reason"].startswith("moving at the end (t = 8.0 s")

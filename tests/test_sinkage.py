@@ -64,3 +64,24 @@ def test_above_the_onset_a_wheel_digs_itself_in():
     assert seg["resistance_N"][-1, 0] == pytest.approx(hand_F_tr, rel=1e-3)
     free = simulate(sc.with_({"terrain.model.sinkage": "off"}))
     assert free.segments["v_mps"][-1, 0] > 0.5 and np.all(free.segments["sinkage_m"] == 0.0)
+
+
+def test_the_verdict_calls_a_dug_in_segment_immobilised_when_its_sinkage_passes_the_limit():
+    """The verdict's default sinkage limit with the law on is 0.9 x ``sinkage_max_m`` (the law
+    approaches the maximum only asymptotically); the dug-in segment of the test above passes it,
+    and the verdict's time is the first output time at which the sinkage reached it (or an earlier
+    slip stall).  With the law off the limit is not judged."""
+    from snoworm.results.verdict import SINKAGE_LIMIT_FRACTION, criteria_of
+
+    sc = scenario(0.62)
+    limit = SINKAGE_LIMIT_FRACTION * sc.terrain.model.sinkage_max_m
+    assert criteria_of(sc).sinkage_m == pytest.approx(limit)
+    assert criteria_of(sc.with_({"terrain.model.sinkage": "off"})).sinkage_m is None
+    r = simulate(sc)
+    v = r.verdict()
+    z = r.segments["sinkage_m"][:, 0]
+    first_sunk = r.t[np.flatnonzero(z >= limit)[0]]
+    assert v.status == "immobilised"
+    assert v.t_s <= first_sunk + 1e-12
+    if v.cause == "sinkage":
+        assert v.t_s == pytest.approx(first_sunk)

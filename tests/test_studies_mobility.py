@@ -117,7 +117,11 @@ def test_default_map_equals_the_every_cell_map_on_the_issue_grid(scenario_path):
     full = _cells(mobility_map(sc, xts, tows, wheel_speed_mps=1.8, jobs=2, every_cell=True))
     fast = _cells(mobility_map(sc, xts, tows, wheel_speed_mps=1.8, jobs=2))
     assert full.keys() == fast.keys() and len(full) == 27
-    assert {r["region"] for r in full.values()} == {"rolling", "inching only"}  # both regions on the grid
+    # all three regions on the grid: with a 100-200 N tow on X_t 0.2-0.4 the gait hangs after its first
+    # phase (its run's verdict: immobilised), which a mean speed over the 8 s run (>= 0.02 m/s) hid
+    assert {r["region"] for r in full.values()} == {"rolling", "inching only", "immobile"}
+    assert full[(0.3, 100.0)]["region"] == "immobile" and full[(0.3, 0.0)]["region"] == "inching only"
+    assert full[(0.3, 100.0)]["inching_note"].startswith("immobilised at x = ")
     skipped = 0
     for key, f in full.items():
         g = fast[key]
@@ -129,8 +133,9 @@ def test_default_map_equals_the_every_cell_map_on_the_issue_grid(scenario_path):
             continue
         assert g["inching"] == f["inching"] and g["inching_note"] == f["inching_note"]
         assert g["inching_speed_mps"] == pytest.approx(f["inching_speed_mps"], rel=1e-9, abs=0)
-        assert g["inching_energy_per_metre_J_per_m"] == pytest.approx(
-            f["inching_energy_per_metre_J_per_m"], rel=1e-9, abs=0
+        energy = f["inching_energy_per_metre_J_per_m"]  # None where the gait does not move
+        assert g["inching_energy_per_metre_J_per_m"] == (
+            None if energy is None else pytest.approx(energy, rel=1e-9, abs=0)
         )
         assert g["inching_cheaper"] == f["inching_cheaper"]
     assert skipped == sum(r["rolling"] for r in full.values()) > 0
@@ -316,8 +321,7 @@ def test_the_runs_are_bisected_over_the_grades(monkeypatch):
     # a stand-in run that inches on grades up to 10 deg: 3 runs decide 5 grades (ceil(log2(6)))
     ran = []
 
-    def fake_run(task):
-        raw, _ = task
+    def fake_run(raw):
         grade = raw["terrain"].get("grade_deg", 0.0)
         ran.append(grade)
         ok = grade <= 10.0
@@ -333,7 +337,7 @@ def test_the_runs_are_bisected_over_the_grades(monkeypatch):
     grades = [0.0, 5.0, 10.0, 15.0, 20.0]
     rows = [{"xt": 0.5, "tow_N": 0.0, "grade_deg": g, "rolling": False} for g in grades]
     seen = []
-    inch_cells(InchingRuns(sc, grades, False, 2.0, 0.02), rows, progress=lambda d, t: seen.append((d, t)))
+    inch_cells(InchingRuns(sc, grades, False, 2.0), rows, progress=lambda d, t: seen.append((d, t)))
     assert len(ran) == 3 and seen[-1] == (3, 3)
     assert [r["inching"] for r in rows] == [True, True, True, False, False]
     inferred = [r for r in rows if r["inching_note"].startswith("not simulated")]
@@ -341,5 +345,43 @@ def test_the_runs_are_bisected_over_the_grades(monkeypatch):
     # every_cell: every grade is run
     ran.clear()
     rows = [{"xt": 0.5, "tow_N": 0.0, "grade_deg": g, "rolling": g == 0.0} for g in grades]
-    inch_cells(InchingRuns(sc, grades, True, 2.0, 0.02), rows)
+    inch_cells(InchingRuns(sc, grades, True, 2.0), rows)
     assert sorted(ran) == grades and all(r["inching_note"] == "" for r in rows)
+
+
+def test_an_inching_cell_moves_unless_its_verdict_is_immobilised():
+    """The map's inching cells use the run's verdict (snoworm.results.verdict): on level X_t 0.6 the
+    gait moves; on 24 deg it slides back, and the cell says where, when and why, as `snoworm run`
+    would for the same run (its window the run's 8 s at most: the criteria's 5 s)."""
+    from snoworm import simulate
+
+    sc = load_scenario(SCENARIOS / "traverse_patch.yaml")
+    for grade, moves in ((0.0, True), (24.0, False)):
+        raw = inching_scenario(sc, 0.6, 0.0, 8.0, grade)
+        cell = mobility._inch_run(raw)
+        res = simulate(scenario_from_dict(raw))
+        v = res.verdict()
+        assert cell["inching"] is moves and (v.status != "immobilised") is moves
+        assert cell["inching_note"] == ("" if moves else v.reason)
+        centre = res.segments["x_m"].mean(axis=1)
+        assert bool(centre[-1] - centre[0] > 0) is moves  # by hand: the gait advances, or slides back
+
+
+def test_a_gait_that_hangs_after_its_first_phase_does_not_inch():
+    """With a 100 N tow on X_t 0.3 the six-segment gait moves the chain 0.23 m in its first phase
+    (by 3 s) and then hangs: a mean speed over the 8 s run (0.029 m/s, over the 0.02 m/s the map used to
+    require) called the cell "inching only"; its run's verdict calls it immobilised."""
+    from snoworm import simulate
+
+    sc = load_scenario(SCENARIOS / "traverse_patch.yaml")
+    raw = inching_scenario(sc, 0.3, 100.0, 8.0)
+    res = simulate(scenario_from_dict(raw))
+    t, centre = res.t, res.segments["x_m"].mean(axis=1)
+    assert (centre[-1] - centre[0]) / (t[-1] - t[0]) > 0.02  # the old rule: moves
+    assert abs(centre[-1] - np.interp(4.0, t, centre)) < 0.005  # by hand: nothing in the last 4 s
+    cell = mobility._inch_run(raw)
+    assert cell["inching"] is False and cell["inching_note"] == res.verdict().reason
+    # a goal the scenario carries does not apply to a cell (uniform snow has no end): still immobile
+    with_goal = load_scenario(SCENARIOS / "traverse_patch.yaml", ["simulation.goal_m=0.1"])
+    assert res.segments["x_m"][-1, 0] > 0.1  # the leader passes it before the gait hangs
+    assert mobility._inch_run(inching_scenario(with_goal, 0.3, 100.0, 8.0))["inching"] is False

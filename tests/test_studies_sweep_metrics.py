@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from snoworm import SolverError, simulate
@@ -67,6 +68,16 @@ def test_rolling_speed_falls_with_xt_and_immobilised_below_0586():
     imm = dict(zip(xts, table["immobilised"]))
     assert imm[0.5] and imm[0.55]
     assert not any(imm[x] for x in xts if x >= 0.62)
+    # the columns are the run's verdict (the test of snoworm run and summary.json)
+    verdicts = dict(zip(xts, table["verdict"]))
+    assert all(verdicts[x] == ("immobilised" if imm[x] else "moving") for x in xts)
+    at = dict(zip(xts, table["immobilised_at_m"]))
+    assert all((at[x] is None) == (not imm[x]) for x in xts)
+    direct = simulate(
+        load_scenario(TOW6, ["terrain.xt=0.55", "tow.force_N=0", "vehicle.segments=1", "simulation.duration_s=10"])
+    )
+    assert at[0.55] == pytest.approx(direct.verdict().x_m, rel=1e-12)
+    assert at[0.55] == pytest.approx(direct.segments["x_m"][int(np.searchsorted(direct.t, direct.verdict().t_s)), 0])
     late = dict(zip(xts, table["late_speed_mps"]))
     assert late[0.55] < 0.05 and late[0.62] > 0.5
     # free rolling on neve: slip ~2 % (docs/model.md section 2), the wheels near 1.8 m/s

@@ -331,7 +331,9 @@ def echo_written(text, paths, out_dir):
 
 
 def echo_run(name, res, paths, out_dir):
-    """``snoworm run``'s report: simulated and wall time, distance, speed, final forces, files written."""
+    """``snoworm run``'s report: simulated and wall time, distance, speed, final forces, files written,
+    and last the verdict's line (:func:`snoworm.results.verdict.verdict`): reached the end of the
+    route, immobilised (where, when, why) or moving at the end."""
     s = res.summary()
     click.echo(
         f"{name}: {s['duration_s']:.1f} s simulated in {res.stats['wall_time_s']:.2f} s "
@@ -342,6 +344,7 @@ def echo_run(name, res, paths, out_dir):
         click.echo("final link forces [N]: " + ", ".join(f"{f:.1f}" for f in s["final_link_forces_N"]))
     click.echo("final net wheel forces [N]: " + ", ".join(f"{f:.1f}" for f in s["final_net_forces_N"]))
     click.echo(f"wrote {len(paths)} files to {out_dir}")
+    click.echo(s["status_reason"])  # the verdict, last (snoworm.results.verdict)
 
 
 def sweep_interrupted(exc, out_dir):

@@ -43,6 +43,7 @@ __all__ = [
     "TerrainConfig",
     "TowConfig",
     "VehicleConfig",
+    "ImmobilisedConfig",
     "SimulationConfig",
 ]
 
@@ -463,8 +464,56 @@ class VehicleConfig(Config):
 
 
 @dataclass(frozen=True)
+class ImmobilisedConfig(Config):
+    """When a run counts as immobilised (``simulation.immobilised``; docs/model.md section
+    "Immobilisation verdict", :func:`snoworm.results.verdict.verdict`).
+
+    The chain is immobilised from the first output time ``t`` after which, over ``window_s``, its
+    wheels are driven (commanded or turning) for at least ``speed_mps`` of travel per second, yet
+    its centre advances less than ``speed_mps`` per second and less than ``1 - slip`` of the
+    wheels' travel; or when its mean sinkage reaches ``sinkage_m`` (a run with a sinkage series).
+    A judgement of the results: it changes nothing of the run.
+    """
+
+    _section = "simulation.immobilised"
+    speed_mps: float | None = field(
+        None,
+        gt=0,
+        le=10,
+        unit="m/s",
+        doc="progress per second below which the chain is stalled (none: max(0.05 m/s, 5 terrain.model.sign_eps_mps), "
+        "above the smooth sign's creep)",
+        why="A stall is slower than walking pace.",
+    )
+    window_s: float = field(
+        5.0,
+        gt=0,
+        le=BIG_TIME_S,
+        unit="s",
+        doc="time over which the chain must stay stalled (longer than a gait phase and the start-up)",
+        why=FINITE_WHY,
+    )
+    slip: float = field(
+        0.9,
+        gt=0,
+        le=1,
+        doc="the chain covers less than (1 - slip) of its wheels' travel over the window",
+        why="A slip ratio lies in (0, 1].",
+    )
+    sinkage_m: float | None = field(
+        None,
+        gt=0,
+        le=10,
+        unit="m",
+        doc="mean sinkage of the chain's wheels at which it is dug in (none: 0.9 x the terrain model's "
+        "sinkage_max_m when its sinkage law is on, else not judged)",
+        why="A wheel sinks by centimetres to decimetres.",
+    )
+
+
+@dataclass(frozen=True)
 class SimulationConfig(Config):
-    """Numerical settings (no physics here)."""
+    """Numerical settings, and how a run is judged (``goal_m``, ``immobilised``): no physics here."""
 
     _section = "simulation"
     duration_s: float = field(
@@ -506,6 +555,18 @@ class SimulationConfig(Config):
         why=FINITE_WHY,
         unit="s",
         doc="wall-clock time after which the run stops with a solver failure (none: no limit)",
+    )
+    goal_m: float | None = field(
+        None,
+        ge=-1e7,
+        le=1e7,
+        why=FINITE_WHY,
+        unit="m",
+        doc="position of the leader at which the run has reached the end of its route (none: the last point of "
+        "terrain.route or terrain.elevation, if given; else no end)",
+    )
+    immobilised: ImmobilisedConfig = field(
+        default_factory=ImmobilisedConfig, doc="when the run counts as immobilised (the verdict)"
     )
 
     def _check(self, path):

@@ -27,6 +27,7 @@ from ..model.quantities import output_series
 from . import frames
 from .copies import copy_inputs, input_problem
 from .energy import energy_along, energy_metrics
+from .verdict import verdict as judge
 
 if TYPE_CHECKING:
     import pandas
@@ -173,13 +174,24 @@ class Result:
         ``t_s``, ``distance_m``, ``motor_electrical_J``, ``joint_electrical_J``, ``total_electrical_J``."""
         return energy_along(self)
 
+    def verdict(self, criteria=None):
+        """Where the run ended up (:func:`snoworm.results.verdict.verdict`): a
+        :class:`~snoworm.results.verdict.Verdict` with ``status`` (``moving``, ``reached_end`` or
+        ``immobilised``), ``t_s``, ``x_m`` (the leader's position), ``reason`` (the line ``snoworm
+        run`` prints) and, immobilised, the X_t, grade and slip there.  ``criteria``: a mapping
+        changing the scenario's (``simulation.immobilised``: ``speed_mps``, ``window_s``, ``slip``,
+        ``sinkage_m``; and ``goal_m``), e.g. ``res.verdict({"window_s": 10})``."""
+        return judge(self, criteria)
+
     def summary(self) -> dict:
-        """The metrics written to ``summary.json``."""
+        """The metrics written to ``summary.json`` (with the verdict: ``status``,
+        ``immobilised_at_m``, ``status_reason``, :meth:`verdict`)."""
         x = self.segments["x_m"]
         dist = float(np.mean(x[-1] - x[0]))
         dur = float(self.t[-1] - self.t[0]) if self.t.size > 1 else 0.0
         metrics = energy_metrics(self)
         e = self.energy(metrics)
+        v = self.verdict()
         s = {
             "scenario": self.scenario.name,
             "snoworm_version": __version__,
@@ -187,6 +199,9 @@ class Result:
             "duration_s": dur,
             "distance_m": dist,
             "mean_speed_mps": dist / dur if dur > 0 else 0.0,
+            "status": v.status,
+            "immobilised_at_m": v.immobilised_at_m,
+            "status_reason": v.reason,
             "final_link_forces_N": self.links["force_N"][-1].tolist(),
             "final_net_forces_N": self.segments["net_force_N"][-1].tolist(),
             "final_slip": self.segments["slip"][-1].tolist(),
@@ -344,6 +359,9 @@ _SUMMARY_KEYS = (
     "duration_s",
     "distance_m",
     "mean_speed_mps",
+    "status",
+    "immobilised_at_m",
+    "status_reason",
     "final_link_forces_N",
     "final_net_forces_N",
     "final_slip",

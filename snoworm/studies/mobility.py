@@ -12,8 +12,13 @@ Rolling (steady state, milliseconds per cell)
     :mod:`snoworm.results.energy`).
 Inching (short simulations, seconds per cell)
     The inchworm mode (paper section 5.1) is simulated for ``inch_duration_s`` on uniform
-    terrain with the tow; it *moves* the vehicle when the chain's mean position advances at
-    ``inch_min_speed_mps`` or more.  Speed and energy per metre are those of the run (from
+    terrain with the tow; it *moves* the vehicle unless the run's verdict is immobilised
+    (:func:`snoworm.results.verdict.verdict`, the test of ``snoworm run``, sweeps and the odds,
+    with the scenario's ``simulation.immobilised`` criteria and a window of at most the run's
+    duration): judged on the chain's centre against its wheels' driven travel, so a gait that
+    stops its anchors by design moves, and one that makes less than a tenth of its wheels' travel
+    and less than ``speed_mps`` (0.05 m/s) for a window does not; the verdict's sentence is the
+    cell's ``inching_note``.  Speed and energy per metre are those of the run (from
     rest, so they include the start-up of the first phase).  Eqs. 4-6 alone would say whether
     each phase can start but not how fast the gait goes nor what it costs, hence simulation.
     A solver failure marks the cell as not inching (the message is kept in the CSV).  The runs
@@ -44,8 +49,9 @@ simulated second (0.25-0.9 s for an 8 s run of six segments, longer at higher X_
 Inching cells
 -------------
 Each cell that the map simulates is an inchworm run (paper section 5.1) of ``duration_s`` on
-uniform X_t and grade with the tow (:func:`inching_scenario`); it *moves* the vehicle when the
-chain's mean position advances at ``min_speed_mps`` or more.  The runs go to a process pool,
+uniform X_t and grade with the tow (:func:`inching_scenario`); it *moves* the vehicle unless the
+run's verdict (:func:`snoworm.results.verdict.verdict`, its window at most ``duration_s``) is
+immobilised.  The runs go to a process pool,
 costliest (highest X_t) first.  Over several grades the runs of one X_t and tow are bisected:
 a gait that fails on a grade is taken to fail on every steeper one (see above); the cells decided
 that way say so in ``inching_note``.  Several gaits are mapped one after the other
@@ -70,6 +76,7 @@ from ..infra.folders import check_output_folder, output_folder, relocate
 from ..infra.pool import ProcessExecutor
 from ..modes import InchwormMode, SupervisorConfig
 from ..results.energy import energy_metrics
+from ..results.verdict import verdict
 from ..simulation.driver import SolverError, simulate
 from .gradeability import grade_text, gradeability
 from .sweep.spec import MAX_CASES, RANGE, parse_spec
@@ -276,8 +283,6 @@ class InchingRuns:
         Simulate every cell, also where the chain rolls, and every grade.
     duration_s : float
         Simulated time of each run [s].
-    min_speed_mps : float
-        Mean chain speed from which a run counts as moving [m/s].
     pool : ProcessExecutor or None
         Where the runs go (None: this process).
     """
@@ -286,7 +291,6 @@ class InchingRuns:
     grades: list
     every_cell: bool
     duration_s: float
-    min_speed_mps: float
     pool: ProcessExecutor | None = None
 
 
@@ -320,8 +324,8 @@ def inching_scenario(sc, xt: float, tow_N: float, duration_s: float, grade_deg: 
     return raw
 
 
-def _inch_run(args):
-    raw, min_speed = args
+def _inch_run(raw):
+    """One inching cell: its run's speed, energy per metre, and whether it moves (its verdict)."""
     try:
         res = simulate(scenario_from_dict(raw))
     except SolverError as exc:
@@ -334,12 +338,14 @@ def _inch_run(args):
     e = energy_metrics(res)
     dur = float(res.t[-1] - res.t[0])
     speed = e["distance_m"] / dur
-    ok = speed >= min_speed
+    # a cell is uniform snow without an end: a goal_m the scenario may carry does not apply
+    v = verdict(res, {"window_s": min(res.scenario.simulation.immobilised.window_s, dur), "goal_m": None})
+    ok = v.status != "immobilised"
     return {
         "inching": bool(ok),
         "inching_speed_mps": speed,
         "inching_energy_per_metre_J_per_m": e["energy_per_metre_J_per_m"] if ok else None,
-        "inching_note": "",
+        "inching_note": "" if ok else v.reason,
     }
 
 
@@ -405,10 +411,7 @@ def inch_cells(runs: InchingRuns, rows, progress=None, gait=None):
         if not picks:
             break
         tasks = [
-            (
-                inching_scenario(runs.sc, c[j]["xt"], c[j]["tow_N"], runs.duration_s, c[j]["grade_deg"], gait),
-                runs.min_speed_mps,
-            )
+            inching_scenario(runs.sc, c[j]["xt"], c[j]["tow_N"], runs.duration_s, c[j]["grade_deg"], gait)
             for c, _, j in picks
         ]
         for (c, b, j), o in zip(picks, _inch_all(tasks, runs.pool, [c[j]["xt"] for c, _, j in picks], report)):
@@ -496,7 +499,6 @@ def mobility_map(
     grades=(0.0,),
     inching: bool = True,
     inch_duration_s: float = 8.0,
-    inch_min_speed_mps: float = 0.02,
     jobs: int = 1,
     every_cell: bool = False,
     progress=None,
@@ -520,9 +522,9 @@ def mobility_map(
     inching : bool
         Simulate inching (else rolling only, steady state).
     inch_duration_s : float
-        Simulated time of each inching run [s].
-    inch_min_speed_mps : float
-        Mean chain speed above which inching counts as moving [m/s].
+        Simulated time of each inching run [s]; a cell inches unless its run's verdict is
+        immobilised (:func:`snoworm.results.verdict.verdict`, the scenario's criteria, a window of
+        at most ``inch_duration_s``).
     jobs : int
         Worker processes for the inching runs.
     every_cell : bool
@@ -554,7 +556,7 @@ def mobility_map(
     rows = _rolling_rows(sc, grid, v)
     labels = [None] if not gaits else list(gaits)
     if inching:  # the inching runs (fill_inching)
-        runs = InchingRuns(sc, grid["grades"], every_cell, inch_duration_s, inch_min_speed_mps)
+        runs = InchingRuns(sc, grid["grades"], every_cell, inch_duration_s)
         fill_inching(runs, rows, labels, jobs=jobs, progress=progress)
     _classify(rows, inching)
     res = {"rows": rows, **grid, "regions": REGIONS, **_steady_limits(sc, grid["xts"], grid["tows"], v)}

@@ -1,12 +1,15 @@
 """Per-case work of a sweep: run one case (:func:`run_case`) and reduce it to scalar metrics.
 
-The ``immobilised`` flag: the chain's mean forward ground speed over the last 25 % of the run
-is below ``max(0.05 m/s, 5 * terrain.model.sign_eps_mps)``.  The smooth sign of the terrain
-resistance (``tanh(V / sign_eps_mps)``) lets a stuck vehicle creep: with the default
-``sign_eps_mps = 0.01 m/s`` a free-rolling FrostyBoy creeps at 0.006 m/s at X_t = 0.5 and
-0.032 m/s at X_t = 0.586, while at X_t = 0.59 it already rolls at 0.2 m/s.  Below the threshold
-``tanh(V / sign_eps_mps) > tanh(5) = 0.9999``: the terrain resistance is saturated, so the motion
-is the regularisation's creep, not rolling.
+The ``verdict``, ``immobilised`` and ``immobilised_at_m`` columns are the run's verdict
+(:func:`snoworm.results.verdict.verdict`, the same test as ``snoworm run``'s last line and
+``summary.json``'s ``status``): ``immobilised`` when, over ``simulation.immobilised.window_s``
+(5 s), the chain's wheels are driven yet its centre advances less than ``speed_mps`` per second
+(by default ``max(0.05 m/s, 5 terrain.model.sign_eps_mps)``) and less than ``1 - slip`` (0.1) of
+its wheels' travel.  The smooth sign of the terrain resistance (``tanh(V / sign_eps_mps)``) lets a
+stuck vehicle creep: with the default ``sign_eps_mps = 0.01 m/s`` a free-rolling FrostyBoy creeps
+at 0.006 m/s at X_t = 0.5 and 0.032 m/s at X_t = 0.586, while at X_t = 0.59 it already rolls at
+0.2 m/s; below the threshold ``tanh(V / sign_eps_mps) > tanh(5) = 0.9999``: the terrain resistance
+is saturated, so the motion is the regularisation's creep, not rolling.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from ...infra.folders import OutputError, os_error_message
 from ...infra.locks import lock_token_matches
 from ...infra.pool import interrupt_within
 from ...modes.controller import ControllerError
+from ...results.verdict import IMMOBILISED_SIGN_FACTOR, IMMOBILISED_SPEED_MPS
 from ...simulation.driver import SolverError, simulate
 from .series import save_series
 
@@ -43,10 +47,6 @@ __all__ = [
     "MAX_ERROR_CHARS",
 ]
 
-#: Absolute floor of the immobilised speed threshold [m/s].
-IMMOBILISED_SPEED_MPS = 0.05
-#: The threshold is at least this multiple of ``terrain.model.sign_eps_mps``.
-IMMOBILISED_SIGN_FACTOR = 5.0
 #: Fraction of the run (at its end) over which the immobilised speed is measured.
 LATE_FRACTION = 0.25
 #: Fraction of the run (at its end) over which slip is averaged.
@@ -68,7 +68,10 @@ METRIC_COLUMNS = {
     "max_slip": "largest slip (signed) over the segments and the second half of the run",
     "max_link_force_N": "largest |link force| over the links and the whole run (0 for one segment) [N]",
     "energy_per_m_J": "energy used (electrical motor + joint work) per metre travelled [J/m] (empty if no distance)",
-    "immobilised": "late_speed_mps < max(0.05 m/s, 5 sign_eps_mps): only smooth-sign creep is left",
+    "immobilised": "the run's verdict is immobilised (snoworm.results.verdict: stalled for window_s with the wheels "
+    "driven, or dug in)",
+    "verdict": "the run's verdict: moving, reached_end (the leader passed the route's end) or immobilised",
+    "immobilised_at_m": "where the chain was immobilised: the leader's position [m] (empty unless immobilised)",
 }
 
 #: Longest error message kept in a row (longer ones are cut).
@@ -93,8 +96,9 @@ def case_metrics(result) -> dict:
         ``max_link_force_N`` (largest absolute link force over the whole run, 0 without links),
         ``final_link_forces_N`` (list, tension positive), ``energy_per_m_J`` (total energy of
         ``Result.energy()`` per metre, None if the distance is below 1 micrometre),
-        ``immobilised`` (``late_speed_mps`` below ``max(0.05 m/s, 5 sign_eps_mps)``, see the
-        module docstring) and ``immobilised_threshold_mps``.
+        and from the run's verdict (:func:`snoworm.results.verdict.verdict`, see the module
+        docstring): ``verdict`` (``moving``, ``reached_end`` or ``immobilised``), ``immobilised``
+        (bool) and ``immobilised_at_m`` (the leader's position, None unless immobilised).
     """
     t = np.asarray(result.t, float)
     x = result.segments["x_m"]
@@ -110,8 +114,7 @@ def case_metrics(result) -> dict:
     slip = result.segments["slip"][half]
     F = result.links["force_N"]
     e = result.energy()
-    eps = result.scenario.terrain.model.sign_eps_mps
-    thr = max(IMMOBILISED_SPEED_MPS, IMMOBILISED_SIGN_FACTOR * eps)
+    v = result.verdict()
     return {
         "n_segments": int(x.shape[1]),
         "distance_m": dist,
@@ -122,8 +125,9 @@ def case_metrics(result) -> dict:
         "max_link_force_N": float(np.max(np.abs(F))) if F.size else 0.0,
         "final_link_forces_N": [float(f) for f in F[-1]] if F.size else [],
         "energy_per_m_J": float(e["total_J"] / dist) if dist > 1e-6 else None,
-        "immobilised": bool(late < thr),
-        "immobilised_threshold_mps": thr,
+        "immobilised": v.status == "immobilised",
+        "verdict": v.status,
+        "immobilised_at_m": v.immobilised_at_m,
     }
 
 

@@ -503,7 +503,7 @@ class _Recorder:
             raise OutputError(self._unsaved(c, result["output_error"]))
         row = {"case_id": c.case_id, "case_key": c.key, **dict(zip(self.plan.keys, c.values))}
         row.update(status=result["status"], error=result["error"])
-        for m in list(METRIC_COLUMNS)[:7] + ["energy_per_m_J", "immobilised"]:
+        for m in list(METRIC_COLUMNS)[:7] + ["energy_per_m_J", "immobilised", "verdict", "immobilised_at_m"]:
             row[m] = result.get(m)
         links = result.get("final_link_forces_N") or []
         for j in range(self.plan.n_links):

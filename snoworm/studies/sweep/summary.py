@@ -75,13 +75,15 @@ def summary_columns(axes: Sequence[Axis], n_links: int) -> list[str]:
         + ["status", "error"]
         + list(METRIC_COLUMNS)[:7]
         + [f"final_link_force_{j}_N" for j in range(n_links)]
-        + ["energy_per_m_J", "immobilised", "wall_time_s"]
+        + ["energy_per_m_J", "immobilised", "verdict", "immobilised_at_m", "wall_time_s"]
     )
 
 
 def _parse_cell(col: str, text: str, swept: Collection[str]) -> Any:
     if col in ("case_id", "case_key", "status", "error"):
         return text
+    if col == "verdict":
+        return text or None
     if text == "":
         return None
     if col in swept:
