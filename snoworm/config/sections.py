@@ -25,6 +25,7 @@ __all__ = [
     "FINITE_WHY",
     "BIG_FORCE_N",
     "BIG_SPEED_MPS",
+    "DRIVETRAINS",
     "MAX_SEGMENTS",
     "MAX_OUTPUT_SAMPLES",
     "SegmentConfig",
@@ -57,6 +58,9 @@ MAX_SEGMENTS = 200
 MAX_OUTPUT_SAMPLES = 150_000
 _REG_WHY = "A regularisation speed, small against the driving speeds."
 FINITE_WHY = "A larger value would only make the run stiff or meaningless (it must stay finite)."
+#: States of a segment's drivetrain (``vehicle.segment_overrides.K.drivetrain``): a failed one gives no
+#: torque and its wheels roll free, without the driveline's losses (docs/model.md section 4).
+DRIVETRAINS = ("working", "failed")
 
 
 @dataclass(frozen=True)
@@ -89,6 +93,17 @@ class SegmentConfig(Config):
         unit="m",
         doc="height of the centre of mass above the ground (pitch load transfer on a grade)",
     )
+    drivetrain: str = field(
+        "working",
+        choices=DRIVETRAINS,
+        doc="'working', or 'failed': the motors give no torque and the wheels roll free "
+        "(docs/model.md section 4); a condition of the segment, not a value of the parameter set",
+    )
+
+    @property
+    def driven(self) -> float:
+        """1.0 when the segment's drivetrain works, 0.0 when it has failed (:class:`SegmentArrays`)."""
+        return 1.0 if self.drivetrain == "working" else 0.0
 
 
 @dataclass(frozen=True)

@@ -127,6 +127,9 @@ class ChainModel:
         self._wnl = col(seg.no_load_speed_radps)
         self._Tmax = col(seg.torque_limit_Nm)
         self._m = seg.mass_kg.astype(float)
+        #: axles of segments with a failed drivetrain, bool (..., N, 1), None when every drivetrain works: no
+        #: motor torque, the wheels roll free (docs/model.md section 4, "Failed drivetrain")
+        self._free_axle = None if np.all(np.asarray(seg.driven) == 1.0) else (np.asarray(seg.driven) == 0.0)[..., None]
         self._bands = self._fd = None
         self._prepare_kernel()
         #: the float kernel of a single short chain (None: batches and long chains use :meth:`evaluate`)
@@ -158,7 +161,7 @@ class ChainModel:
             self._coef = (
                 terrain.traction_coefficients(Fn, X, self._tpk),
                 terrain.resistance_coefficients(Fn, X, self._tpk),
-                terrain.torque_coefficient(Fn, X, self._R, self._tpk),
+                self._torque_coefficient(Fn, X, self._R, self._tpk),
             )
         else:
             self._Xc = self._coef = None
@@ -352,6 +355,8 @@ class ChainModel:
         Tm, dI = feedback.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on_mask"], self._ki_kp)
         if cd["torque"] is not None:  # direct torque commands (a controller's wheel_torque_Nm)
             Tm, dI = feedback.direct_torque(cd["torque_cmd"], T_lo, T_hi, cd["torque"], Tm, dI)
+        if self._free_axle is not None:  # a failed drivetrain: no torque, the PI integral frozen
+            Tm, dI = np.where(self._free_axle, self._zero, Tm), np.where(self._free_axle, self._zero, dI)
         reaction = terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)
         dY[..., L.omega] = (Tm - reaction) / self._J
         dY[..., L.integral] = dI
@@ -413,6 +418,15 @@ class ChainModel:
             "normal_load_N": np.broadcast_to(Fn, Ft.shape),
         }
 
+    def _torque_coefficient(self, Fn, X, R, tp):
+        """Factor of the resistance torque per axle: the fitted ``T_rr`` of a driven wheel
+        (:func:`terrain.torque_coefficient`), the free-rolling ``T_free`` where the drivetrain has failed
+        (:func:`terrain.free_rolling_coefficient`; docs/model.md section 2, "Terrain resistance torque")."""
+        c = terrain.torque_coefficient(Fn, X, R, tp)
+        if self._free_axle is None:
+            return c
+        return np.where(self._free_axle, terrain.free_rolling_coefficient(Fn, X, R, tp), c)
+
     def _terrain(self, x, V, wm, Fn):
         """Per-axle terrain quantities (Eqs. 1-3, resistance torque), X_t evaluated at each axle.
 
@@ -427,7 +441,7 @@ class ChainModel:
             X = self.profile(x[..., None] + self.axle_offset_m)
             c_t = terrain.traction_coefficients(Fn, X, tp)
             c_r = terrain.resistance_coefficients(Fn, X, tp)
-            c_q = terrain.torque_coefficient(Fn, X, R, tp)
+            c_q = self._torque_coefficient(Fn, X, R, tp)
         Ft = terrain.traction_from_coefficients(i, c_t)
         Ftr = terrain.resistance_from_coefficients(V, c_r, tp)
         Trr = terrain.torque_from_coefficient(wm, c_q, tp)
