@@ -33,6 +33,7 @@ __all__ = [
     "state_at_slip",
     "peak_slip",
     "max_grade_deg",
+    "tow_drawbar_N",
     "axle_loads_N",
 ]
 
@@ -153,24 +154,53 @@ def max_drawbar_N(X, seg, tp: TerrainParams, wheel_speed_mps: float, grade_deg: 
     return float(net_force_per_segment_N(i_pk, X, wheel_speed_mps, seg, tp, moving=True, grade_deg=grade_deg))
 
 
-def max_grade_deg(X, seg, tp: TerrainParams, wheel_speed_mps: float, drawbar_N: float = 0.0) -> float | None:
-    """Steepest grade [deg] on which a rolling segment still pulls ``drawbar_N`` (its share of the tow)
-    at wheel speed ``wheel_speed_mps`` on terrain ``X`` (docs/model.md section 7).
+def tow_drawbar_N(force_N, seg, grade_deg: float = 0.0, sled_mass_kg: float = 0.0, sled_friction: float = 0.0):
+    """Steady pull of the towed load on a chain moving forward on a constant grade [N] (docs/model.md
+    section 4, "Towed load"): ``D(theta) = force_N + m_s g (sin(theta) + mu cos(theta))``, the constant force
+    plus a sled's gravity and friction (:func:`terrain.sled_force_N` at full forward motion; ``g`` the
+    segment's)."""
+    th = np.radians(grade_deg)
+    sled = terrain.sled_force_N(sled_mass_kg * seg.gravity_mps2, sled_friction, np.sin(th), np.cos(th), 1.0)
+    return float(force_N + sled)
 
-    The root of ``max_drawbar_N(X, grade) = drawbar_N`` in [-MAX_GRADE_DEG, MAX_GRADE_DEG] (it falls
+
+def _grade_root(f):
+    """The grade [deg] where ``f`` (falling with the grade) crosses 0 in [-MAX_GRADE_DEG, MAX_GRADE_DEG];
+    ``MAX_GRADE_DEG`` when it is >= 0 even there, None when < 0 even at ``-MAX_GRADE_DEG``."""
+    if f(MAX_GRADE_DEG) >= 0:
+        return MAX_GRADE_DEG
+    if f(-MAX_GRADE_DEG) < 0:
+        return None
+    return float(brentq(f, -MAX_GRADE_DEG, MAX_GRADE_DEG, xtol=1e-9))
+
+
+def max_grade_deg(
+    X,
+    seg,
+    tp: TerrainParams,
+    wheel_speed_mps: float,
+    drawbar_N: float = 0.0,
+    *,
+    segments: int = 1,
+    sled_mass_kg: float = 0.0,
+    sled_friction: float = 0.0,
+) -> float | None:
+    """Steepest grade [deg] on which a rolling segment still pulls ``drawbar_N`` (its share of the tow's
+    constant force) at wheel speed ``wheel_speed_mps`` on terrain ``X`` (docs/model.md section 7).
+
+    A sled (``sled_mass_kg``, ``sled_friction``) adds its pull on the grade, shared by ``segments``
+    segments: the root of ``max_drawbar_N(X, grade) = drawbar_N + m_s g (sin + mu cos) / segments``
+    (:func:`tow_drawbar_N`).  The root lies in [-MAX_GRADE_DEG, MAX_GRADE_DEG] (the balance falls
     monotonically with the grade); ``MAX_GRADE_DEG`` when the segment pulls it even there, None when it
     cannot even downhill at ``-MAX_GRADE_DEG``.  The motor torque limit is not applied: check
     ``steady_state(..., grade_deg=...).torque_Nm`` against it.
     """
 
     def f(g):
-        return max_drawbar_N(X, seg, tp, wheel_speed_mps, grade_deg=g) - drawbar_N
+        load = drawbar_N + tow_drawbar_N(0.0, seg, g, sled_mass_kg, sled_friction) / segments
+        return max_drawbar_N(X, seg, tp, wheel_speed_mps, grade_deg=g) - load
 
-    if f(MAX_GRADE_DEG) >= 0:
-        return MAX_GRADE_DEG
-    if f(-MAX_GRADE_DEG) < 0:
-        return None
-    return float(brentq(f, -MAX_GRADE_DEG, MAX_GRADE_DEG, xtol=1e-9))
+    return _grade_root(f)
 
 
 def steady_state(

@@ -26,6 +26,7 @@ __all__ = [
     "wheel_reaction_torque",
     "normal_load_N",
     "gravity_force_N",
+    "sled_force_N",
     "traction_coefficients",
     "traction_from_coefficients",
     "resistance_coefficients",
@@ -291,6 +292,28 @@ def normal_load_N(weight_per_wheel_N, sin_theta, cos_theta, transfer):
 def gravity_force_N(mass_kg, gravity_mps2, sin_theta):
     """Gravity along the track on a segment, ``-m g sin(theta)`` [N] (forward positive; docs/model.md section 7)."""
     return -mass_kg * gravity_mps2 * sin_theta
+
+
+def sled_force_N(weight_N, friction, sin_theta, cos_theta, direction):
+    """Backward pull of a towed sled on the rear segment [N] (docs/model.md section 4, "Towed load").
+
+    ``F = m_s g (sin(theta) + mu cos(theta) d)``: gravity along the grade and Coulomb friction on the
+    snow, which opposes the sled's motion: ``d`` is the direction of motion, the smooth sign
+    ``tanh(v / v_s)`` of the rear segment's speed in the kernel (at rest only gravity), 1 for steady
+    forward motion.
+
+    Parameters
+    ----------
+    weight_N : array_like
+        The sled's weight ``m_s g`` [N].
+    friction : array_like
+        Sliding friction coefficient ``mu`` of the sled on the snow.
+    sin_theta, cos_theta : array_like
+        Grade at the rear segment (positive uphill).
+    direction : array_like
+        Direction of the sled's motion, in [-1, 1].
+    """
+    return weight_N * (sin_theta + friction * cos_theta * direction)
 
 
 @dataclass(frozen=True)

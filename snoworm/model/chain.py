@@ -78,6 +78,10 @@ class ChainModel:
         Whether the state includes the outer force-loop integrators (force-control mode).
     elevation : ElevationProfile, optional
         Elevation along the track (docs/model.md section 7); None or level: level ground.
+    sled_mass_kg, sled_friction : float, optional
+        A sled towed behind the rear segment (mass 0: none): it adds
+        :func:`terrain.sled_force_N` at the rear segment's grade to the tow (docs/model.md section 4,
+        "Towed load").
     """
 
     def __init__(
@@ -89,6 +93,8 @@ class ChainModel:
         tow_force_N: float,
         force_loop: bool = False,
         elevation: ElevationProfile | None = None,
+        sled_mass_kg: float = 0.0,
+        sled_friction: float = 0.0,
     ):
         self.seg = seg
         self.links = links
@@ -99,6 +105,10 @@ class ChainModel:
         #: chains (see :meth:`stack`); every per-segment array then has shape (B, N)
         self.batch_shape = tuple(np.shape(seg.mass_kg)[:-1])
         self.tow_force_N = float(tow_force_N) if np.ndim(tow_force_N) == 0 else np.asarray(tow_force_N, float)
+        self.sled_mass_kg = float(sled_mass_kg) if np.ndim(sled_mass_kg) == 0 else np.asarray(sled_mass_kg, float)
+        self.sled_friction = float(sled_friction) if np.ndim(sled_friction) == 0 else np.asarray(sled_friction, float)
+        #: whether a sled is towed (a structural flag: without one the tow is the constant force)
+        self._sled = bool(np.any(np.asarray(sled_mass_kg) > 0))
         self.n = int(np.shape(seg.mass_kg)[-1])
         self.force_loop = bool(force_loop)
         self.has_joints = bool(np.any(links.prismatic > 0))
@@ -179,7 +189,35 @@ class ChainModel:
         self._stroke_max = np.asarray(L.stroke_max_m, float)
         self._stroke_min = np.asarray(L.stroke_min_m, float)
         self._tow_col = np.asarray(self.tow_force_N, float)[..., None]
+        self._prepare_sled()
         self._ctl_cache = (None, None)
+
+    def _prepare_sled(self):
+        """The sled's weight and friction, and the grade at the rear segment where it is constant (level:
+        0), as columns of shape (..., 1)."""
+        self._sled_w = self._sled_mu = self._sled_sin = self._sled_cos = None
+        if not self._sled:
+            return
+        g = np.asarray(self.seg.gravity_mps2, float)[..., -1:]
+        self._sled_w = np.asarray(self.sled_mass_kg, float)[..., None] * g
+        self._sled_mu = np.asarray(self.sled_friction, float)[..., None] + np.zeros(g.shape)
+        if self.elevation is None or self.elevation.is_constant:
+            zero = np.zeros(g.shape)
+            s = zero if self.elevation is None else self.elevation.sin_grade(zero, self._half_base[..., -1:])
+            self._sled_sin, self._sled_cos = np.asarray(s, float), np.asarray(np.sqrt(1.0 - s * s), float)
+
+    def _tow_force_N(self, x, v):
+        """The towed load on the rear segment, positive backward, shape (..., 1): the constant force plus
+        the sled's gravity and friction at the rear segment's grade (:func:`terrain.sled_force_N`;
+        docs/model.md section 4, "Towed load")."""
+        if not self._sled:
+            return self._tow_col
+        s, c = self._sled_sin, self._sled_cos
+        if s is None:  # a grade along the track: the chord grade under the rear segment
+            s = self.elevation.sin_grade(x[..., -1:], self._half_base[..., -1:])
+            c = np.sqrt(1.0 - s * s)
+        d = terrain.smooth_sign(v[..., -1:], self._tpk.sign_eps_mps)
+        return self._tow_col + terrain.sled_force_N(self._sled_w, self._sled_mu, s, c, d)
 
     def _controls(self, ctl: Controls):
         """Arrays derived from the controls of an interval, computed once per Controls object."""
@@ -229,6 +267,8 @@ class ChainModel:
             np.array([m.tow_force_N for m in models]),
             force_loop=m0.force_loop,
             elevation=m0.elevation,
+            sled_mass_kg=np.array([m.sled_mass_kg for m in models]),
+            sled_friction=np.array([m.sled_friction for m in models]),
         )
 
     # ------------------------------------------------------------------ the kernel's inputs
@@ -338,10 +378,11 @@ class ChainModel:
         X, i, Ft, Ftr, Trr = self._terrain(x, V, w * R, Fn)
         dY = np.empty_like(Y)
         T, T_spring, damper_v = self._links(Y, x, v, ctl, cd, dY)
+        F_tow = self._tow_force_N(x, v)
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
         sp = ctl.speed_sp_mps
         if self.force_loop:
-            tow = np.broadcast_to(self._tow_col, T.shape[:-1] + (1,))
+            tow = np.broadcast_to(F_tow, T.shape[:-1] + (1,))
             Fsel = np.concatenate([T, tow], axis=-1)[..., ctl.fc_link]
             vsp, dq = feedback.link_force_pi(
                 Fsel, ctl.fc_ref_N, ctl.fc_sigma, Y[..., L.q], ctl.fc_nominal_mps, ctl.fc_kp, ctl.fc_ki, ctl.fc_vmax_mps
@@ -366,7 +407,7 @@ class ChainModel:
         Tpad = np.empty_like(T, shape=T.shape[:-1] + (self.n + 1,))
         Tpad[..., 0] = 0.0
         Tpad[..., 1:-1] = T
-        Tpad[..., -1] = self.tow_force_N
+        Tpad[..., -1:] = F_tow
         Fl = Tpad[..., :-1] - Tpad[..., 1:]
         dY[..., L.x] = v
         dY[..., L.v] = (wheel_net + Fl if G is None else wheel_net + Fl + G) / self._m

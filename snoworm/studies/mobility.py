@@ -164,12 +164,13 @@ def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float, grade_deg:
 
     Returns ``rolling`` (bool), ``rolling_speed_mps``, ``rolling_slip``,
     ``rolling_energy_per_metre_J_per_m`` (electrical) and ``rolling_max_drawbar_N`` (per segment).
-    Uses the first segment's parameters for every segment (a uniform chain).
+    Uses the first segment's parameters for every segment (a uniform chain); the scenario's sled, if it
+    tows one, adds its steady pull on the grade to ``tow_N`` (:func:`snoworm.steady.tow_drawbar_N`).
     """
     seg = sc.vehicle.segment_params()[0]
     tp = sc.terrain.model.params()
     n = sc.vehicle.segments
-    share = tow_N / n
+    share = steady.tow_drawbar_N(tow_N, seg, grade_deg, sc.tow.mass_kg, sc.tow.sled_friction) / n
     dmax = steady.max_drawbar_N(xt, seg, tp, wheel_speed_mps, grade_deg=grade_deg)
     out = {
         "rolling": False,
@@ -249,15 +250,16 @@ def _steady_limits(sc, xts, tows, wheel_speed_mps) -> dict:
     ``rolling_max_grade_deg``: per tow and X_t, the steepest rolling grade."""
     seg = sc.vehicle.segment_params()[0]
     tp = sc.terrain.model.params()
+    n, sled = sc.vehicle.segments, {"sled_mass_kg": sc.tow.mass_kg, "sled_friction": sc.tow.sled_friction}
     limits, max_grade = {}, {}
     for f in tows:
         try:
             limits[f] = steady.immobilisation_limit_xt(
-                seg, tp, drawbar_N=f / sc.vehicle.segments, wheel_speed_mps=wheel_speed_mps
+                seg, tp, drawbar_N=steady.tow_drawbar_N(f, seg, 0.0, **sled) / n, wheel_speed_mps=wheel_speed_mps
             )
         except ValueError:
             limits[f] = None
-        max_grade[f] = {x: steady.max_grade_deg(x, seg, tp, wheel_speed_mps, f / sc.vehicle.segments) for x in xts}
+        max_grade[f] = {x: steady.max_grade_deg(x, seg, tp, wheel_speed_mps, f / n, segments=n, **sled) for x in xts}
     return {"rolling_limit_xt": limits, "rolling_max_grade_deg": max_grade}
 
 
@@ -312,7 +314,7 @@ def inching_scenario(sc, xt: float, tow_N: float, duration_s: float, grade_deg: 
     raw["terrain"] = {"xt": float(xt), "model": raw["terrain"]["model"]}
     if grade_deg:
         raw["terrain"]["grade_deg"] = float(grade_deg)
-    raw["tow"] = {"force_N": float(tow_N)}
+    raw["tow"] = {**raw["tow"], "force_N": float(tow_N)}  # the scenario's sled, if any, with the cell's force
     raw["mode"] = inching_mode_raw(sc)
     if gait is not None:
         raw["mode"]["gait"] = gait
