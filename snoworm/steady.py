@@ -34,6 +34,10 @@ __all__ = [
     "peak_slip",
     "max_grade_deg",
     "tow_drawbar_N",
+    "starting_traction_coefficient",
+    "from_rest_drawbar_N",
+    "max_grade_from_rest_deg",
+    "max_grade_below_slip_deg",
     "axle_loads_N",
 ]
 
@@ -253,3 +257,96 @@ def steady_state(
 def immobilisation_limit_xt(seg, tp: TerrainParams, *, wheel_speed_mps: float, drawbar_N: float = 0.0) -> float:
     """Terrain coefficient below which a segment cannot pull ``drawbar_N`` (0.586 for FrostyBoy, no tow)."""
     return float(brentq(lambda X: max_drawbar_N(X, seg, tp, wheel_speed_mps) - drawbar_N, 0.05, 1.0, xtol=1e-10))
+
+
+# ------------------------------------------------------------------ limits in field terms (docs/model.md section 7)
+def _load_N(seg, grade_deg, drawbar_N, segments, sled_mass_kg, sled_friction):
+    """A segment's share of the tow on a grade: ``drawbar_N`` plus the sled's steady pull over ``segments``."""
+    return drawbar_N + tow_drawbar_N(0.0, seg, grade_deg, sled_mass_kg, sled_friction) / segments
+
+
+def starting_traction_coefficient(X, tp: TerrainParams) -> float:
+    """Traction per unit normal load that a wheel spinning up from rest develops, ``F_t / F_n``
+    (docs/model.md section 7, "Starting from rest").
+
+    At ``V = 0`` the regularised slip of Eq. 1 is 1 as soon as the wheel turns, so the wheel pulls with
+    Eq. 2 at slip 1, past the Magic Formula's peak.  With the shear-displacement standstill law
+    (``tp.standstill == "shear"``, where the model has it) the slip of a wheel turning from rest grows
+    with the shear displacement and passes through the peak: the wheel pulls with the peak of Eq. 2.
+    """
+    if getattr(tp, "standstill", "regularised") == "shear":
+        res = minimize_scalar(
+            lambda i: -float(terrain.traction_force(i, 1.0, X, tp)),
+            bounds=(0.0, 1.0),
+            method="bounded",
+            options={"xatol": 1e-10},
+        )
+        return float(max(-res.fun, terrain.traction_force(1.0, 1.0, X, tp)))
+    return float(terrain.traction_force(1.0, 1.0, X, tp))
+
+
+def from_rest_drawbar_N(X, seg, tp: TerrainParams, grade_deg: float = 0.0) -> float:
+    """Drawbar a segment at rest on uniform terrain ``X`` and grade ``grade_deg`` develops as it starts [N].
+
+    Each wheel pulls with the starting traction (:func:`starting_traction_coefficient` times its normal
+    load), at most what the motor's stall torque ``T_s = min(T_max, k_w w_nl)`` turns against the
+    resistance torque, ``(T_s - T_rr) / R_w``; the segment moves only against the full resistance of
+    Eq. 3 (``sgn(V) = 1``) and gravity.  Negative: the segment cannot start.
+    """
+    n_w, _, R = segment_geometry(seg)
+    Ff, Fr, G = axle_loads_N(seg, grade_deg)
+    c = starting_traction_coefficient(X, tp)
+    stall = min(seg.torque_limit_Nm, seg.motor_slope_Nms_per_rad * seg.no_load_speed_radps)
+    total = 0.0
+    for F in (Ff, Fr):
+        torque = float(terrain.resistance_torque(np.inf, F, X, R, tp))
+        Ft = min(c * F, (stall - torque) / R)
+        total += Ft - float(terrain.resistance_force(np.inf, F, X, tp))
+    return float(n_w / 2 * total + G)
+
+
+def max_grade_from_rest_deg(
+    X,
+    seg,
+    tp: TerrainParams,
+    drawbar_N: float = 0.0,
+    *,
+    segments: int = 1,
+    sled_mass_kg: float = 0.0,
+    sled_friction: float = 0.0,
+) -> float | None:
+    """Steepest grade [deg] on which a chain at rest starts rolling: the root of
+    ``from_rest_drawbar_N(grade) = drawbar_N + sled / segments`` (the sled moving, as the chain must
+    pull it once it moves; docs/model.md section 7).  ``MAX_GRADE_DEG`` / None as :func:`max_grade_deg`;
+    a negative value is the downhill grade the chain needs to start at all."""
+    return _grade_root(
+        lambda g: from_rest_drawbar_N(X, seg, tp, g) - _load_N(seg, g, drawbar_N, segments, sled_mass_kg, sled_friction)
+    )
+
+
+def max_grade_below_slip_deg(
+    X,
+    seg,
+    tp: TerrainParams,
+    wheel_speed_mps: float,
+    slip_cap: float,
+    drawbar_N: float = 0.0,
+    *,
+    segments: int = 1,
+    sled_mass_kg: float = 0.0,
+    sled_friction: float = 0.0,
+) -> float | None:
+    """Steepest grade [deg] a rolling chain climbs with its steady slip at most ``slip_cap``.
+
+    Below the peak slip the drawbar grows with the slip, so the steady slip is at most the cap exactly
+    where the drawbar at the cap (or at the peak, if the cap lies beyond it) carries the load: the root
+    of ``net_force_per_segment_N(min(cap, peak), grade, moving) = load(grade)``
+    (docs/model.md section 7).  ``MAX_GRADE_DEG`` / None as :func:`max_grade_deg`.
+    """
+    i = min(float(slip_cap), peak_slip(X, wheel_speed_mps, seg, tp))
+
+    def f(g):
+        D = float(net_force_per_segment_N(i, X, wheel_speed_mps, seg, tp, moving=True, grade_deg=g))
+        return D - _load_N(seg, g, drawbar_N, segments, sled_mass_kg, sled_friction)
+
+    return _grade_root(f)
