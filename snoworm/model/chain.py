@@ -207,17 +207,15 @@ class ChainModel:
             self._sled_sin, self._sled_cos = np.asarray(s, float), np.asarray(np.sqrt(1.0 - s * s), float)
 
     def _tow_force_N(self, x, v):
-        """The towed load on the rear segment, positive backward, shape (..., 1): the constant force plus
-        the sled's gravity and friction at the rear segment's grade (:func:`terrain.sled_force_N`;
+        """The towed load on the rear segment with a sled, positive backward, shape (..., 1): the constant
+        force plus the sled's gravity and friction at the rear segment's grade (:func:`terrain.sled_force_N`;
         docs/model.md section 4, "Towed load")."""
-        if not self._sled:
-            return self._tow_col
         s, c = self._sled_sin, self._sled_cos
         if s is None:  # a grade along the track: the chord grade under the rear segment
             s = self.elevation.sin_grade(x[..., -1:], self._half_base[..., -1:])
             c = np.sqrt(1.0 - s * s)
         d = terrain.smooth_sign(v[..., -1:], self._tpk.sign_eps_mps)
-        return self._tow_col + terrain.sled_force_N(self._sled_w, self._sled_mu, s, c, d)
+        return np.asarray(self.tow_force_N)[..., None] + terrain.sled_force_N(self._sled_w, self._sled_mu, s, c, d)
 
     def _controls(self, ctl: Controls):
         """Arrays derived from the controls of an interval, computed once per Controls object."""
@@ -378,11 +376,11 @@ class ChainModel:
         X, i, Ft, Ftr, Trr = self._terrain(x, V, w * R, Fn)
         dY = np.empty_like(Y)
         T, T_spring, damper_v = self._links(Y, x, v, ctl, cd, dY)
-        F_tow = self._tow_force_N(x, v)
+        F_tow = self._tow_force_N(x, v) if self._sled else None  # None: the constant tow_force_N
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
         sp = ctl.speed_sp_mps
         if self.force_loop:
-            tow = np.broadcast_to(F_tow, T.shape[:-1] + (1,))
+            tow = np.broadcast_to(self._tow_col if F_tow is None else F_tow, T.shape[:-1] + (1,))
             Fsel = np.concatenate([T, tow], axis=-1)[..., ctl.fc_link]
             vsp, dq = feedback.link_force_pi(
                 Fsel, ctl.fc_ref_N, ctl.fc_sigma, Y[..., L.q], ctl.fc_nominal_mps, ctl.fc_kp, ctl.fc_ki, ctl.fc_vmax_mps
@@ -404,11 +402,7 @@ class ChainModel:
         # chassis: the net link force on segment k is T_{k-1} - T_k (T_{-1} = 0, T_{N-1} = tow)
         net = Ft - Ftr
         wheel_net = self.wheels_per_axle * (net[..., 0] + net[..., 1])
-        Tpad = np.empty_like(T, shape=T.shape[:-1] + (self.n + 1,))
-        Tpad[..., 0] = 0.0
-        Tpad[..., 1:-1] = T
-        Tpad[..., -1:] = F_tow
-        Fl = Tpad[..., :-1] - Tpad[..., 1:]
+        Fl = self._connector_net_N(T, F_tow)
         dY[..., L.x] = v
         dY[..., L.v] = (wheel_net + Fl if G is None else wheel_net + Fl + G) / self._m
         if not outputs:
@@ -458,6 +452,18 @@ class ChainModel:
             "gravity_N": np.zeros(x.shape) if G is None else np.broadcast_to(G, x.shape),
             "normal_load_N": np.broadcast_to(Fn, Ft.shape),
         }
+
+    def _connector_net_N(self, T, F_tow):
+        """Net force of the links and the tow on each segment, ``T_{k-1} - T_k`` with ``T_{-1} = 0`` and
+        ``T_{N-1}`` the tow (``F_tow`` of :meth:`_tow_force_N`, None: the constant ``tow_force_N``)."""
+        Tpad = np.empty_like(T, shape=T.shape[:-1] + (self.n + 1,))
+        Tpad[..., 0] = 0.0
+        Tpad[..., 1:-1] = T
+        if F_tow is None:
+            Tpad[..., -1] = self.tow_force_N
+        else:
+            Tpad[..., -1:] = F_tow
+        return Tpad[..., :-1] - Tpad[..., 1:]
 
     def _torque_coefficient(self, Fn, X, R, tp):
         """Factor of the resistance torque per axle: the fitted ``T_rr`` of a driven wheel
