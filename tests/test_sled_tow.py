@@ -142,3 +142,30 @@ def test_a_sled_without_friction_is_refused(tmp_path):
     assert r.exit_code == 2
     assert "tow.friction" in r.output and "Traceback" not in r.output
     assert not (tmp_path / "o").exists()
+
+
+def test_stacked_runs_with_sleds_and_failed_drivetrains_equal_the_runs_alone():
+    """Same question, same answer: a sled and a failed drivetrain are parameters of a member, so chains with
+    and without them share a batch key, and the stacked run gives each member the run it has alone
+    (the tolerance of tests/test_studies_sweep_batched.py: the members share LSODA's steps)."""
+    from snoworm.simulation.driver import batch_key, simulate_batch
+
+    base = load_scenario("tow6_uniform", ["simulation.duration_s=4", "terrain.grade_deg=4"])
+    members = [
+        base,
+        base.with_({"tow.mass_kg": M_S, "tow.friction": MU}),
+        base.with_({"vehicle.segment_overrides": {5: {"drivetrain": "failed"}}}),
+        base.with_(
+            {"tow.mass_kg": 60.0, "tow.friction": 0.3, "vehicle.segment_overrides": {2: {"drivetrain": "failed"}}}
+        ),
+    ]
+    assert len({batch_key(sc) for sc in members}) == 1
+    alone = [simulate(sc) for sc in members]
+    v_end = [a.segments["v_mps"][-1].mean() for a in alone]
+    assert len({round(v, 3) for v in v_end}) == 4  # the members differ
+    for m, a in zip(simulate_batch(members), alone):
+        assert m.status == "ok"
+        np.testing.assert_allclose(m.result.segments["v_mps"][-1], a.segments["v_mps"][-1], rtol=1e-4)
+        np.testing.assert_allclose(
+            m.result.segments["motor_torque_Nm"][-1], a.segments["motor_torque_Nm"][-1], rtol=1e-4, atol=1e-6
+        )
