@@ -169,3 +169,32 @@ def test_stacked_runs_with_sleds_and_failed_drivetrains_equal_the_runs_alone():
         np.testing.assert_allclose(
             m.result.segments["motor_torque_Nm"][-1], a.segments["motor_torque_Nm"][-1], rtol=1e-4, atol=1e-6
         )
+
+
+def test_the_modes_plan_with_the_sled():
+    """The force-control plan (level, docs/model.md section 5) shares the tow's steady pull, force_N + m_s g mu:
+    pi3_equal's leader and rear each carry half of it (hand), and the simulated steady wheel forces follow.
+    The supervisor's rolling surplus subtracts the sled's pull at the rear segment's grade (hand)."""
+    import math
+
+    from snoworm.modes.supervisor import chain_drawbar_surplus_N
+    from snoworm.simulation.driver import assemble
+
+    sc = load_scenario("pi3_equal", [f"tow.mass_kg={M_S}", f"tow.friction={MU}"])
+    g = sc.vehicle.segment_params()[-1].gravity_mps2
+    pull = _hand_pull(200.0, 0.0, g)
+    plan = assemble(sc).mode.plan
+    np.testing.assert_allclose(plan.wheel_net_N, [pull / 2, 0.0, pull / 2], rtol=1e-12, atol=1e-9)
+    res = simulate(sc)
+    np.testing.assert_allclose(res.segments["net_force_N"][-1], [pull / 2, 0.0, pull / 2], rtol=1e-3, atol=0.5)
+
+    level = load_scenario("traverse_patch")
+    segs = level.vehicle.segment_params()
+    x = np.array([30.0 - 1.5 * k for k in range(6)])  # past the patch: X_t = 0.9 under every axle
+    for grade in (0.0, 6.0):
+        plain = level.with_({"terrain.grade_deg": grade})
+        sled = plain.with_({"tow.mass_kg": M_S, "tow.friction": MU})
+        s0 = chain_drawbar_surplus_N(chain_model(plain), segs, x, 1.8)
+        s1 = chain_drawbar_surplus_N(chain_model(sled), segs, x, 1.8)
+        th = math.radians(grade)
+        assert s0 - s1 == pytest.approx(M_S * g * (math.sin(th) + MU * math.cos(th)), rel=1e-9)
