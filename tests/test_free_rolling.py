@@ -170,3 +170,18 @@ def test_a_bad_drivetrain_value_is_refused(tmp_path):
     assert "vehicle.segment_overrides.1.drivetrain" in r.output and "'failed'" in r.output
     assert "Traceback" not in r.output
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("scenario", ["tow6_weak_segment", "inchworm6", "traverse_patch"])
+def test_modes_that_plan_driven_segments_refuse_a_failed_one(scenario, tmp_path):
+    """Force control (its plan gives each segment a wheel force), inchworm and the supervisor (they hold
+    segments on locked wheels) refuse a failed drivetrain with a message naming the segment's field (exit 2)."""
+    from snoworm.config.schema import ScenarioError
+
+    with pytest.raises(ScenarioError, match=r"vehicle\.segment_overrides\.1\.drivetrain: the .* mode"):
+        load_scenario(scenario).with_({"vehicle.segment_overrides": {1: FAILED}})
+    r = CliRunner().invoke(
+        main,
+        ["run", scenario, "--set", "vehicle.segment_overrides.1.drivetrain=failed", "--out", str(tmp_path / "o")],
+    )
+    assert r.exit_code == 2 and "segment 1's drivetrain has failed" in r.output
