@@ -201,7 +201,7 @@ def max_grade_deg(
     """
 
     def f(g):
-        load = drawbar_N + tow_drawbar_N(0.0, seg, g, sled_mass_kg, sled_friction) / segments
+        load = _load_N(seg, g, drawbar_N, segments, sled_mass_kg, sled_friction)
         return max_drawbar_N(X, seg, tp, wheel_speed_mps, grade_deg=g) - load
 
     return _grade_root(f)
