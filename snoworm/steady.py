@@ -33,6 +33,11 @@ __all__ = [
     "state_at_slip",
     "peak_slip",
     "max_grade_deg",
+    "tow_drawbar_N",
+    "starting_traction_coefficient",
+    "from_rest_drawbar_N",
+    "max_grade_from_rest_deg",
+    "max_grade_below_slip_deg",
     "axle_loads_N",
 ]
 
@@ -153,24 +158,53 @@ def max_drawbar_N(X, seg, tp: TerrainParams, wheel_speed_mps: float, grade_deg: 
     return float(net_force_per_segment_N(i_pk, X, wheel_speed_mps, seg, tp, moving=True, grade_deg=grade_deg))
 
 
-def max_grade_deg(X, seg, tp: TerrainParams, wheel_speed_mps: float, drawbar_N: float = 0.0) -> float | None:
-    """Steepest grade [deg] on which a rolling segment still pulls ``drawbar_N`` (its share of the tow)
-    at wheel speed ``wheel_speed_mps`` on terrain ``X`` (docs/model.md section 7).
+def tow_drawbar_N(force_N, seg, grade_deg: float = 0.0, sled_mass_kg: float = 0.0, sled_friction: float = 0.0):
+    """Steady pull of the towed load on a chain moving forward on a constant grade [N] (docs/model.md
+    section 4, "Towed load"): ``D(theta) = force_N + m_s g (sin(theta) + mu cos(theta))``, the constant force
+    plus a sled's gravity and friction (:func:`terrain.sled_force_N` at full forward motion; ``g`` the
+    segment's)."""
+    th = np.radians(grade_deg)
+    sled = terrain.sled_force_N(sled_mass_kg * seg.gravity_mps2, sled_friction, np.sin(th), np.cos(th), 1.0)
+    return float(force_N + sled)
 
-    The root of ``max_drawbar_N(X, grade) = drawbar_N`` in [-MAX_GRADE_DEG, MAX_GRADE_DEG] (it falls
+
+def _grade_root(f):
+    """The grade [deg] where ``f`` (falling with the grade) crosses 0 in [-MAX_GRADE_DEG, MAX_GRADE_DEG];
+    ``MAX_GRADE_DEG`` when it is >= 0 even there, None when < 0 even at ``-MAX_GRADE_DEG``."""
+    if f(MAX_GRADE_DEG) >= 0:
+        return MAX_GRADE_DEG
+    if f(-MAX_GRADE_DEG) < 0:
+        return None
+    return float(brentq(f, -MAX_GRADE_DEG, MAX_GRADE_DEG, xtol=1e-9))
+
+
+def max_grade_deg(
+    X,
+    seg,
+    tp: TerrainParams,
+    wheel_speed_mps: float,
+    drawbar_N: float = 0.0,
+    *,
+    segments: int = 1,
+    sled_mass_kg: float = 0.0,
+    sled_friction: float = 0.0,
+) -> float | None:
+    """Steepest grade [deg] on which a rolling segment still pulls ``drawbar_N`` (its share of the tow's
+    constant force) at wheel speed ``wheel_speed_mps`` on terrain ``X`` (docs/model.md section 7).
+
+    A sled (``sled_mass_kg``, ``sled_friction``) adds its pull on the grade, shared by ``segments``
+    segments: the root of ``max_drawbar_N(X, grade) = drawbar_N + m_s g (sin + mu cos) / segments``
+    (:func:`tow_drawbar_N`).  The root lies in [-MAX_GRADE_DEG, MAX_GRADE_DEG] (the balance falls
     monotonically with the grade); ``MAX_GRADE_DEG`` when the segment pulls it even there, None when it
     cannot even downhill at ``-MAX_GRADE_DEG``.  The motor torque limit is not applied: check
     ``steady_state(..., grade_deg=...).torque_Nm`` against it.
     """
 
     def f(g):
-        return max_drawbar_N(X, seg, tp, wheel_speed_mps, grade_deg=g) - drawbar_N
+        load = _load_N(seg, g, drawbar_N, segments, sled_mass_kg, sled_friction)
+        return max_drawbar_N(X, seg, tp, wheel_speed_mps, grade_deg=g) - load
 
-    if f(MAX_GRADE_DEG) >= 0:
-        return MAX_GRADE_DEG
-    if f(-MAX_GRADE_DEG) < 0:
-        return None
-    return float(brentq(f, -MAX_GRADE_DEG, MAX_GRADE_DEG, xtol=1e-9))
+    return _grade_root(f)
 
 
 def steady_state(
@@ -223,3 +257,96 @@ def steady_state(
 def immobilisation_limit_xt(seg, tp: TerrainParams, *, wheel_speed_mps: float, drawbar_N: float = 0.0) -> float:
     """Terrain coefficient below which a segment cannot pull ``drawbar_N`` (0.586 for FrostyBoy, no tow)."""
     return float(brentq(lambda X: max_drawbar_N(X, seg, tp, wheel_speed_mps) - drawbar_N, 0.05, 1.0, xtol=1e-10))
+
+
+# ------------------------------------------------------------------ limits in field terms (docs/model.md section 7)
+def _load_N(seg, grade_deg, drawbar_N, segments, sled_mass_kg, sled_friction):
+    """A segment's share of the tow on a grade: ``drawbar_N`` plus the sled's steady pull over ``segments``."""
+    return drawbar_N + tow_drawbar_N(0.0, seg, grade_deg, sled_mass_kg, sled_friction) / segments
+
+
+def starting_traction_coefficient(X, tp: TerrainParams) -> float:
+    """Traction per unit normal load that a wheel spinning up from rest develops, ``F_t / F_n``
+    (docs/model.md section 7, "Starting from rest").
+
+    At ``V = 0`` the regularised slip of Eq. 1 is 1 as soon as the wheel turns, so the wheel pulls with
+    Eq. 2 at slip 1, past the Magic Formula's peak.  With the shear-displacement standstill law
+    (``tp.standstill == "shear"``, where the model has it) the slip of a wheel turning from rest grows
+    with the shear displacement and passes through the peak: the wheel pulls with the peak of Eq. 2.
+    """
+    if getattr(tp, "standstill", "regularised") == "shear":
+        res = minimize_scalar(
+            lambda i: -float(terrain.traction_force(i, 1.0, X, tp)),
+            bounds=(0.0, 1.0),
+            method="bounded",
+            options={"xatol": 1e-10},
+        )
+        return float(max(-res.fun, terrain.traction_force(1.0, 1.0, X, tp)))
+    return float(terrain.traction_force(1.0, 1.0, X, tp))
+
+
+def from_rest_drawbar_N(X, seg, tp: TerrainParams, grade_deg: float = 0.0) -> float:
+    """Drawbar a segment at rest on uniform terrain ``X`` and grade ``grade_deg`` develops as it starts [N].
+
+    Each wheel pulls with the starting traction (:func:`starting_traction_coefficient` times its normal
+    load), at most what the motor's stall torque ``T_s = min(T_max, k_w w_nl)`` turns against the
+    resistance torque, ``(T_s - T_rr) / R_w``; the segment moves only against the full resistance of
+    Eq. 3 (``sgn(V) = 1``) and gravity.  Negative: the segment cannot start.
+    """
+    n_w, _, R = segment_geometry(seg)
+    Ff, Fr, G = axle_loads_N(seg, grade_deg)
+    c = starting_traction_coefficient(X, tp)
+    stall = min(seg.torque_limit_Nm, seg.motor_slope_Nms_per_rad * seg.no_load_speed_radps)
+    total = 0.0
+    for F in (Ff, Fr):
+        torque = float(terrain.resistance_torque(np.inf, F, X, R, tp))
+        Ft = min(c * F, (stall - torque) / R)
+        total += Ft - float(terrain.resistance_force(np.inf, F, X, tp))
+    return float(n_w / 2 * total + G)
+
+
+def max_grade_from_rest_deg(
+    X,
+    seg,
+    tp: TerrainParams,
+    drawbar_N: float = 0.0,
+    *,
+    segments: int = 1,
+    sled_mass_kg: float = 0.0,
+    sled_friction: float = 0.0,
+) -> float | None:
+    """Steepest grade [deg] on which a chain at rest starts rolling: the root of
+    ``from_rest_drawbar_N(grade) = drawbar_N + sled / segments`` (the sled moving, as the chain must
+    pull it once it moves; docs/model.md section 7).  ``MAX_GRADE_DEG`` / None as :func:`max_grade_deg`;
+    a negative value is the downhill grade the chain needs to start at all."""
+    return _grade_root(
+        lambda g: from_rest_drawbar_N(X, seg, tp, g) - _load_N(seg, g, drawbar_N, segments, sled_mass_kg, sled_friction)
+    )
+
+
+def max_grade_below_slip_deg(
+    X,
+    seg,
+    tp: TerrainParams,
+    wheel_speed_mps: float,
+    slip_cap: float,
+    drawbar_N: float = 0.0,
+    *,
+    segments: int = 1,
+    sled_mass_kg: float = 0.0,
+    sled_friction: float = 0.0,
+) -> float | None:
+    """Steepest grade [deg] a rolling chain climbs with its steady slip at most ``slip_cap``.
+
+    Below the peak slip the drawbar grows with the slip, so the steady slip is at most the cap exactly
+    where the drawbar at the cap (or at the peak, if the cap lies beyond it) carries the load: the root
+    of ``net_force_per_segment_N(min(cap, peak), grade, moving) = load(grade)``
+    (docs/model.md section 7).  ``MAX_GRADE_DEG`` / None as :func:`max_grade_deg`.
+    """
+    i = min(float(slip_cap), peak_slip(X, wheel_speed_mps, seg, tp))
+
+    def f(g):
+        D = float(net_force_per_segment_N(i, X, wheel_speed_mps, seg, tp, moving=True, grade_deg=g))
+        return D - _load_N(seg, g, drawbar_N, segments, sled_mass_kg, sled_friction)
+
+    return _grade_root(f)

@@ -33,12 +33,15 @@ __all__ = [
     "wheel_reaction_torque",
     "normal_load_N",
     "gravity_force_N",
+    "sled_force_N",
     "traction_coefficients",
     "traction_from_coefficients",
     "resistance_coefficients",
     "resistance_from_coefficients",
     "torque_coefficient",
     "torque_from_coefficient",
+    "free_rolling_coefficient",
+    "free_rolling_torque",
     "TerrainProfile",
     "STEP_WIDTH_M",
     "patch_profile",
@@ -332,6 +335,45 @@ def torque_from_coefficient(omega_mps, coef, p: TerrainParams):
     return coef * smooth_sign(omega_mps, p.sign_eps_mps)
 
 
+def free_rolling_coefficient(F_n, X, R_w, p: TerrainParams):
+    """The speed-independent factor of :func:`free_rolling_torque`, ``F_n R_w c_free(X)``.
+
+    ``"contact"`` balance: ``c_free = min(b_trF / X^A, tau0 + tau1 (1 - X))``; ``"traction"``: 0.
+    """
+    if p.torque_balance == "traction":
+        return F_n * R_w * (0.0 * X)
+    return F_n * R_w * np.minimum(p.b_trF / X**p.A, p.tau0 + p.tau1 * (1.0 - X))
+
+
+def free_rolling_torque(omega_mps, F_n, X, R_w, p: TerrainParams):
+    """Resistance torque of a wheel that rolls free, with no drivetrain behind it [N m] (docs/model.md
+    section 2, "Terrain resistance torque").
+
+    The fitted ``T_rr`` of :func:`resistance_torque` holds what the *driven* wheels of Table 2 lost,
+    the driveline's losses included.  It splits as ``T_rr = T_free + T_loss``: ``T_free`` is the
+    terrain's share, the torque that makes a free wheel resist with exactly Eq. 3, and ``T_loss``
+    the driveline losses (derived from the fit, ``>= 0``):
+
+    * ``"contact"`` balance, ``J dw/dt = T_m - R_w (F_t - F_tr) - T``: a free wheel (``T_m = 0``) in
+      steady rolling passes ``F_t - F_tr = -T / R_w`` to the chassis, which is ``-F_tr`` (Eq. 3) exactly
+      when ``T_free = R_w F_tr = F_n R_w b_trF / X^A sgn(w)`` (its traction is then 0, at zero slip);
+    * ``"traction"`` balance, ``J dw/dt = T_m - R_w F_t - T``: the chassis receives ``F_t - F_tr``
+      whatever the wheel torque, and a free wheel is at ``F_t = 0`` when ``T_free = 0``.
+
+    ``T_free`` is capped at ``T_rr`` (``T_loss >= 0``): the fit, made on ``X`` in [0.65, 1], falls below
+    ``R_w F_tr`` only on snow looser than ``X`` = 0.018 (FrostyBoy), where a free wheel then resists as a
+    driven one.  ``sgn`` is smoothed as in :func:`resistance_torque`.
+
+    Parameters
+    ----------
+    omega_mps : array_like
+        Wheel circumferential speed ``R_w * omega`` [m/s] (only its sign matters).
+    F_n, X, R_w : array_like
+        Normal load [N], terrain coefficient, wheel radius [m].
+    """
+    return torque_from_coefficient(omega_mps, free_rolling_coefficient(F_n, X, R_w, p), p)
+
+
 def wheel_reaction_torque(F_t, F_tr, T_rr, R_w, p: TerrainParams):
     """Terrain torque opposing the motor in the wheel torque balance [N m].
 
@@ -372,6 +414,28 @@ def normal_load_N(weight_per_wheel_N, sin_theta, cos_theta, transfer):
 def gravity_force_N(mass_kg, gravity_mps2, sin_theta):
     """Gravity along the track on a segment, ``-m g sin(theta)`` [N] (forward positive; docs/model.md section 7)."""
     return -mass_kg * gravity_mps2 * sin_theta
+
+
+def sled_force_N(weight_N, friction, sin_theta, cos_theta, direction):
+    """Backward pull of a towed sled on the rear segment [N] (docs/model.md section 4, "Towed load").
+
+    ``F = m_s g (sin(theta) + mu cos(theta) d)``: gravity along the grade and Coulomb friction on the
+    snow, which opposes the sled's motion: ``d`` is the direction of motion, the smooth sign
+    ``tanh(v / v_s)`` of the rear segment's speed in the kernel (at rest only gravity), 1 for steady
+    forward motion.
+
+    Parameters
+    ----------
+    weight_N : array_like
+        The sled's weight ``m_s g`` [N].
+    friction : array_like
+        Sliding friction coefficient ``mu`` of the sled on the snow.
+    sin_theta, cos_theta : array_like
+        Grade at the rear segment (positive uphill).
+    direction : array_like
+        Direction of the sled's motion, in [-1, 1].
+    """
+    return weight_N * (sin_theta + friction * cos_theta * direction)
 
 
 @dataclass(frozen=True)

@@ -59,3 +59,98 @@ def test_ground_speed_form_agrees_with_wheel_speed_form():
     assert b.wheel_speed_mps == pytest.approx(W, abs=1e-9)
     with pytest.raises(ValueError, match="exactly one"):
         steady.steady_state(0.8, SEG, TP)
+
+
+# ------------------------------------------------------------------ limits in field terms (docs/model.md section 7)
+def _hand_from_rest_deg(X):
+    """By hand, a uniform chain with no tow: each wheel pulls Eq. 2 at slip 1 per unit load,
+    c = X^d b_tF sin(2.8 X atan(atan(4 X^2))), against Eq. 3 in motion, b_trF / X^A, and gravity; both scale
+    with cos(theta), so tan(theta) = c - b_trF / X^A (the motor's stall torque is not the limit here:
+    R_w F_n c + T_rr < T_max on the more loaded axle, checked with the pitch transfer's bound for
+    |theta| <= 15 deg, F_n <= 1.16 W)."""
+    import math
+
+    c = X**TP.peak_exponent_d * TP.b_tF * math.sin(2.8 * X * math.atan(math.atan(4 * X * X)))
+    F_n = SEG.mass_kg * SEG.gravity_mps2 / 4
+    torque = SEG.wheel_radius_m * F_n * c + F_n * SEG.wheel_radius_m * (TP.tau0 + TP.tau1 * (1 - X))
+    assert 1.16 * torque < SEG.torque_limit_Nm
+    return math.degrees(math.atan(c - TP.b_trF / X**TP.A))
+
+
+@pytest.mark.parametrize("X", [1.0, 0.9, 0.8, 0.4])
+def test_from_rest_limit_by_hand(X):
+    """The from-rest limit is atan(c_t(1) - mu): 11.4 deg on X_t 1.0 and 14.3 deg on 0.9 (the hill starts
+    issue 32 measured, 11.6 and 14.4 deg), 12.7 deg downhill on 0.4 (where slip 1 is the peak: the same
+    as once moving)."""
+    got = steady.max_grade_from_rest_deg(X, SEG, TP)
+    assert got == pytest.approx(_hand_from_rest_deg(X), abs=1e-7)
+    assert got <= steady.max_grade_deg(X, SEG, TP, W) + 1e-7
+
+
+def test_from_rest_limit_reads_the_standstill_law():
+    """With a shear-displacement standstill law (``standstill: shear``, issue 32a) the wheel turning from
+    rest passes through the Magic Formula's peak: the starting traction is the peak of Eq. 2, and at X_t 1.0
+    the from-rest limit rises to the rolling-on limit's neighbourhood (the peak at the rolling wheel speed)."""
+    from dataclasses import asdict
+
+    shear = SimpleNamespace(**asdict(TP), standstill="shear")
+    c_peak = steady.starting_traction_coefficient(1.0, shear)
+    i = [k / 10000 for k in range(10001)]
+    from snoworm import terrain
+
+    assert c_peak == pytest.approx(max(float(terrain.traction_force(x, 1.0, 1.0, TP)) for x in i), rel=1e-6)
+    assert steady.starting_traction_coefficient(1.0, TP) == pytest.approx(
+        float(terrain.traction_force(1.0, 1.0, 1.0, TP))
+    )
+    assert steady.max_grade_from_rest_deg(1.0, SEG, shear) == pytest.approx(
+        steady.max_grade_deg(1.0, SEG, TP, W), abs=1e-4
+    )
+
+
+@pytest.mark.parametrize("X", [1.0, 0.8])
+@pytest.mark.parametrize("offset", [-0.3, 0.3])
+def test_hill_start_against_the_simulation(X, offset):
+    """Six segments at rest on a slope of X_t uniform snow, motors started at 1 s at 1.8 m/s: 0.3 deg below the
+    from-rest limit the chain starts and reaches its steady climbing speed (steady.steady_state); 0.3 deg
+    above it the wheels spin at slip ~0.99 and the chain crawls (2-3 cm/s, the smooth laws' creep),
+    although the rolling-on limit lies 2-17 deg higher."""
+    from snoworm import load_scenario, simulate
+
+    limit = steady.max_grade_from_rest_deg(X, SEG, TP)
+    grade = limit + offset
+    sc = load_scenario("tow6_uniform", [f"terrain.xt={X}", "tow.force_N=0", "simulation.duration_s=12"])
+    res = simulate(sc.with_({"terrain.grade_deg": grade}))
+    v, slip = res.segments["v_mps"][-1], res.segments["slip"][-1]
+    if offset < 0:
+        ss = steady.steady_state(X, SEG, TP, wheel_speed_mps=W, grade_deg=grade)
+        assert v.mean() == pytest.approx(ss.ground_speed_mps, rel=2e-3)
+    else:
+        assert v.mean() < 0.05 and slip.min() > 0.98
+        assert steady.max_grade_deg(X, SEG, TP, W) > grade + 1.5
+
+
+@pytest.mark.parametrize("X", [0.7, 0.8])
+def test_slip_capped_limit(X):
+    """On the slip-capped limit the steady slip is exactly the cap; a cap beyond the peak slip gives the
+    rolling-on limit (X_t 1.0: the peak is below 30 %)."""
+    cap = 0.3
+    g = steady.max_grade_below_slip_deg(X, SEG, TP, W, cap)
+    assert g < steady.max_grade_deg(X, SEG, TP, W)
+    assert steady.steady_state(X, SEG, TP, wheel_speed_mps=W, grade_deg=g).slip == pytest.approx(cap, rel=1e-6)
+    assert steady.steady_state(X, SEG, TP, wheel_speed_mps=W, grade_deg=g - 0.5).slip < cap
+    assert steady.max_grade_below_slip_deg(1.0, SEG, TP, W, cap) == pytest.approx(
+        steady.max_grade_deg(1.0, SEG, TP, W), abs=1e-9
+    )
+
+
+def test_from_rest_drawbar_is_capped_by_the_stall_torque():
+    """A motor too weak to turn the wheel through slip 1 limits the starting traction to
+    (T_stall - T_rr) / R_w per wheel (by hand, level ground, X_t 1.0, a 30 N m motor)."""
+    weak = SimpleNamespace(**{**vars(SEG), "torque_limit_Nm": 30.0})
+    F_n = SEG.mass_kg * SEG.gravity_mps2 / 4
+    T_rr = F_n * SEG.wheel_radius_m * (TP.tau0 + TP.tau1 * 0.0)
+    capped = (30.0 - T_rr) / SEG.wheel_radius_m
+    assert capped < steady.starting_traction_coefficient(1.0, TP) * F_n  # the cap binds
+    want = 4 * (capped - TP.b_trF * F_n)
+    assert steady.from_rest_drawbar_N(1.0, weak, TP) == pytest.approx(want, rel=1e-12)
+    assert steady.from_rest_drawbar_N(1.0, SEG, TP) > want

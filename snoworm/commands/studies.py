@@ -193,7 +193,7 @@ def calibrate(field_csv, fit, out_dir, **options):
     help="Inchworm gait to map, repeatable: a name (six_segment, two_segment) or phases as a list, e.g. "
     "'[[0],[1],[2],[3],[4],[5]]' (default: the scenario's). Several: one gradeability curve each.",
 )
-@out_option("Directory for mobility_map.csv and mobility_map.png (and gradeability.png).")
+@out_option("Directory for mobility_map.csv and mobility_map.png (and gradeability.csv, gradeability.png).")
 @set_option
 @click.option(
     "--rolling-speed",
@@ -201,6 +201,15 @@ def calibrate(field_csv, fit, out_dir, **options):
     type=float,
     default=None,
     help="Rolling wheel-speed set-point [m/s] (default: the scenario's supervisor or uniform mode).",
+)
+@click.option(
+    "--slip-cap",
+    "slip_cap",
+    type=float,
+    default=0.3,
+    show_default=True,
+    help="Slip cap in (0, 1] of the slip-capped rolling limit: with several --grade values each X_t gets the "
+    "steepest grade rolled once moving, from rest and with the steady slip at most this (gradeability.csv).",
 )
 @click.option("--no-inching", is_flag=True, help="Rolling only (steady state, no inching simulations).")
 @click.option(
@@ -239,13 +248,14 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot
     drawbar); inching by short simulations of the inchworm gait of the scenario's supervisor or
     inchworm mode, in the cells that do not roll (every cell with --every-cell), bisected over the
     grades.  Writes --out/mobility_map.csv and --out/mobility_map.png (with several --grade values
-    also --out/gradeability.png).  At most 100000 cells (X_t x grades x tows, the bound of one
-    sweep).  Progress of the inching runs goes to stderr.
+    also --out/gradeability.csv and --out/gradeability.png, and prints per X_t the rolling limits once
+    moving, from rest and below --slip-cap in a sentence).  At most 100000 cells (X_t x grades x tows,
+    the bound of one sweep).  Progress of the inching runs goes to stderr.
     """
     from ..studies.mobility import run_mobility_map  # lazy: start-up
 
-    # options: grade_spec, gaits, rolling_speed_mps, inch_duration_s, jobs, every_cell, plot_format, figure_size,
-    # overwrite
+    # options: grade_spec, gaits, rolling_speed_mps, slip_cap, inch_duration_s, jobs, every_cell, plot_format,
+    # figure_size, overwrite
     # (run_mobility_map's names)
     with progress_bar(1, "mobility map", "inching runs") as bar:
         _, text, paths = run_mobility_map(

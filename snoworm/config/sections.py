@@ -33,6 +33,7 @@ __all__ = [
     "FINITE_WHY",
     "BIG_FORCE_N",
     "BIG_SPEED_MPS",
+    "DRIVETRAINS",
     "MAX_SEGMENTS",
     "MAX_OUTPUT_SAMPLES",
     "SegmentConfig",
@@ -66,6 +67,9 @@ MAX_SEGMENTS = 200
 MAX_OUTPUT_SAMPLES = 150_000
 _REG_WHY = "A regularisation speed, small against the driving speeds."
 FINITE_WHY = "A larger value would only make the run stiff or meaningless (it must stay finite)."
+#: States of a segment's drivetrain (``vehicle.segment_overrides.K.drivetrain``): a failed one gives no
+#: torque and its wheels roll free, without the driveline's losses (docs/model.md section 4).
+DRIVETRAINS = ("working", "failed")
 
 
 @dataclass(frozen=True)
@@ -98,6 +102,17 @@ class SegmentConfig(Config):
         unit="m",
         doc="height of the centre of mass above the ground (pitch load transfer on a grade)",
     )
+    drivetrain: str = field(
+        "working",
+        choices=DRIVETRAINS,
+        doc="'working', or 'failed': the motors give no torque and the wheels roll free "
+        "(docs/model.md section 4); a condition of the segment, not a value of the parameter set",
+    )
+
+    @property
+    def driven(self) -> float:
+        """1.0 when the segment's drivetrain works, 0.0 when it has failed (:class:`SegmentArrays`)."""
+        return 1.0 if self.drivetrain == "working" else 0.0
 
 
 @dataclass(frozen=True)
@@ -398,7 +413,7 @@ class TerrainConfig(Config):
 
 @dataclass(frozen=True)
 class TowConfig(Config):
-    """Towed load on the rear segment (docs/model.md section 4)."""
+    """Towed load on the rear segment: a constant force and a sled (docs/model.md section 4, "Towed load")."""
 
     _section = "tow"
     force_N: float = field(
@@ -408,6 +423,35 @@ class TowConfig(Config):
         unit="N",
         doc="constant force pulling the rear segment backward",
     )
+    mass_kg: float = field(
+        0.0,
+        ge=0,
+        le=1e5,
+        why=FINITE_WHY,
+        unit="kg",
+        doc="mass of a sled towed behind the rear segment (0: none); it adds m g (sin(theta) + "
+        "friction cos(theta)) at the rear segment's grade, docs/model.md section 4",
+    )
+    friction: float | None = field(
+        None,
+        ge=0,
+        le=5,
+        doc="the sled's sliding friction coefficient on the snow (needed with mass_kg > 0)",
+        why="A friction coefficient is >= 0; a sled on snow slides at 0.02-0.5 (beyond a few it would not slide).",
+    )
+
+    def _check(self, path):
+        if self.mass_kg > 0 and self.friction is None:
+            raise ScenarioError(
+                f"{path}.friction: a sled (tow.mass_kg = {self.mass_kg:g} kg) needs its sliding friction "
+                "coefficient on the snow; there is no default. Give tow.friction, e.g. 0.1 for a plastic sled "
+                'on packed snow (docs/model.md section 4, "Towed load").'
+            )
+
+    @property
+    def sled_friction(self) -> float:
+        """The sled's friction coefficient, 0 without a sled (no value given)."""
+        return 0.0 if self.friction is None else float(self.friction)
 
 
 @dataclass(frozen=True)

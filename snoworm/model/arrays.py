@@ -57,6 +57,8 @@ class SegmentArrays:
     speed_kp_Nms_per_rad: np.ndarray
     speed_ki_Nm_per_rad: np.ndarray
     com_height_m: np.ndarray
+    #: 1.0 where the segment's drivetrain works, 0.0 where it has failed (no motor torque, wheels free)
+    driven: np.ndarray
 
     @classmethod
     def from_list(cls, segments) -> SegmentArrays:

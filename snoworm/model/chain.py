@@ -78,6 +78,10 @@ class ChainModel:
         Whether the state includes the outer force-loop integrators (force-control mode).
     elevation : ElevationProfile, optional
         Elevation along the track (docs/model.md section 7); None or level: level ground.
+    sled_mass_kg, sled_friction : float, optional
+        A sled towed behind the rear segment (mass 0: none): it adds
+        :func:`terrain.sled_force_N` at the rear segment's grade to the tow (docs/model.md section 4,
+        "Towed load").
     """
 
     def __init__(
@@ -89,6 +93,8 @@ class ChainModel:
         tow_force_N: float,
         force_loop: bool = False,
         elevation: ElevationProfile | None = None,
+        sled_mass_kg: float = 0.0,
+        sled_friction: float = 0.0,
     ):
         self.seg = seg
         self.links = links
@@ -99,6 +105,10 @@ class ChainModel:
         #: chains (see :meth:`stack`); every per-segment array then has shape (B, N)
         self.batch_shape = tuple(np.shape(seg.mass_kg)[:-1])
         self.tow_force_N = float(tow_force_N) if np.ndim(tow_force_N) == 0 else np.asarray(tow_force_N, float)
+        self.sled_mass_kg = float(sled_mass_kg) if np.ndim(sled_mass_kg) == 0 else np.asarray(sled_mass_kg, float)
+        self.sled_friction = float(sled_friction) if np.ndim(sled_friction) == 0 else np.asarray(sled_friction, float)
+        #: whether a sled is towed (a structural flag: without one the tow is the constant force)
+        self._sled = bool(np.any(np.asarray(sled_mass_kg) > 0))
         self.n = int(np.shape(seg.mass_kg)[-1])
         self.force_loop = bool(force_loop)
         self.has_joints = bool(np.any(links.prismatic > 0))
@@ -133,6 +143,9 @@ class ChainModel:
         self._wnl = col(seg.no_load_speed_radps)
         self._Tmax = col(seg.torque_limit_Nm)
         self._m = seg.mass_kg.astype(float)
+        #: axles of segments with a failed drivetrain, bool (..., N, 1), None when every drivetrain works: no
+        #: motor torque, the wheels roll free (docs/model.md section 4, "Failed drivetrain")
+        self._free_axle = None if np.all(np.asarray(seg.driven) == 1.0) else (np.asarray(seg.driven) == 0.0)[..., None]
         self._bands = self._fd = None
         self._prepare_kernel()
         #: the float kernel of a single short chain (None: batches and long chains use :meth:`evaluate`)
@@ -166,7 +179,7 @@ class ChainModel:
             self._coef = (
                 terrain.traction_coefficients(Fn, X, self._tpk),
                 terrain.resistance_coefficients(Fn, X, self._tpk),
-                terrain.torque_coefficient(Fn, X, self._R, self._tpk),
+                self._torque_coefficient(Fn, X, self._R, self._tpk),
             )
         else:
             self._Xc = self._coef = None
@@ -184,7 +197,33 @@ class ChainModel:
         self._stroke_max = np.asarray(L.stroke_max_m, float)
         self._stroke_min = np.asarray(L.stroke_min_m, float)
         self._tow_col = np.asarray(self.tow_force_N, float)[..., None]
+        self._prepare_sled()
         self._ctl_cache = (None, None)
+
+    def _prepare_sled(self):
+        """The sled's weight and friction, and the grade at the rear segment where it is constant (level:
+        0), as columns of shape (..., 1)."""
+        self._sled_w = self._sled_mu = self._sled_sin = self._sled_cos = None
+        if not self._sled:
+            return
+        g = np.asarray(self.seg.gravity_mps2, float)[..., -1:]
+        self._sled_w = np.asarray(self.sled_mass_kg, float)[..., None] * g
+        self._sled_mu = np.asarray(self.sled_friction, float)[..., None] + np.zeros(g.shape)
+        if self.elevation is None or self.elevation.is_constant:
+            zero = np.zeros(g.shape)
+            s = zero if self.elevation is None else self.elevation.sin_grade(zero, self._half_base[..., -1:])
+            self._sled_sin, self._sled_cos = np.asarray(s, float), np.asarray(np.sqrt(1.0 - s * s), float)
+
+    def _tow_force_N(self, x, v):
+        """The towed load on the rear segment with a sled, positive backward, shape (..., 1): the constant
+        force plus the sled's gravity and friction at the rear segment's grade (:func:`terrain.sled_force_N`;
+        docs/model.md section 4, "Towed load")."""
+        s, c = self._sled_sin, self._sled_cos
+        if s is None:  # a grade along the track: the chord grade under the rear segment
+            s = self.elevation.sin_grade(x[..., -1:], self._half_base[..., -1:])
+            c = np.sqrt(1.0 - s * s)
+        d = terrain.smooth_sign(v[..., -1:], self._tpk.sign_eps_mps)
+        return np.asarray(self.tow_force_N)[..., None] + terrain.sled_force_N(self._sled_w, self._sled_mu, s, c, d)
 
     def _controls(self, ctl: Controls):
         """Arrays derived from the controls of an interval, computed once per Controls object."""
@@ -234,6 +273,8 @@ class ChainModel:
             np.array([m.tow_force_N for m in models]),
             force_loop=m0.force_loop,
             elevation=m0.elevation,
+            sled_mass_kg=np.array([m.sled_mass_kg for m in models]),
+            sled_friction=np.array([m.sled_friction for m in models]),
         )
 
     # ------------------------------------------------------------------ the kernel's inputs
@@ -346,10 +387,11 @@ class ChainModel:
         X, Ft, Ftr, Trr = self._terrain(x, V, wm, Fn, i)
         Ftr, z = self._sinkage(Y, wm, V, i, Ftr, dY)
         T, T_spring, damper_v = self._links(Y, x, v, ctl, cd, dY)
+        F_tow = self._tow_force_N(x, v) if self._sled else None  # None: the constant tow_force_N
         # wheel-speed set-points, from the outer force loop where it is active (section 5.2)
         sp = ctl.speed_sp_mps
         if self.force_loop:
-            tow = np.broadcast_to(self._tow_col, T.shape[:-1] + (1,))
+            tow = np.broadcast_to(self._tow_col if F_tow is None else F_tow, T.shape[:-1] + (1,))
             Fsel = np.concatenate([T, tow], axis=-1)[..., ctl.fc_link]
             vsp, dq = feedback.link_force_pi(
                 Fsel, ctl.fc_ref_N, ctl.fc_sigma, Y[..., L.q], ctl.fc_nominal_mps, ctl.fc_kp, ctl.fc_ki, ctl.fc_vmax_mps
@@ -363,17 +405,15 @@ class ChainModel:
         Tm, dI = feedback.speed_pi(w_ref, w, integ, self._kp, self._ki, T_lo, T_hi, cd["on_mask"], self._ki_kp)
         if cd["torque"] is not None:  # direct torque commands (a controller's wheel_torque_Nm)
             Tm, dI = feedback.direct_torque(cd["torque_cmd"], T_lo, T_hi, cd["torque"], Tm, dI)
+        if self._free_axle is not None:  # a failed drivetrain: no torque, the PI integral frozen
+            Tm, dI = np.where(self._free_axle, self._zero, Tm), np.where(self._free_axle, self._zero, dI)
         reaction = terrain.wheel_reaction_torque(Ft, Ftr, Trr, R, tp)
         dY[..., L.omega] = (Tm - reaction) / self._J
         dY[..., L.integral] = dI
         # chassis: the net link force on segment k is T_{k-1} - T_k (T_{-1} = 0, T_{N-1} = tow)
         net = Ft - Ftr
         wheel_net = self.wheels_per_axle * (net[..., 0] + net[..., 1])
-        Tpad = np.empty_like(T, shape=T.shape[:-1] + (self.n + 1,))
-        Tpad[..., 0] = 0.0
-        Tpad[..., 1:-1] = T
-        Tpad[..., -1] = self.tow_force_N
-        Fl = Tpad[..., :-1] - Tpad[..., 1:]
+        Fl = self._connector_net_N(T, F_tow)
         dY[..., L.x] = v
         dY[..., L.v] = (wheel_net + Fl if G is None else wheel_net + Fl + G) / self._m
         if not outputs:
@@ -439,6 +479,27 @@ class ChainModel:
         dY[..., self.layout.j] = terrain.shear_displacement_rate(wm, V, j, tp.shear_modulus_K_m)
         return terrain.shear_slip(j, tp.shear_modulus_K_m)
 
+    def _connector_net_N(self, T, F_tow):
+        """Net force of the links and the tow on each segment, ``T_{k-1} - T_k`` with ``T_{-1} = 0`` and
+        ``T_{N-1}`` the tow (``F_tow`` of :meth:`_tow_force_N`, None: the constant ``tow_force_N``)."""
+        Tpad = np.empty_like(T, shape=T.shape[:-1] + (self.n + 1,))
+        Tpad[..., 0] = 0.0
+        Tpad[..., 1:-1] = T
+        if F_tow is None:
+            Tpad[..., -1] = self.tow_force_N
+        else:
+            Tpad[..., -1:] = F_tow
+        return Tpad[..., :-1] - Tpad[..., 1:]
+
+    def _torque_coefficient(self, Fn, X, R, tp):
+        """Factor of the resistance torque per axle: the fitted ``T_rr`` of a driven wheel
+        (:func:`terrain.torque_coefficient`), the free-rolling ``T_free`` where the drivetrain has failed
+        (:func:`terrain.free_rolling_coefficient`; docs/model.md section 2, "Terrain resistance torque")."""
+        c = terrain.torque_coefficient(Fn, X, R, tp)
+        if self._free_axle is None:
+            return c
+        return np.where(self._free_axle, terrain.free_rolling_coefficient(Fn, X, R, tp), c)
+
     def _sinkage(self, Y, wm, V, i, Ftr, dY):
         """``(F_tr, z)``: with ``sinkage: slip`` the resistance raised by the sinkage ``z`` of each axle,
         whose rate it writes into ``dY`` (:func:`terrain.sinkage_rate`, docs/model.md section 2,
@@ -463,7 +524,7 @@ class ChainModel:
             X = self.profile(x[..., None] + self.axle_offset_m)
             c_t = terrain.traction_coefficients(Fn, X, tp)
             c_r = terrain.resistance_coefficients(Fn, X, tp)
-            c_q = terrain.torque_coefficient(Fn, X, R, tp)
+            c_q = self._torque_coefficient(Fn, X, R, tp)
         Ft = terrain.traction_from_coefficients(i, c_t)
         Ftr = terrain.resistance_from_coefficients(V, c_r, tp)
         Trr = terrain.torque_from_coefficient(wm, c_q, tp)

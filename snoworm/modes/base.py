@@ -162,6 +162,18 @@ def build_mode(
     return cls(cfg, scenario, model)
 
 
+def refuse_failed_drivetrains(vehicle: Any, mode_name: str, why: str) -> None:
+    """ScenarioError naming the first segment whose drivetrain has failed (docs/model.md section 4,
+    "Failed drivetrain"), for a mode that plans every segment as driven (``why``: what it needs of them)."""
+    for k, seg in enumerate(vehicle.segment_params()):
+        if seg.drivetrain != "working":
+            raise ScenarioError(
+                f"vehicle.segment_overrides.{k}.drivetrain: the {mode_name} mode {why}, and segment {k}'s "
+                "drivetrain has failed (no torque). Run a chain with a failed segment in mode 'uniform' or with "
+                "a controller, or set its drivetrain to 'working'."
+            )
+
+
 def start_times(values: ArrayLike, n_segments: int, path: str = "mode.start_time_s") -> NDArray[np.float64]:
     """One start time for all segments, or one per segment, as an array of length N."""
     v = np.asarray(values, float)

@@ -38,7 +38,7 @@ from ..config.mode_registry import ModeConfig
 from ..config.schema import Config, ScenarioError, field, suggest
 from ..config.sections import FINITE_WHY
 from ..model.inputs import Controls
-from .base import Interval, Mode, register_mode, rolling_interval, start_times
+from .base import Interval, Mode, refuse_failed_drivetrains, register_mode, rolling_interval, start_times
 
 if TYPE_CHECKING:
     from numpy.typing import NDArray
@@ -156,6 +156,7 @@ class ForceControlConfig(ModeConfig):
                 f"got {n}. Use mode type 'uniform' for one segment."
             )
         start_times(self.start_time_s, n, f"{path}.start_time_s")
+        refuse_failed_drivetrains(vehicle, "force_control", "plans every segment's wheel force with its motors")
         if len(self.speed_mps) not in (1, n):
             raise ScenarioError(f"{path}.speed_mps: give one speed for all segments or {n}; got {len(self.speed_mps)}.")
         if self.free_segment is not None and self.free_segment >= n:

@@ -254,7 +254,8 @@ def plan(cfg, sc, model, path="mode") -> ForcePlan:
     n = model.n
     segs = sc.vehicle.segment_params()
     tp = model.tp
-    F_tow = float(sc.tow.force_N)
+    # the tow's steady pull on level ground (the plan is level: docs/model.md section 7), a sled's included
+    F_tow = steady.tow_drawbar_N(sc.tow.force_N, segs[-1], 0.0, sc.tow.mass_kg, sc.tow.sled_friction)
     nominal = np.asarray(cfg.speed_mps, float) * np.ones(n)
     R = model.seg.wheel_radius_m
     vmax = np.full(n, cfg.max_speed_mps) if cfg.max_speed_mps is not None else R * model.seg.no_load_speed_radps

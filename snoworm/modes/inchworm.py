@@ -59,7 +59,7 @@ from ..config.mode_registry import ModeConfig
 from ..config.schema import ScenarioError, field, suggest
 from ..config.sections import FINITE_WHY
 from ..model.inputs import Controls
-from .base import Interval, Mode, register_mode
+from .base import Interval, Mode, refuse_failed_drivetrains, register_mode
 
 if TYPE_CHECKING:
     from numpy.typing import NDArray
@@ -314,6 +314,7 @@ class InchwormConfig(ModeConfig):
                 f"(joint_control = {self.joint_control!r}, joint_force_N = {self.joint_force_N!r})."
             )
         gait_plan(self.phases(), vehicle.segments, vehicle.link_types(), f"{path}.gait")
+        refuse_failed_drivetrains(vehicle, "inchworm", "holds segments on their locked wheels and drives the others")
 
 
 @register_mode

@@ -129,7 +129,8 @@ def chain_drawbar_surplus_N(
     """Steady drawbar the chain could develop rolling at its current position, minus the tow [N].
 
     ``sum_k sum_axles max_drawbar_N(X_t(axle), grade_k) / 2 - F_tow`` (docs/model.md section 2 per-segment
-    maximum drawbar, on the grade under the segment of section 7; each axle carries half a segment).
+    maximum drawbar, on the grade under the segment of section 7; each axle carries half a segment; F_tow
+    the tow's steady pull, :func:`snoworm.steady.tow_drawbar_N`, a sled's at the rear segment's grade).
     Positive: the chain can roll.
 
     Parameters
@@ -153,7 +154,14 @@ def chain_drawbar_surplus_N(
             total += 0.5 * steady.max_drawbar_N(
                 float(X[k, a]), seg, model.tp, wheel_speed_mps, grade_deg=float(grade[k])
             )
-    return total - cast(float, model.tow_force_N)  # one chain: the supervisor never runs stacked
+    # the tow's steady pull, a sled's at the rear segment's grade included (docs/model.md section 4, "Towed load")
+    return total - steady.tow_drawbar_N(  # one chain: the supervisor never runs stacked
+        cast(float, model.tow_force_N),
+        segments[-1],
+        float(grade[-1]),
+        cast(float, model.sled_mass_kg),
+        cast(float, model.sled_friction),
+    )
 
 
 @register_mode
@@ -180,8 +188,15 @@ class SupervisorMode(Mode):
         from .. import steady  # root finding (scipy.optimize, slow to import): loaded by a run, not by validation
 
         seg0 = self.segments[0]
+        tow = steady.tow_drawbar_N(  # one chain: the supervisor never runs stacked
+            cast(float, model.tow_force_N),
+            self.segments[-1],
+            0.0,
+            cast(float, model.sled_mass_kg),
+            cast(float, model.sled_friction),
+        )
         self.rolling_limit_xt = steady.immobilisation_limit_xt(
-            seg0, model.tp, drawbar_N=cast(float, model.tow_force_N) / model.n, wheel_speed_mps=cfg.rolling_speed_mps
+            seg0, model.tp, drawbar_N=tow / model.n, wheel_speed_mps=cfg.rolling_speed_mps
         )
 
     def initial_state(self) -> NDArray[np.float64]:

@@ -132,6 +132,18 @@ def energy_metrics(result) -> dict:
     }
 
 
+def _tow_force_N(result):
+    """The towed load on the rear segment over time [N]: the constant ``tow.force_N``, or with a sled
+    (docs/model.md section 4, "Towed load") what the run's link and connector forces say it was,
+    ``T_{N-2} - connector_net_{N-1}`` (the connector force on the rear segment is the last link's
+    pull minus the tow)."""
+    sc = result.scenario
+    if not sc.tow.mass_kg > 0:
+        return sc.tow.force_N
+    pull = result.links["force_N"][:, -1] if sc.vehicle.segments > 1 else 0.0
+    return pull - result.segments["connector_net_N"][:, -1]
+
+
 def energy_balance(result) -> dict:
     """Mechanical energy balance of a run (every term in J; the residual should be ~0).
 
@@ -162,7 +174,7 @@ def energy_balance(result) -> dict:
         "joint_J": float(np.trapezoid(result.links["joint_power_W"].sum(1), t)),
         "terrain_J": float(np.trapezoid(result.segments["terrain_dissipation_W"].sum(1), t)),
         "damper_J": float(np.trapezoid(result.links["damper_power_W"].sum(1), t)),
-        "tow_J": float(np.trapezoid(sc.tow.force_N * v[:, -1], t)),
+        "tow_J": float(np.trapezoid(_tow_force_N(result) * v[:, -1], t)),
         "kinetic_change_J": float(kinetic[-1] - kinetic[0]),
         "spring_change_J": float(spring_E[-1] - spring_E[0]),
         "potential_change_J": float(

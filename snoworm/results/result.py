@@ -10,7 +10,7 @@ import io
 import json
 import math
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -40,6 +40,7 @@ if TYPE_CHECKING:
     from ..model.chain import ChainModel
     from ..model.inputs import Controls
     from ..modes.base import Mode
+    from .verdict import Verdict
 
 #: A figure size: "column", "page", "WxH" in inches or a (width, height) pair.
 FigureSize = str | tuple[float, float]
@@ -174,7 +175,7 @@ class Result:
         ``t_s``, ``distance_m``, ``motor_electrical_J``, ``joint_electrical_J``, ``total_electrical_J``."""
         return energy_along(self)
 
-    def verdict(self, criteria=None):
+    def verdict(self, criteria: Mapping[str, float] | None = None) -> Verdict:
         """Where the run ended up (:func:`snoworm.results.verdict.verdict`): a
         :class:`~snoworm.results.verdict.Verdict` with ``status`` (``moving``, ``reached_end`` or
         ``immobilised``), ``t_s``, ``x_m`` (the leader's position), ``reason`` (the line ``snoworm

@@ -99,6 +99,8 @@ def chain_model(sc: Scenario) -> ChainModel:
         sc.tow.force_N,
         force_loop=sc.mode.force_loop,
         elevation=terrain.elevation_profile(),
+        sled_mass_kg=sc.tow.mass_kg,
+        sled_friction=sc.tow.sled_friction,
     )
 
 

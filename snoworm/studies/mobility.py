@@ -78,7 +78,7 @@ from ..modes import InchwormMode, SupervisorConfig
 from ..results.energy import energy_metrics
 from ..results.verdict import verdict
 from ..simulation.driver import SolverError, simulate
-from .gradeability import grade_text, gradeability
+from .gradeability import GRADEABILITY_COLUMNS, SLIP_CAP, SlipCap, grade_text, gradeability, gradeability_rows
 from .sweep.spec import MAX_CASES, RANGE, parse_spec
 
 __all__ = [
@@ -171,12 +171,13 @@ def rolling_cell(sc, xt: float, tow_N: float, wheel_speed_mps: float, grade_deg:
 
     Returns ``rolling`` (bool), ``rolling_speed_mps``, ``rolling_slip``,
     ``rolling_energy_per_metre_J_per_m`` (electrical) and ``rolling_max_drawbar_N`` (per segment).
-    Uses the first segment's parameters for every segment (a uniform chain).
+    Uses the first segment's parameters for every segment (a uniform chain); the scenario's sled, if it
+    tows one, adds its steady pull on the grade to ``tow_N`` (:func:`snoworm.steady.tow_drawbar_N`).
     """
     seg = sc.vehicle.segment_params()[0]
     tp = sc.terrain.model.params()
     n = sc.vehicle.segments
-    share = tow_N / n
+    share = steady.tow_drawbar_N(tow_N, seg, grade_deg, sc.tow.mass_kg, sc.tow.sled_friction) / n
     dmax = steady.max_drawbar_N(xt, seg, tp, wheel_speed_mps, grade_deg=grade_deg)
     out = {
         "rolling": False,
@@ -251,21 +252,35 @@ def _rolling_rows(sc, grid, wheel_speed_mps) -> list:
     ]
 
 
-def _steady_limits(sc, xts, tows, wheel_speed_mps) -> dict:
-    """``rolling_limit_xt``: per tow, the level rolling limit X_t (None above 1);
-    ``rolling_max_grade_deg``: per tow and X_t, the steepest rolling grade."""
+def _steady_limits(sc, xts, tows, wheel_speed_mps, slip_cap=SLIP_CAP) -> dict:
+    """``rolling_limit_xt``: per tow, the level rolling limit X_t (None above 1); per tow and X_t, the
+    steepest rolling grade once moving (``rolling_max_grade_deg``), from rest
+    (``rolling_from_rest_grade_deg``) and with the steady slip at most ``slip_cap``
+    (``rolling_slip_capped_grade_deg``; docs/model.md section 7)."""
     seg = sc.vehicle.segment_params()[0]
     tp = sc.terrain.model.params()
-    limits, max_grade = {}, {}
+    n, sled = sc.vehicle.segments, {"sled_mass_kg": sc.tow.mass_kg, "sled_friction": sc.tow.sled_friction}
+    limits, max_grade, rest, capped = {}, {}, {}, {}
     for f in tows:
         try:
             limits[f] = steady.immobilisation_limit_xt(
-                seg, tp, drawbar_N=f / sc.vehicle.segments, wheel_speed_mps=wheel_speed_mps
+                seg, tp, drawbar_N=steady.tow_drawbar_N(f, seg, 0.0, **sled) / n, wheel_speed_mps=wheel_speed_mps
             )
         except ValueError:
             limits[f] = None
-        max_grade[f] = {x: steady.max_grade_deg(x, seg, tp, wheel_speed_mps, f / sc.vehicle.segments) for x in xts}
-    return {"rolling_limit_xt": limits, "rolling_max_grade_deg": max_grade}
+        max_grade[f] = {x: steady.max_grade_deg(x, seg, tp, wheel_speed_mps, f / n, segments=n, **sled) for x in xts}
+        rest[f] = {x: steady.max_grade_from_rest_deg(x, seg, tp, f / n, segments=n, **sled) for x in xts}
+        capped[f] = {
+            x: steady.max_grade_below_slip_deg(x, seg, tp, wheel_speed_mps, slip_cap, f / n, segments=n, **sled)
+            for x in xts
+        }
+    return {
+        "rolling_limit_xt": limits,
+        "rolling_max_grade_deg": max_grade,
+        "rolling_from_rest_grade_deg": rest,
+        "rolling_slip_capped_grade_deg": capped,
+        "slip_cap": slip_cap,
+    }
 
 
 # ------------------------------------------------------- the inching cells: short inchworm runs
@@ -316,7 +331,7 @@ def inching_scenario(sc, xt: float, tow_N: float, duration_s: float, grade_deg: 
     raw["terrain"] = {"xt": float(xt), "model": raw["terrain"]["model"]}
     if grade_deg:
         raw["terrain"]["grade_deg"] = float(grade_deg)
-    raw["tow"] = {"force_N": float(tow_N)}
+    raw["tow"] = {**raw["tow"], "force_N": float(tow_N)}  # the scenario's sled, if any, with the cell's force
     raw["mode"] = inching_mode_raw(sc)
     if gait is not None:
         raw["mode"]["gait"] = gait
@@ -503,6 +518,7 @@ def mobility_map(
     every_cell: bool = False,
     progress=None,
     gaits=None,
+    slip_cap: float = SLIP_CAP,
 ) -> dict:
     """Mobility map of a scenario's vehicle over ``xts`` x ``grades`` x ``tows``.
 
@@ -538,6 +554,8 @@ def mobility_map(
         is "inching only" when any gait moves the chain; its inching columns are those of the moving
         gait with the least energy per metre (``inching_gait``), and ``inching_by_gait`` holds each
         gait's.
+    slip_cap : float
+        Slip cap of the slip-capped rolling limit, in (0, 1] (:func:`snoworm.steady.max_grade_below_slip_deg`).
 
     Returns
     -------
@@ -551,6 +569,7 @@ def mobility_map(
     check_cell_count(len(xts), len(grades), len(tows))
     grid = _checked_grid(xts, tows, grades)
     v = check_field(SupervisorConfig, "rolling_speed_mps", wheel_speed_mps, "--rolling-speed")
+    cap = check_field(SlipCap, "slip_cap", slip_cap, "--slip-cap")
     if inching:
         check_field(SimulationConfig, "duration_s", inch_duration_s, "--inch-duration")
     rows = _rolling_rows(sc, grid, v)
@@ -559,7 +578,7 @@ def mobility_map(
         runs = InchingRuns(sc, grid["grades"], every_cell, inch_duration_s)
         fill_inching(runs, rows, labels, jobs=jobs, progress=progress)
     _classify(rows, inching)
-    res = {"rows": rows, **grid, "regions": REGIONS, **_steady_limits(sc, grid["xts"], grid["tows"], v)}
+    res = {"rows": rows, **grid, "regions": REGIONS, **_steady_limits(sc, grid["xts"], grid["tows"], v, cap)}
     res["gait_labels"] = [gait_label(g) for g in labels] if len(labels) > 1 else None
     res.update(inching=inching, every_cell=bool(every_cell), inch_duration_s=inch_duration_s)
     res.update(wheel_speed_mps=v, scenario=sc.name)
@@ -589,6 +608,8 @@ MAP_COLUMNS = (
 
 #: Cells of ``mobility_map.csv``: 6 significant digits, booleans 1/0, commas in notes as ``;``.
 MAP_FORMAT = CellFormat(comma=";")
+#: Cells of ``gradeability.csv``: 6 significant digits; the sentences keep their commas (quoted).
+GRADE_FORMAT = CellFormat()
 
 
 def map_csv(result: dict) -> str:
@@ -616,6 +637,7 @@ def run_mobility_map(
     gaits=None,
     figure_size=None,
     command=None,
+    slip_cap=SLIP_CAP,
 ):
     """Load a scenario, compute its map, write ``mobility_map.csv`` (and the plot, a ``plot_format`` file:
     png, pdf or svg, at print ``figure_size``: column, page or WxH; with several grades also
@@ -643,10 +665,15 @@ def run_mobility_map(
         every_cell=every_cell,
         progress=progress,
         gaits=[parse_gait(g) for g in gaits] if gaits else None,
+        slip_cap=slip_cap,
     )
     columns = MAP_COLUMNS + (("inching_gait",) if res["gait_labels"] else ())
     with output_folder(out_dir, overwrite, command) as out:
         paths = [write_csv(out / "mobility_map.csv", columns, res["rows"], MAP_FORMAT)]
+        if len(res["grades"]) > 1:  # the gradeability in numbers and sentences (docs/model.md section 7)
+            paths.append(
+                write_csv(out / "gradeability.csv", GRADEABILITY_COLUMNS, gradeability_rows(res), GRADE_FORMAT)
+            )
         if plot:
             from .. import plotting  # lazy: matplotlib costs ~0.5 s to import; --no-plot never pays it
 
