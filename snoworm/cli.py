@@ -9,12 +9,14 @@ paper) are in :mod:`snoworm.commands.studies`.
 
 from __future__ import annotations
 
+import math
 import os
 
 import click
 
 from ._version import __version__
 from .commands.common import (
+    EXIT_INPUT,
     EXIT_SOLVER,
     CommandGroup,
     allow_code_option,
@@ -212,6 +214,79 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
     except KeyboardInterrupt as exc:
         sweep_interrupted(exc, out_dir)
     echo_sweep(table, out_dir)
+
+
+# ------------------------------------------------------------------ animate (issue 34)
+@main.command()
+@click.argument("result_dir", type=click.Path(file_okay=False))
+@click.option(
+    "--fps", default=20, show_default=True, type=click.IntRange(1, 60), help="Frames per second of the video."
+)
+@click.option(
+    "--speed-up",
+    type=float,
+    default=None,
+    metavar="X",
+    help="Simulated seconds per second of video [default: the run in at most 20 s of video, never faster "
+    "than real time (1)].",
+)
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["gif", "mp4"]),
+    default=None,
+    help="Video format [default: mp4 when the ffmpeg program is installed, else gif]; mp4 needs ffmpeg.",
+)
+@click.option(
+    "--out",
+    "out_file",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="The video file [default: RESULT_DIR/animation.gif or .mp4, listed in the folder's manifest].",
+)
+@click.option("--overwrite", is_flag=True, help="Replace an existing --out file snoworm did not write.")
+@handle_errors
+def animate(result_dir, fps, speed_up, fmt, out_file, overwrite):
+    """Animate the run in RESULT_DIR (a folder written by `snoworm run`): the chain moving along its
+    route, segments, wheels and links to scale, the links coloured by their force (tension red,
+    compression blue), the terrain's elevation with X_t as a colour band under it, the time and the
+    gait phase in a corner, the view following the chain.
+
+    Written atomically; into RESULT_DIR under its lock (never while another snoworm process writes
+    it). Progress goes to stderr. Exit status 2 for a bad option, a folder that is not a run or mp4
+    without ffmpeg.
+    """
+    from .plotting.animation import AnimationOptionError, check_options, ffmpeg_available  # lazy: matplotlib
+    from .results.result import load_result  # lazy: start-up
+
+    fmt = fmt or ("mp4" if ffmpeg_available() else "gif")
+    try:
+        check_options(1.0, fps, speed_up if speed_up is not None else 1.0, fmt)  # before reading anything
+    except AnimationOptionError as exc:
+        fail(f"{exc}.", EXIT_INPUT)
+    path = os.path.abspath(out_file if out_file is not None else os.path.join(result_dir, f"animation.{fmt}"))
+    if os.path.lexists(path) and not overwrite and not _written_by_snoworm(path):
+        fail(f"{path} exists and snoworm did not write it; give another --out or pass --overwrite.", EXIT_INPUT)
+    res = load_result(result_dir)
+    duration = float(res.t[-1] - res.t[0])
+    try:
+        speed_up = check_options(duration, fps, speed_up, fmt)
+        with progress_bar(1 + math.floor(duration * fps / speed_up + 1e-9), "animate", "frames") as bar:
+            out = res.animate(path, fps=fps, speed_up=speed_up, fmt=fmt, progress=lambda done, total: bar.set(done))
+    except AnimationOptionError as exc:
+        fail(f"{exc}.", EXIT_INPUT)
+    click.echo(f"{res.scenario.name}: {duration:g} s at {speed_up:g}x, {fps} fps -> {out}")
+
+
+def _written_by_snoworm(path: str) -> bool:
+    """``path`` is listed in the manifest of the snoworm output folder holding it."""
+    from .infra.folders import folder_state, read_manifest  # lazy: start-up
+
+    folder = os.path.dirname(path)
+    if folder_state(folder) != "snoworm":
+        return False
+    man = read_manifest(folder) or {}
+    return os.path.basename(path) in man.get("files", [])
 
 
 for _command in STUDY_COMMANDS:

@@ -48,6 +48,7 @@ LAZY_OK = {
     "threading",
     "concurrent",
     "snoworm.plotting",
+    "snoworm.plotting.animation",  # matplotlib, as the package
     "IPython",
     "snoworm.steady",
     "snoworm.modes.force_plan",

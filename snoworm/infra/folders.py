@@ -65,6 +65,7 @@ __all__ = [
     "folder_report",
     "read_manifest",
     "write_manifest",
+    "add_file",
     "remove_listed",
     "folder_lock",
     "FolderLocked",
@@ -189,6 +190,47 @@ def write_manifest(folder, command: str | None = None, **extra) -> Path:
         "files": _files(folder),
     }
     return atomic_write_text(folder / MANIFEST, json.dumps(doc, indent=2) + "\n")
+
+
+@contextmanager
+def add_file(path):
+    """Yield a temporary path beside ``path`` to write a file into; on success it replaces ``path``.
+
+    Into a snoworm output folder (e.g. an animation into a run's folder), under the folder's lock
+    (:func:`folder_lock`: never while another snoworm process writes it), and the folder's manifest
+    lists the file first, so the folder stays snoworm's (a later run into it replaces it as a
+    whole; an interruption between the two leaves a listed file missing, which no reader minds).
+    Into any other folder: refused if another snoworm process holds its lock, else written
+    atomically (:func:`atomic_path`).  Never touches another file.
+
+    Raises
+    ------
+    OutputError
+        The folder is locked by another process, is not a folder, or the write fails.
+    """
+    path = Path(os.path.abspath(path))
+    folder = path.parent
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"{folder} is not a folder; give a file path inside a folder.")
+    try:
+        if folder_state(folder) != "snoworm":
+            if folder.is_dir():
+                check_unlocked(folder)
+            with atomic_path(path) as tmp:
+                yield tmp
+            return
+        with folder_lock(folder):
+            if folder_state(folder) != "snoworm":  # changed before the lock was taken
+                raise OutputError(f"{folder} changed while the file was being prepared; try again.")
+            with atomic_path(path) as tmp:
+                yield tmp
+                man = _manifest.load_manifest(folder) or {}
+                rel = path.relative_to(folder).as_posix()
+                if rel not in man.get("files", []):
+                    man["files"] = sorted([*man.get("files", []), rel])
+                    atomic_write_text(folder / MANIFEST, json.dumps(man, indent=2) + "\n")
+    except OSError as exc:
+        raise OutputError(f"cannot write the file: {os_error_message(exc, path)}") from None
 
 
 def folder_report(path) -> tuple:
