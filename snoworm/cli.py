@@ -289,6 +289,66 @@ def _written_by_snoworm(path: str) -> bool:
     return os.path.basename(path) in man.get("files", [])
 
 
+# ------------------------------------------------------------------ route files (issue 34)
+@main.group(cls=CommandGroup)
+def route():
+    """Route files (docs/model.md section 7): import a GPS track as a route."""
+
+
+@route.command("import")
+@click.argument("track", type=click.Path(dir_okay=False))
+@click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False), help="The route file (CSV).")
+@click.option(
+    "--smooth-m",
+    default=20.0,
+    show_default=True,
+    type=float,
+    metavar="M",
+    help="Full width of the triangular window that smooths the GPS elevations along the track [m]; 0 keeps them raw.",
+)
+@click.option("--xt", type=float, default=None, help="A constant X_t for the whole route, in (0, 1].")
+@click.option(
+    "--xt-tag",
+    default=None,
+    metavar="TAG",
+    help="X_t per point, from the element TAG in each point's <extensions> (any namespace), e.g. --xt-tag xt.",
+)
+@click.option("--overwrite", is_flag=True, help="Replace an existing --out file.")
+@handle_errors
+def route_import(track, out_file, smooth_m, xt, xt_tag, overwrite):
+    """Turn the GPS track TRACK (a GPX file) into a route file that `terrain.route` reads.
+
+    \b
+    distance_m: the geodesic on the WGS84 ellipsoid (Vincenty) summed over the track's points;
+    elevation_m: the points' <ele>, smoothed along the track over --smooth-m;
+    xt: --xt for every point, or each point's <extensions><TAG> (--xt-tag TAG).
+    The raw latitude, longitude and elevation are kept as extra columns. The file is read back as
+    a route before it replaces --out (written atomically). Exit status 2 for a bad GPX file (the
+    line and the fix) or an existing --out without --overwrite.
+    """
+    from .config.gpx import read_gpx, route_csv, route_from_track  # lazy: start-up
+    from .config.routes import read_route  # lazy: start-up
+    from .infra.folders import add_file  # lazy: start-up
+
+    if (xt is None) == (xt_tag is None):
+        fail(
+            "give the route's X_t: either a constant (--xt 0.8) or the points' extension tag (--xt-tag xt).", EXIT_INPUT
+        )
+    out = os.path.abspath(out_file)
+    if os.path.lexists(out) and not overwrite:
+        fail(f"{out} exists; give another --out or pass --overwrite to replace it.", EXIT_INPUT)
+    rt = route_from_track(read_gpx(track, xt_tag), smooth_m, xt)
+    with add_file(out) as tmp:
+        tmp.write_text(route_csv(rt, os.path.basename(track)), encoding="utf-8")
+        read_route(tmp)  # reads back as a route, or nothing replaces --out
+    z = rt.elevation_m
+    click.echo(
+        f"{out}: {rt.distance_m.size} points, {rt.distance_m[-1]:.1f} m along the track, elevation "
+        f"{z.min():.1f} to {z.max():.1f} m (smoothed over {smooth_m:g} m), X_t {rt.xt.min():g} to {rt.xt.max():g}"
+        + (f"; {rt.dropped} points within a centimetre of the previous one dropped" if rt.dropped else "")
+    )
+
+
 for _command in STUDY_COMMANDS:
     main.add_command(_command)
 
