@@ -88,6 +88,13 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
         command=command_line(),
     )
     echo_run(sc.name, res, paths, out_dir)
+    if sc.terrain.route is not None:  # one line on stderr when the run left the route file's end
+        from .config.routes import route_end_warning  # lazy: start-up
+
+        front = res.segments["x_m"][:, 0] + sc.vehicle.segment_params()[0].wheelbase_m / 2.0
+        note = route_end_warning(sc.terrain.route_data(), res.t, front.tolist())
+        if note:
+            click.echo(note, err=True)
 
 
 @main.command()

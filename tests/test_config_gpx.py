@@ -199,3 +199,33 @@ def test_xt_and_grade_problems_are_input_errors(tmp_path):
         ScenarioError, match=r"line 10: after smoothing over 0 m the elevation changes by 30.00 m .*\(--smooth-m\)"
     ):
         route_from_track(read_gpx(track), smooth_m=0.0, xt=0.5)
+
+
+# ------------------------------------------------------------------ a run past the end of its route
+def test_a_run_past_the_route_end_warns_once_and_the_terrain_is_held(tmp_path):
+    route = tmp_path / "short.csv"
+    route.write_text("distance_m,elevation_m,xt\n-12,0,0.9\n-2,0.5,0.9\n2.0,0.7,0.8\n")
+    raw = [f"terrain={{route: {route}}}", "simulation.duration_s=4", "simulation.output_dt_s=0.1", "tow.force_N=0"]
+    out = tmp_path / "run"
+    args = ["run", str(SCENARIOS / "tow6_uniform.yaml"), "--out", str(out), "--no-plot"]
+    r = CliRunner().invoke(main, args + [a for kv in raw for a in ("--set", kv)])
+    assert r.exit_code == 0, r.output
+    warnings = [line for line in r.stderr.splitlines() if "past the end of the route file" in line]
+    assert len(warnings) == 1
+    from snoworm.results.result import load_result
+
+    res = load_result(out)
+    b = res.scenario.vehicle.segment.wheelbase_m
+    front = res.segments["x_m"][:, 0] + b / 2
+    first = res.t[np.argmax(front > 2.0)]  # the first output time the leader's front axle is past 2 m
+    assert f"at t = {first:.1f} s" in warnings[0] and "ends at 2 m" in warnings[0]
+    # beyond the end: level ground (grade 0) at the last row's elevation, the last row's X_t
+    beyond = res.segments["x_m"] - b / 2 > 2.0  # both axles past the end
+    assert beyond.any()
+    np.testing.assert_allclose(res.segments["grade_deg"][beyond], 0.0, atol=1e-9)
+    np.testing.assert_allclose(res.segments["elevation_m"][beyond], 0.7, atol=1e-6)
+    np.testing.assert_allclose(res.segments["xt"][beyond], 0.8, atol=1e-6)
+    # a route long enough: no warning
+    route.write_text("distance_m,elevation_m,xt\n-12,0,0.9\n-2,0.5,0.9\n40,0.7,0.8\n")
+    r = CliRunner().invoke(main, args + ["--overwrite"] + [a for kv in raw for a in ("--set", kv)])
+    assert r.exit_code == 0 and "past the end" not in r.stderr
