@@ -268,7 +268,7 @@ def animate(result_dir, fps, speed_up, fmt, out_file, overwrite):
 
     fmt = fmt or ("mp4" if ffmpeg_available() else "gif")
     try:
-        check_options(1.0, fps, speed_up if speed_up is not None else 1.0, fmt)  # before reading anything
+        check_options(0.0, fps, speed_up, fmt)  # the options alone, before reading anything
     except AnimationOptionError as exc:
         fail(f"{exc}.", EXIT_INPUT)
     path = os.path.abspath(out_file if out_file is not None else os.path.join(result_dir, f"animation.{fmt}"))
