@@ -197,3 +197,14 @@ def test_cli_animate(tiny_dir, tmp_path):
     assert r.exit_code == 2 and "--overwrite" in r.output and mine.read_bytes() == b"a user's file"
     r = CliRunner().invoke(main, ["animate", str(tmp_path), "--format", "gif"])
     assert r.exit_code == 2 and "not a snoworm run folder" in r.output
+
+
+@pytest.mark.skipif(not animation.ffmpeg_available(), reason="needs the ffmpeg program")
+def test_mp4_has_the_frames_of_its_duration_fps_and_speed_up(tiny, tmp_path):
+    import re
+    import subprocess
+
+    path = tiny.animate(tmp_path / "a.mp4", fps=5, speed_up=0.6)
+    out = subprocess.run(["ffmpeg", "-i", str(path), "-f", "null", "-"], capture_output=True, text=True, check=True)
+    frames = int(re.findall(r"frame=\s*(\d+)", out.stderr)[-1])
+    assert frames == math.floor(1.2 * 5 / 0.6 + 1e-9) + 1 and "yuv420p" in out.stderr
