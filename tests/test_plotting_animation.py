@@ -143,6 +143,12 @@ def test_a_second_frame_moves_the_same_artists():
     after = np.array([p.vertices[:4] for p in a2.chassis.get_paths()])
     assert a2 is a1 and len(ax.collections) == len({id(c) for c in ax.collections})
     np.testing.assert_allclose(after[..., 0] - before[..., 0], 0.7, atol=1e-12)
+    # another chain on the same axes replaces the first (no artists or colour bars left behind)
+    n_artists = len(ax.collections), len(ax.child_axes), len(ax.texts)
+    sc1, one = _scene(n=1)
+    a3 = draw_chain(ax, ChainFrame(0.0, np.array([0.0]), np.zeros(0)), one)
+    assert a3 is not a1 and (len(ax.collections), len(ax.child_axes), len(ax.texts)) == n_artists
+    assert len(a3.chassis.get_paths()) == 1 and len(a3.links.get_paths()) == 0
 
 
 def test_render_rgb_is_an_image():

@@ -41,6 +41,7 @@ from matplotlib.cm import ScalarMappable
 from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
+from PIL import Image
 
 from ..infra.folders import add_file
 from .phases import gait_spans
@@ -265,6 +266,7 @@ class _ChainArtists:
         ax.add_collection(self.band)
         ax.set_xlabel("distance along the track [m]")
         ax.set_ylabel("elevation [m]")
+        self.colourbar_axes: list[Axes] = []
         if colourbars:  # beside the axes (inset axes: they take no room from a user's axes layout)
             fig = ax.get_figure()
             assert fig is not None
@@ -272,6 +274,7 @@ class _ChainArtists:
             cx = ax.inset_axes((1.25, 0.0, 0.025, 1.0))
             fig.colorbar(ScalarMappable(self.force_norm, self.force_cmap), cax=cf, label="link force [N], tension +")
             fig.colorbar(ScalarMappable(self.xt_norm, colormaps[XT_CMAP]), cax=cx, label="$X_t$")
+            self.colourbar_axes = [cf, cx]
 
     def terrain(self, lo: float, hi: float) -> None:
         """Draw the ground line and the X_t band over ``[lo, hi]`` (extended by a window each side)."""
@@ -316,6 +319,13 @@ class _ChainArtists:
         half_h = w / 2 * box.height / box.width
         ax.set_ylim(zc - half_h, zc + half_h)
 
+    def remove(self) -> None:
+        """Take the artists (and the colour bars' axes) off the axes."""
+        for a in (self.chassis, self.wheels, self.links, self.link_edges, self.band, self.ground_line, self.text):
+            a.remove()
+        for cax in self.colourbar_axes:
+            cax.remove()
+
     @property
     def wheel_radii(self) -> NDArray[np.float64]:
         return np.repeat(self.scene.wheel_radius_m, 2)
@@ -329,7 +339,10 @@ def draw_chain(
     ``wheels``, ``links``: matplotlib collections in data coordinates; ``text``).  ``decimals``:
     of the time shown."""
     artists = getattr(ax, "_snoworm_chain", None)
-    if artists is None or artists.scene is not scene:
+    if artists is not None and artists.scene is not scene:  # another chain on these axes: replaced
+        artists.remove()
+        artists = None
+    if artists is None:
         artists = _ChainArtists(ax, scene, colourbars)
         ax._snoworm_chain = artists  # type: ignore[attr-defined]  # the artists travel with their axes
     artists.update(frame, decimals)
@@ -439,7 +452,7 @@ class _GifWriter(PillowWriter):
 
     def grab_frame(self, **savefig_kwargs: Any) -> None:
         super().grab_frame(**savefig_kwargs)
-        self._frames[-1] = self._frames[-1].convert("P", palette=1)  # 1: Image.Palette.ADAPTIVE
+        self._frames[-1] = self._frames[-1].convert("P", palette=Image.Palette.ADAPTIVE)
 
 
 def animate_result(
