@@ -229,3 +229,25 @@ def test_a_run_past_the_route_end_warns_once_and_the_terrain_is_held(tmp_path):
     route.write_text("distance_m,elevation_m,xt\n-12,0,0.9\n-2,0.5,0.9\n40,0.7,0.8\n")
     r = CliRunner().invoke(main, args + ["--overwrite"] + [a for kv in raw for a in ("--set", kv)])
     assert r.exit_code == 0 and "past the end" not in r.stderr
+
+
+def test_the_shipped_example_track_imports_and_drives(tmp_path):
+    track = SCENARIOS.parent / "examples" / "tracks" / "drift_traverse.gpx"
+    out = tmp_path / "route.csv"
+    r = CliRunner().invoke(main, ["route", "import", str(track), "--out", str(out), "--xt-tag", "xt"])
+    assert r.exit_code == 0, r.output
+    route = read_route(out)
+    s, z, xt = (np.array(v) for v in (route.distance_m, route.elevation_m, route.xt))
+    # its header: 6 deg up from 40 to 140 m, scatter of at most 0.9 m; the smoothing is exact on the
+    # straight ramp, so over 60..120 m the mean grade is off by at most 2 x 0.9 m / 60 m in sin(grade)
+    j0, j1 = np.searchsorted(s, 60.0), np.searchsorted(s, 120.0)
+    rise = (z[j1] - z[j0]) / (s[j1] - s[j0])
+    assert abs(rise - math.sin(math.radians(6.0))) <= 1.8 / (s[j1] - s[j0])
+    assert set(xt[(s > 155) & (s < 195)]) == {0.6} and set(xt[s < 140]) == {0.9}
+    sc = load_scenario(
+        SCENARIOS / "tow6_uniform.yaml", [f"terrain={{route: {out}}}", "simulation.duration_s=2", "tow.force_N=0"]
+    )
+    from snoworm import simulate
+
+    res = simulate(sc)
+    assert res.segments["x_m"][-1, 0] > res.segments["x_m"][0, 0] + 0.5  # it drives on the imported route
