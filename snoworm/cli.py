@@ -67,7 +67,8 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
     All or nothing: the files go to a temporary folder beside --out that replaces it at the
     end, with a manifest (.snoworm-manifest.json); nothing is written if the scenario is
     invalid (exit 2), the solver fails (exit 1) or the run is interrupted.  Progress in
-    simulated time goes to stderr, and so does which controller code runs (if any).
+    simulated time goes to stderr, and so does which controller code runs (if any), and one line
+    when the chain drives past the end of its route file (beyond it the terrain is held).
     """
     from .config.scenario import load_scenario  # lazy: start-up
     from .infra.folders import check_output_folder  # lazy: start-up

@@ -1,7 +1,8 @@
 """Routes from the field: a GPS track (GPX) turned into a route file (``snoworm route import``).
 
 A GPX file's track points (``<trkpt lat= lon=><ele>``; a route's ``<rtept>`` when the file has no
-track) become the rows of a route file (:func:`snoworm.config.routes.read_route`):
+track), in the file's order (several tracks or track segments are joined end to end), become the
+rows of a route file (:func:`snoworm.config.routes.read_route`):
 
 * ``distance_m``: the distance along the track, summed over consecutive points from the
   **geodesic** on the WGS84 ellipsoid (:func:`geodesic_m`, Vincenty's inverse formula: accurate to
