@@ -251,3 +251,25 @@ def test_the_shipped_example_track_imports_and_drives(tmp_path):
 
     res = simulate(sc)
     assert res.segments["x_m"][-1, 0] > res.segments["x_m"][0, 0] + 0.5  # it drives on the imported route
+
+
+def test_track_segments_are_joined_and_route_points_read_without_a_track(tmp_path):
+    lat, s, z = meridian_track(n=8)
+    pts = [f'<trkpt lat="{la}" lon="11.0"><ele>{e}</ele></trkpt>' for la, e in zip(lat, z)]
+    track = tmp_path / "two.gpx"
+    track.write_text(
+        '<gpx xmlns="http://www.topografix.com/GPX/1/1"><trk><trkseg>\n'
+        + "\n".join(pts[:4])
+        + "\n</trkseg><trkseg>\n"
+        + "\n".join(pts[4:])
+        + "\n</trkseg></trk></gpx>\n"
+    )
+    rt = route_from_track(read_gpx(track), smooth_m=0.0, xt=0.5)
+    np.testing.assert_allclose(rt.distance_m, s, atol=1e-9)  # the gap between segments counted once
+    rte = tmp_path / "route.gpx"
+    rte.write_text(
+        '<gpx xmlns="http://www.topografix.com/GPX/1/1"><rte>\n'
+        + "\n".join(p.replace("trkpt", "rtept") for p in pts)
+        + "\n</rte></gpx>\n"
+    )
+    np.testing.assert_allclose(route_from_track(read_gpx(rte), smooth_m=0.0, xt=0.5).distance_m, s, atol=1e-9)
