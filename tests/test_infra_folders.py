@@ -349,3 +349,25 @@ def test_add_file_keeps_a_snoworm_folder_snoworms_and_writes_all_or_nothing(tmp_
             with folders.add_file(plain / "y.txt") as tmp:
                 tmp.write_text("y")
     assert not (plain / "y.txt").exists()
+
+
+def test_add_file_into_a_folder_inside_snoworm_folders_lists_it_in_each(tmp_path):
+    """A sweep's case folder is a snoworm folder inside the sweep's: a file added to it (or to a new
+    subfolder of it) is listed by both manifests, so neither folder turns foreign."""
+    outer = tmp_path / "sweep"
+    with output_folder(outer) as stage:
+        atomic_write_text(stage / "summary.csv", "a\n")
+    inner = outer / "cases" / "c1"
+    with output_folder(inner) as stage:
+        atomic_write_text(stage / "segments.csv", "1\n")
+    folders.write_manifest(outer)  # as the sweep does after its cases: it lists the cases' files too
+    with folders.add_file(inner / "videos" / "a.gif") as tmp:
+        tmp.write_bytes(b"GIF89a")
+    assert folders.folder_state(inner) == "snoworm" and folders.folder_state(outer) == "snoworm"
+    assert "videos/a.gif" in folders.read_manifest(inner)["files"]
+    assert "cases/c1/videos/a.gif" in folders.read_manifest(outer)["files"]
+    with folders.folder_lock(outer):  # the sweep's folder is another process's: refused
+        with pytest.raises(OutputError):
+            with folders.add_file(inner / "b.gif") as tmp:
+                tmp.write_bytes(b"GIF89a")
+    assert not (inner / "b.gif").exists()
