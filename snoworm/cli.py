@@ -243,7 +243,8 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
     "fmt",
     type=click.Choice(["gif", "mp4"]),
     default=None,
-    help="Video format [default: mp4 when the ffmpeg program is installed, else gif]; mp4 needs ffmpeg.",
+    help="Video format [default: the --out file's suffix, else mp4 when the ffmpeg program is installed, "
+    "else gif]; mp4 needs ffmpeg.",
 )
 @click.option(
     "--out",
@@ -267,7 +268,8 @@ def animate(result_dir, fps, speed_up, fmt, out_file, overwrite):
     from .plotting.animation import AnimationOptionError, check_options, ffmpeg_available  # lazy: matplotlib
     from .results.result import load_result  # lazy: start-up
 
-    fmt = fmt or ("mp4" if ffmpeg_available() else "gif")
+    suffix = os.path.splitext(out_file)[1].lower().lstrip(".") if out_file is not None else ""
+    fmt = fmt or (suffix if suffix in ("gif", "mp4") else "mp4" if ffmpeg_available() else "gif")
     try:
         check_options(0.0, fps, speed_up, fmt)  # the options alone, before reading anything
     except AnimationOptionError as exc:

@@ -201,6 +201,9 @@ def test_cli_animate(tiny_dir, tmp_path):
     mine.write_bytes(b"a user's file")
     r = CliRunner().invoke(main, ["animate", str(tiny_dir), "--format", "gif", "--out", str(mine)])
     assert r.exit_code == 2 and "--overwrite" in r.output and mine.read_bytes() == b"a user's file"
+    r = CliRunner().invoke(main, ["animate", str(tiny_dir), "--fps", "1", "--out", str(tmp_path / "v" / "a.gif")])
+    assert r.exit_code == 0, r.output  # the format from the suffix (whether ffmpeg is installed or not)
+    assert len(gif_frames(tmp_path / "v" / "a.gif")[0]) == 2  # 1.2 s at 1 fps, speed-up 1: t = 0, 1 s
     r = CliRunner().invoke(main, ["animate", str(tmp_path), "--format", "gif"])
     assert r.exit_code == 2 and "not a snoworm run folder" in r.output
 
