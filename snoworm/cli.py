@@ -9,6 +9,7 @@ paper) are in :mod:`snoworm.commands.studies`.
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 
@@ -16,6 +17,7 @@ import click
 
 from ._version import __version__
 from .commands.common import (
+    EXIT_INPUT,
     EXIT_SOLVER,
     CommandGroup,
     allow_code_option,
@@ -66,7 +68,8 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
     All or nothing: the files go to a temporary folder beside --out that replaces it at the
     end, with a manifest (.snoworm-manifest.json); nothing is written if the scenario is
     invalid (exit 2), the solver fails (exit 1) or the run is interrupted.  Progress in
-    simulated time goes to stderr, and so does which controller code runs (if any).
+    simulated time goes to stderr, and so does which controller code runs (if any), and one line
+    when the chain drives past the end of its route file (beyond it the terrain is held).
 
     The last line is the run's verdict (also in summary.json: status, immobilised_at_m,
     status_reason): "reached the end of the route ... at t = ..." (the leader passed
@@ -93,6 +96,13 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
         command=command_line(),
     )
     echo_run(sc.name, res, paths, out_dir)
+    if sc.terrain.route is not None:  # one line on stderr when the run left the route file's end
+        from .config.routes import route_end_warning  # lazy: start-up
+
+        front = res.segments["x_m"][:, 0] + sc.vehicle.segment_params()[0].wheelbase_m / 2.0
+        note = route_end_warning(sc.terrain.route_data(), res.t, front.tolist())
+        if note:
+            click.echo(note, err=True)
 
 
 @main.command()
@@ -362,6 +372,141 @@ def _odds_interrupted(exc, out_dir):
     how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
     click.echo(f"{how}: finished draws are in {out_dir}/samples.csv; run the same command again to resume.", err=True)
     sys.exit(143 if isinstance(exc, Terminated) else 130)
+
+
+# ------------------------------------------------------------------ animate (issue 34)
+@main.command()
+@click.argument("result_dir", type=click.Path(file_okay=False))
+@click.option(
+    "--fps", default=20, show_default=True, type=click.IntRange(1, 60), help="Frames per second of the video."
+)
+@click.option(
+    "--speed-up",
+    type=float,
+    default=None,
+    metavar="X",
+    help="Simulated seconds per second of video [default: the run in at most 20 s of video, never faster "
+    "than real time (1)].",
+)
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["gif", "mp4"]),
+    default=None,
+    help="Video format [default: the --out file's suffix, else mp4 when the ffmpeg program is installed, "
+    "else gif]; mp4 needs ffmpeg.",
+)
+@click.option(
+    "--out",
+    "out_file",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="The video file [default: RESULT_DIR/animation.gif or .mp4, listed in the folder's manifest].",
+)
+@click.option("--overwrite", is_flag=True, help="Replace an existing --out file snoworm did not write.")
+@handle_errors
+def animate(result_dir, fps, speed_up, fmt, out_file, overwrite):
+    """Animate the run in RESULT_DIR (a folder written by `snoworm run`): the chain moving along its
+    route, segments, wheels and links to scale, the links coloured by their force (tension red,
+    compression blue), the terrain's elevation with X_t as a colour band under it, the time and the
+    gait phase in a corner, the view following the chain.
+
+    Written atomically; into RESULT_DIR under its lock (never while another snoworm process writes
+    it). Progress goes to stderr. Exit status 2 for a bad option, a folder that is not a run or mp4
+    without ffmpeg.
+    """
+    from .plotting.animation import AnimationOptionError, check_options, ffmpeg_available  # lazy: matplotlib
+    from .results.result import load_result  # lazy: start-up
+
+    suffix = os.path.splitext(out_file)[1].lower().lstrip(".") if out_file is not None else ""
+    fmt = fmt or (suffix if suffix in ("gif", "mp4") else "mp4" if ffmpeg_available() else "gif")
+    try:
+        check_options(0.0, fps, speed_up, fmt)  # the options alone, before reading anything
+    except AnimationOptionError as exc:
+        fail(f"{exc}.", EXIT_INPUT)
+    path = os.path.abspath(out_file if out_file is not None else os.path.join(result_dir, f"animation.{fmt}"))
+    if os.path.lexists(path) and not overwrite and not _written_by_snoworm(path):
+        fail(f"{path} exists and snoworm did not write it; give another --out or pass --overwrite.", EXIT_INPUT)
+    res = load_result(result_dir)
+    duration = float(res.t[-1] - res.t[0])
+    try:
+        speed_up = check_options(duration, fps, speed_up, fmt)
+        with progress_bar(1 + math.floor(duration * fps / speed_up + 1e-9), "animate", "frames") as bar:
+            out = res.animate(path, fps=fps, speed_up=speed_up, fmt=fmt, progress=lambda done, total: bar.set(done))
+    except AnimationOptionError as exc:
+        fail(f"{exc}.", EXIT_INPUT)
+    click.echo(f"{res.scenario.name}: {duration:g} s at {speed_up:g}x, {fps} fps -> {out}")
+
+
+def _written_by_snoworm(path: str) -> bool:
+    """``path`` is listed in the manifest of the snoworm output folder holding it."""
+    from .infra.folders import folder_state, read_manifest  # lazy: start-up
+
+    folder = os.path.dirname(path)
+    if folder_state(folder) != "snoworm":
+        return False
+    man = read_manifest(folder) or {}
+    return os.path.basename(path) in man.get("files", [])
+
+
+# ------------------------------------------------------------------ route files (issue 34)
+@main.group(cls=CommandGroup)
+def route():
+    """Route files (docs/model.md section 7): import a GPS track as a route."""
+
+
+@route.command("import")
+@click.argument("track", type=click.Path(dir_okay=False))
+@click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False), help="The route file (CSV).")
+@click.option(
+    "--smooth-m",
+    default=20.0,
+    show_default=True,
+    type=float,
+    metavar="M",
+    help="Full width of the triangular window that smooths the GPS elevations along the track [m]; 0 keeps them raw.",
+)
+@click.option("--xt", type=float, default=None, help="A constant X_t for the whole route, in (0, 1].")
+@click.option(
+    "--xt-tag",
+    default=None,
+    metavar="TAG",
+    help="X_t per point, from the element TAG in each point's <extensions> (any namespace), e.g. --xt-tag xt.",
+)
+@click.option("--overwrite", is_flag=True, help="Replace an existing --out file.")
+@handle_errors
+def route_import(track, out_file, smooth_m, xt, xt_tag, overwrite):
+    """Turn the GPS track TRACK (a GPX file) into a route file that `terrain.route` reads.
+
+    \b
+    distance_m: the geodesic on the WGS84 ellipsoid (Vincenty) summed over the track's points;
+    elevation_m: the points' <ele>, smoothed along the track over --smooth-m;
+    xt: --xt for every point, or each point's <extensions><TAG> (--xt-tag TAG).
+    The raw latitude, longitude and elevation are kept as extra columns. The file is read back as
+    a route before it replaces --out (written atomically). Exit status 2 for a bad GPX file (the
+    line and the fix) or an existing --out without --overwrite.
+    """
+    from .config.gpx import read_gpx, route_csv, route_from_track  # lazy: start-up
+    from .config.routes import read_route  # lazy: start-up
+    from .infra.folders import add_file  # lazy: start-up
+
+    if (xt is None) == (xt_tag is None):
+        fail(
+            "give the route's X_t: either a constant (--xt 0.8) or the points' extension tag (--xt-tag xt).", EXIT_INPUT
+        )
+    out = os.path.abspath(out_file)
+    if os.path.lexists(out) and not overwrite:
+        fail(f"{out} exists; give another --out or pass --overwrite to replace it.", EXIT_INPUT)
+    rt = route_from_track(read_gpx(track, xt_tag), smooth_m, xt)
+    with add_file(out) as tmp:
+        tmp.write_text(route_csv(rt, os.path.basename(track)), encoding="utf-8")
+        read_route(tmp)  # reads back as a route, or nothing replaces --out
+    z = rt.elevation_m
+    click.echo(
+        f"{out}: {rt.distance_m.size} points, {rt.distance_m[-1]:.1f} m along the track, elevation "
+        f"{z.min():.1f} to {z.max():.1f} m (smoothed over {smooth_m:g} m), X_t {rt.xt.min():g} to {rt.xt.max():g}"
+        + (f"; {rt.dropped} points within a centimetre of the previous one dropped" if rt.dropped else "")
+    )
 
 
 for _command in STUDY_COMMANDS:

@@ -49,6 +49,7 @@ LAZY_OK = {
     "concurrent",
     "snoworm.plotting",
     "snoworm.plotting.odds",  # a module of the package above, not imported by its __init__
+    "snoworm.plotting.animation",  # matplotlib, as the package
     "IPython",
     "snoworm.steady",
     "snoworm.modes.force_plan",

@@ -321,3 +321,53 @@ def test_a_failed_sync_at_the_commit_writes_nothing(tmp_path, monkeypatch):
     with pytest.raises(OutputError, match="Input/output error"):
         _write(tmp_path / "run", ["segments.csv"])
     assert list(tmp_path.iterdir()) == []
+
+
+def test_add_file_keeps_a_snoworm_folder_snoworms_and_writes_all_or_nothing(tmp_path):
+    """issue 34 (an animation into a results folder): the file is listed in the folder's manifest, so
+    the folder stays snoworm's; a failed write leaves nothing; another process's folder is refused."""
+    run = tmp_path / "run"
+    with output_folder(run) as stage:
+        atomic_write_text(stage / "a.csv", "1\n")
+    with folders.add_file(run / "video.gif") as tmp:
+        tmp.write_bytes(b"GIF89a")
+    assert (run / "video.gif").read_bytes() == b"GIF89a"
+    assert folders.folder_state(run) == "snoworm" and "video.gif" in folders.read_manifest(run)["files"]
+    with pytest.raises(RuntimeError):  # the writer fails: the earlier file stays, no temporary is left
+        with folders.add_file(run / "video.gif") as tmp:
+            tmp.write_bytes(b"half")
+            raise RuntimeError("the writer failed")
+    assert (run / "video.gif").read_bytes() == b"GIF89a"
+    assert set(os.listdir(run)) - {folders.LOCK} == {MANIFEST, "a.csv", "video.gif"}
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    with folders.add_file(plain / "x.txt") as tmp:
+        tmp.write_text("x")
+    assert os.listdir(plain) == ["x.txt"]  # a folder snoworm did not write gets the file and nothing else
+    with folders.folder_lock(plain):
+        with pytest.raises(OutputError, match="in use|process"):
+            with folders.add_file(plain / "y.txt") as tmp:
+                tmp.write_text("y")
+    assert not (plain / "y.txt").exists()
+
+
+def test_add_file_into_a_folder_inside_snoworm_folders_lists_it_in_each(tmp_path):
+    """A sweep's case folder is a snoworm folder inside the sweep's: a file added to it (or to a new
+    subfolder of it) is listed by both manifests, so neither folder turns foreign."""
+    outer = tmp_path / "sweep"
+    with output_folder(outer) as stage:
+        atomic_write_text(stage / "summary.csv", "a\n")
+    inner = outer / "cases" / "c1"
+    with output_folder(inner) as stage:
+        atomic_write_text(stage / "segments.csv", "1\n")
+    folders.write_manifest(outer)  # as the sweep does after its cases: it lists the cases' files too
+    with folders.add_file(inner / "videos" / "a.gif") as tmp:
+        tmp.write_bytes(b"GIF89a")
+    assert folders.folder_state(inner) == "snoworm" and folders.folder_state(outer) == "snoworm"
+    assert "videos/a.gif" in folders.read_manifest(inner)["files"]
+    assert "cases/c1/videos/a.gif" in folders.read_manifest(outer)["files"]
+    with folders.folder_lock(outer):  # the sweep's folder is another process's: refused
+        with pytest.raises(OutputError):
+            with folders.add_file(inner / "b.gif") as tmp:
+                tmp.write_bytes(b"GIF89a")
+    assert not (inner / "b.gif").exists()

@@ -34,6 +34,7 @@ __all__ = [
     "read_route",
     "check_elevation_table",
     "check_vehicle_on_grade",
+    "route_end_warning",
 ]
 
 #: Domain of every grade angle a scenario or a study gives [deg].
@@ -319,3 +320,23 @@ def check_vehicle_on_grade(vehicle, elevation: ElevationProfile | None, path: st
                 f"{math.degrees(theta):.1f} deg: needs 2 h tan(theta) < wheelbase ({b:g} m), h = {h:g} m. "
                 "Lower the centre of mass or the grade."
             )
+
+
+def route_end_warning(route: Route, t_s, front_m) -> str | None:
+    """One line when a run drove past the end of its route file, else None.
+
+    ``t_s``: the output times [s]; ``front_m``: the position of the leader's front axle at those times
+    [m] (the chain's foremost contact).  Beyond the last row the terrain is not extrapolated: the
+    elevation is held (level ground, :class:`~snoworm.slope.ElevationProfile`) and so is X_t
+    (:class:`~snoworm.terrain.TerrainProfile`), at the last row's values.
+    """
+    end = route.distance_m[-1]
+    past = [j for j, x in enumerate(front_m) if x > end]
+    if not past:
+        return None
+    return (
+        f"warning: the chain drove past the end of the route file {short_path(route.path, 120)} at "
+        f"t = {float(t_s[past[0]]):.1f} s (its front axle reached {max(front_m):.1f} m; the file ends at {end:g} m). "
+        f"Beyond it the run went on over level ground at the last row's elevation ({route.elevation_m[-1]:g} m) "
+        f"and X_t ({route.xt[-1]:g}), held, not extrapolated; give a longer route or a shorter simulation.duration_s."
+    )

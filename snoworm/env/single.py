@@ -13,6 +13,7 @@ from ..model.quantities import output_series
 from ..modes.command import Observation
 from ..simulation.stepwise import Simulator
 from .core import OBSERVATION_FIELDS, EnvCore, RewardFunction, table_fields
+from .render import RENDER_MODES, ChainRenderer, check_render_mode
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -42,11 +43,12 @@ class SnowormEnv(gymnasium.Env["NDArray[np.float32]", "ArrayLike"]):
         Tolerances are the scenario's.
     record : bool
         Keep every step for ``env.sim.result()`` (memory grows with the episode); default False.
-    render_mode : None
-        No rendering (accepted for ``gymnasium.make``).
+    render_mode : {None, "rgb_array"}
+        ``"rgb_array"``: :meth:`render` returns the chain as an ``H x W x 3`` uint8 image
+        (:mod:`snoworm.env.render`, the drawing of ``snoworm animate``); None: no rendering.
     """
 
-    metadata = {"render_modes": []}
+    metadata = {"render_modes": RENDER_MODES}
 
     def __init__(
         self,
@@ -61,8 +63,7 @@ class SnowormEnv(gymnasium.Env["NDArray[np.float32]", "ArrayLike"]):
         record: bool = False,
         render_mode: str | None = None,
     ) -> None:
-        if render_mode is not None:
-            raise ValueError(f"render_mode: the environment does not render; got {render_mode!r}, use None")
+        self.render_mode = check_render_mode(render_mode)
         if reward is not None and not callable(reward):
             raise ValueError(f"reward: expected a callable reward(prev_obs, obs, info), got {reward!r}")
         self.core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s)
@@ -75,7 +76,8 @@ class SnowormEnv(gymnasium.Env["NDArray[np.float32]", "ArrayLike"]):
         self.sim = Simulator(sc, record=record)
         self.action_space = self.core.single_action_space
         self.observation_space = self.core.single_observation_space
-        self.render_mode = None
+        self.metadata = {**self.metadata, "render_fps": 1.0 / self.dt_s}  # a frame per step
+        self.renderer = ChainRenderer(sc)
         self.observation: Observation | None = None
         self._stalled_s = 0.0
         self._done: bool | None = None
@@ -133,6 +135,21 @@ class SnowormEnv(gymnasium.Env["NDArray[np.float32]", "ArrayLike"]):
         truncated = obs_t >= self.core.duration_s - 1e-9
         self.observation, self._done = obs, bool(terminated or truncated)
         return self.core.normalised(fields, obs_t), float(reward), bool(terminated), bool(truncated), info
+
+    def render(self) -> NDArray[np.uint8] | None:
+        """The chain now, as an ``H x W x 3`` uint8 image (``render_mode="rgb_array"``); None without
+        a render mode.  Raises ResetNeeded before the first :meth:`reset`."""
+        if self.render_mode is None:
+            gymnasium.logger.warn("SnowormEnv.render: no render_mode was given (render_mode='rgb_array' draws)")
+            return None
+        obs = self.observation
+        if obs is None:
+            raise ResetNeeded("SnowormEnv.render: call reset() before render()")
+        return self.renderer.image(obs.t_s, obs.x_m, obs.link_force_N)
+
+    def close(self) -> None:
+        self.renderer.close()
+        super().close()
 
 
 def make_env(**kwargs: Any) -> gymnasium.wrappers.TimeLimit:

@@ -59,6 +59,7 @@ from ..simulation.driver import assemble
 from ..simulation.interval import output_grid
 from ..simulation.stepper import STACK_MAX_MEMBERS, STACK_MAX_STATES, ChainStepper, stack_size
 from .core import EnvCore, table_fields
+from .render import RENDER_MODES, ChainRenderer, check_render_mode
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike, NDArray
@@ -88,11 +89,13 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         Solver of the stacked periods: ``"VODE"`` (default; its tolerances divided by the square
         root of the stack's size), another ``simulation.method`` (a stack of several members then
         runs on LSODA, as a batched sweep), or None: the scenario's.
-    render_mode : None
-        No rendering.
+    render_mode : {None, "rgb_array"}
+        ``"rgb_array"``: :meth:`render` returns member 0's chain as an ``H x W x 3`` uint8 image (the
+        single environment's picture, :mod:`snoworm.env.render`; one member, since a tile of 64
+        chains would show none of them); None: no rendering.
     """
 
-    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+    metadata = {"render_modes": RENDER_MODES, "autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(
         self,
@@ -117,8 +120,7 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
                 f"1 to {MAX_NUM_ENVS} members is the range measured to step at a flat cost per member "
                 "(docs/performance.md); for more, run several vector environments (e.g. one per process)"
             )
-        if render_mode is not None:
-            raise ValueError(f"render_mode: the environment does not render; got {render_mode!r}, use None")
+        render_mode = check_render_mode(render_mode)
         self.core = core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s)
         self.num_envs = B = int(num_envs)
         self.max_episode_steps = core.max_episode_steps
@@ -133,7 +135,9 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         sc = core.scenario
         if method is not None and method != sc.simulation.method:
             sc = sc.with_({"simulation.method": method})
-        self.scenario, self.dt_s, self.render_mode = sc, core.dt_s, None
+        self.scenario, self.dt_s, self.render_mode = sc, core.dt_s, render_mode
+        self.metadata = {**self.metadata, "render_fps": 1.0 / core.dt_s}
+        self.renderer = ChainRenderer(sc)
         self._command: dict[str, NDArray[np.float64]] | None = None
         self.single_action_space = core.single_action_space
         self.single_observation_space = core.single_observation_space
@@ -235,6 +239,19 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         self._T += self.dt_s
         info = self._info(energy, failed, errors)
         return self._obs.copy(), rewards.astype(float), terminated, truncated, info
+
+    def render(self) -> NDArray[np.uint8] | None:  # type: ignore[override]
+        """Member 0's chain now, as an ``H x W x 3`` uint8 image (``render_mode="rgb_array"``); None
+        without a render mode.  Raises ResetNeeded before the first :meth:`reset`."""
+        if self.render_mode is None:
+            return None
+        if not self._started:
+            raise ResetNeeded("SnowormVectorEnv.render: call reset() before render()")
+        seg, lk = output_series(self.model, self._y[None], self._cmd.controls)  # (1, B, ...): one kernel call
+        return self.renderer.image(float(self._t[0]), seg["x_m"][0, 0], lk["force_N"][0, 0])
+
+    def close_extras(self, **kwargs: Any) -> None:
+        self.renderer.close()
 
     def _info(self, energy: NDArray[np.float64], failed: NDArray[np.bool_], errors: dict[int, str]) -> dict[str, Any]:
         B = self.num_envs

@@ -65,6 +65,7 @@ __all__ = [
     "folder_report",
     "read_manifest",
     "write_manifest",
+    "add_file",
     "remove_listed",
     "folder_lock",
     "FolderLocked",
@@ -189,6 +190,60 @@ def write_manifest(folder, command: str | None = None, **extra) -> Path:
         "files": _files(folder),
     }
     return atomic_write_text(folder / MANIFEST, json.dumps(doc, indent=2) + "\n")
+
+
+@contextmanager
+def add_file(path):
+    """Yield a temporary path beside ``path`` to write a file into; on success it replaces ``path``.
+
+    Into a snoworm output folder (e.g. an animation into a run's folder, or into a sweep's case
+    folder, inside the sweep's), under the lock of the outermost snoworm output folder holding it
+    (:func:`folder_lock`; the inner ones checked unlocked: never while another snoworm process
+    writes one of them), and
+    their manifests list the file first, so the folders stay snoworm's (a later run into one
+    replaces it as a whole; an interruption between the two leaves a listed file missing, which no
+    reader minds).  Into any other folder: refused if another snoworm process holds its lock, else
+    written atomically (:func:`atomic_path`).  Never touches another file.
+
+    Raises
+    ------
+    OutputError
+        A folder is locked by another process, is not a folder, or the write fails.
+    """
+    path = Path(os.path.abspath(path))
+    folder = path.parent
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"{folder} is not a folder; give a file path inside a folder.")
+    try:
+        owners = _owners(folder)
+        if not owners:
+            if folder.is_dir():
+                check_unlocked(folder)
+            with atomic_path(path) as tmp:
+                yield tmp
+            return
+        # the outermost folder's lock (a sweep holds its own for its whole run); the inner ones are
+        # checked, not locked: a lock file inside would be an entry the outer manifest does not list
+        with folder_lock(owners[-1]):
+            for owner in owners[:-1]:
+                check_unlocked(owner)
+            if _owners(folder) != owners:  # changed before the lock was taken
+                raise OutputError(f"{owners[0]} changed while the file was being prepared; try again.")
+            with atomic_path(path) as tmp:
+                yield tmp
+                for owner in owners:
+                    man = _manifest.load_manifest(owner) or {}
+                    rel = path.relative_to(owner).as_posix()
+                    if rel not in man.get("files", []):
+                        man["files"] = sorted([*man.get("files", []), rel])
+                        atomic_write_text(owner / MANIFEST, json.dumps(man, indent=2) + "\n")
+    except OSError as exc:
+        raise OutputError(f"cannot write the file: {os_error_message(exc, path)}") from None
+
+
+def _owners(folder: Path) -> list:
+    """The snoworm output folders holding ``folder`` (itself included), nearest first."""
+    return [a for a in (folder, *folder.parents) if (a / MANIFEST).is_file() and folder_state(a) == "snoworm"]
 
 
 def folder_report(path) -> tuple:

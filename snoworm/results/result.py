@@ -10,7 +10,7 @@ import io
 import json
 import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -278,6 +278,38 @@ class Result:
         if kind not in plotting.PLOT_KINDS:
             raise ValueError(f"unknown plot kind {kind!r}; kinds: {', '.join(plotting.PLOT_KINDS)}")
         return plotting.PLOT_KINDS[kind](self, ax=ax, fig=fig, size=size, **kwargs)
+
+    def animate(
+        self,
+        path: str | os.PathLike[str],
+        fps: int = 20,
+        speed_up: float | None = None,
+        fmt: str | None = None,
+        progress: Callable[[int, int], None] | None = None,
+        force_scale_N: float | None = None,
+    ) -> Path:
+        """Write an animation of the run to ``path`` (GIF, or MP4 where ffmpeg is installed) and
+        return its path: the chain moving along its route, to scale, the links coloured by their
+        force, the terrain's elevation and X_t under it, the time and gait phase in a corner
+        (:func:`snoworm.plotting.animation.animate_result`; ``snoworm animate`` at the command line).
+
+        ``fps``: frames per second (a whole number, 1 to 60); ``speed_up``: simulated seconds per video second
+        (default: the run in at most 20 s of video, never faster than real time); ``fmt``: ``"gif"``
+        or ``"mp4"`` (default from the suffix of ``path``); ``progress(done, total)``: called after
+        each frame; ``force_scale_N``: the force at the ends of the colour map (default: the run's
+        largest |force|).  Written atomically; into a snoworm results folder under its lock and
+        listed in its manifest.
+
+        Raises
+        ------
+        ValueError
+            A bad option, MP4 without ffmpeg, or too many frames (the message says the fix).
+        snoworm.infra.folders.OutputError
+            The file cannot be written (nothing is written).
+        """
+        from ..plotting import animation  # lazy: matplotlib costs ~0.5 s to import
+
+        return animation.animate_result(self, path, fps, speed_up, fmt, progress, force_scale_N)
 
     # ------------------------------------------------------------------ tables
     def segments_csv(self) -> str:
