@@ -15,7 +15,10 @@ ends at the same time: the B chains are stepped by the one stepper of one chain 
 environment's, with one member): stacks of at most :data:`STACK_MAX_MEMBERS` (64) members and
 :data:`STACK_MAX_STATES` states (:meth:`ChainModel.stack`, the kernel with one more leading axis),
 of sizes that differ by at most one, each integrated over the period on VODE with its tolerances
-divided by sqrt(size), restarted at a period whose command changed and carried on while every
+divided by sqrt(size) (each member's relative tolerance ``rtol``, default :data:`VECTOR_RTOL` = 1e-3,
+not the scenario's: a stack steps at the pace of its hardest member, so its other members are
+solved far more finely than their tolerance; every member stays within 5e-3 of an rtol 1e-9
+reference in normalised observation units with stacks of 64), restarted at a period whose command changed and carried on while every
 member holds its command (as the single environment).  One stack of all B members cost more per member as
 B grew (its steps follow its most demanding member at tighter tolerances, and past 10 000 states
 VODE's BLAS calls start threads: 67 s a period for B = 1 000 against 0.3 s for 64); with stacks
@@ -66,11 +69,31 @@ if TYPE_CHECKING:
     from ..config.scenario import Scenario
     from ..model.inputs import Controls
 
-__all__ = ["SnowormVectorEnv", "MAX_NUM_ENVS", "STACK_MAX_MEMBERS", "STACK_MAX_STATES", "stack_size"]
+__all__ = ["SnowormVectorEnv", "MAX_NUM_ENVS", "VECTOR_RTOL", "STACK_MAX_MEMBERS", "STACK_MAX_STATES", "stack_size"]
+
+#: Each member's relative tolerance by default (``SnowormVectorEnv(rtol=...)``): a stack of k members
+#: runs VODE at ``VECTOR_RTOL / sqrt(k)``; measured with stacks of 64 to keep every member within
+#: 5e-3 of an rtol 1e-9 reference (normalised observation units; docs/performance.md).
+VECTOR_RTOL = 1e-3
 
 #: Most members of a vector environment: the range over which the cost per member was measured flat
 #: (docs/performance.md, "Vector environment"); more are refused (run several environments instead).
 MAX_NUM_ENVS = 1024
+
+
+def _rtol(value: Any) -> float:
+    """``value`` as a relative tolerance in (0, 1); else ValueError naming ``rtol``."""
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not 0 < float(value) < 1
+    ):
+        raise ValueError(
+            f"rtol: must be a relative tolerance between 0 and 1 (exclusive), got {quote(value, 60)}; "
+            f"the default {VECTOR_RTOL:g} keeps each member within 5e-3 of a tight reference with stacks of 64 members, "
+            "None uses the scenario's simulation.rtol"
+        )
+    return float(value)
 
 
 class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[Any]"]):
@@ -88,6 +111,15 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         Solver of the stacked periods: ``"VODE"`` (default; its tolerances divided by the square
         root of the stack's size), another ``simulation.method`` (a stack of several members then
         runs on LSODA, as a batched sweep), or None: the scenario's.
+    rtol : float or None
+        Each member's relative tolerance (default :data:`VECTOR_RTOL`, 1e-3), in place of the
+        scenario's ``simulation.rtol``; a stack of k members runs VODE at ``rtol / sqrt(k)`` (and
+        the scenario's absolute tolerances / sqrt(k)).  With stacks of 64 members (B = 64 and its
+        multiples) every member stays within 5e-3 of an rtol 1e-9 reference in normalised
+        observation units over 20 s of random actions, at ~7x the single environment's env-steps
+        per CPU second (docs/performance.md, "Vector environment": accuracy and speed against B;
+        smaller stacks are less accurate at the same rtol).  None: the scenario's ``simulation.rtol``
+        (the single environment's accuracy, ~2.5x its speed).
     render_mode : None
         No rendering.
     """
@@ -106,6 +138,7 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         max_episode_steps: int | None = None,
         method: str | None = "VODE",
         render_mode: str | None = None,
+        rtol: float | None = VECTOR_RTOL,
     ) -> None:
         if (
             isinstance(num_envs, bool)
@@ -133,6 +166,8 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         sc = core.scenario
         if method is not None and method != sc.simulation.method:
             sc = sc.with_({"simulation.method": method})
+        if rtol is not None:
+            sc = sc.with_({"simulation.rtol": _rtol(rtol)})
         self.scenario, self.dt_s, self.render_mode = sc, core.dt_s, None
         self._command: dict[str, NDArray[np.float64]] | None = None
         self.single_action_space = core.single_action_space
