@@ -152,9 +152,30 @@ def test_errors_and_seeding(short6):
         ({"max_episode_steps": 0}, "max_episode_steps"),
         ({"dt_s": -1.0}, "dt_s"),
         ({"dt_s": 1e-9}, r"dt_s: must be a number of seconds >= 1e-06"),
+        ({"rtol": 0.0}, r"rtol: must be a relative tolerance between 0 and 1"),
+        ({"rtol": float("nan")}, "rtol"),
+        ({"reward": lambda p, o, i: 0.0}, "reward: the vector environment takes a preset name"),
+        ({"reward": "speed"}, "reward: expected one of the presets"),
     ):
         with pytest.raises(ValueError, match=msg):
             SnowormVectorEnv(**({"num_envs": 2, "scenario": short6} | kw))
+
+
+def test_reward_presets_charge_the_energy_over_the_chains_weight(short6):
+    """Issue 34: the default preset "efficiency" rewards progress minus the energy over m g (six
+    segments of 90 kg), "distance" the progress alone: each member's reward against its own
+    progress and ``info["motor_energy_J"]``."""
+    acts = np.random.default_rng(2).uniform(-1, 1, (3, 2, 6)).astype(np.float32)
+    for reward, weight in (("efficiency", 1 / (6 * 90.0 * 9.81)), ("distance", 0.0)):
+        vec = SnowormVectorEnv(2, short6, reward=reward)
+        vec.reset(seed=0)
+        x_prev = vec._xmean.copy()  # the members' mean positions [m]
+        for a in acts:
+            _, r, _, _, info = vec.step(a)
+            assert np.all(info["motor_energy_J"] > 0)
+            progress = vec._xmean - x_prev
+            np.testing.assert_allclose(r, progress - weight * info["motor_energy_J"], rtol=1e-12, atol=1e-12)
+            x_prev = vec._xmean.copy()
 
 
 def test_memory_stays_bounded_over_many_periods(short6):

@@ -41,7 +41,8 @@ different times of their episodes share one period.
   and is reset at the next step; the other members go on.
 * **info**: ``t_s``, ``motor_energy_J`` and ``solver_failure`` per member (each with its ``_key``
   mask, as Gymnasium's vector infos).
-* A ``reward`` callable is not taken (wrap the vector environment instead).
+* **Reward**: a preset of :data:`snoworm.env.core.REWARD_PRESETS` (default ``"efficiency"``); a
+  ``reward`` callable is not taken (wrap the vector environment instead).
 """
 
 from __future__ import annotations
@@ -61,7 +62,7 @@ from ..modes.command import CommandState
 from ..simulation.driver import assemble
 from ..simulation.interval import output_grid
 from ..simulation.stepper import STACK_MAX_MEMBERS, STACK_MAX_STATES, ChainStepper, stack_size
-from .core import EnvCore, table_fields
+from .core import DEFAULT_REWARD, EnvCore, table_fields
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike, NDArray
@@ -105,6 +106,9 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         Number of members B, 1 to :data:`MAX_NUM_ENVS` (ValueError beyond).
     scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s
         As :class:`snoworm.env.single.SnowormEnv`.
+    reward : str
+        A preset of :data:`snoworm.env.core.REWARD_PRESETS` (default ``"efficiency"``); a callable
+        is refused (wrap the vector environment instead).
     max_episode_steps : int, optional
         Truncate an episode after this many steps if that comes before ``simulation.duration_s``.
     method : str or None
@@ -132,13 +136,14 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         scenario: Scenario | str | os.PathLike[str] = "tow6_uniform",
         dt_s: float = 0.1,
         action_keys: str | Sequence[str] = ("wheel_speed_mps",),
-        energy_weight: float = 1e-3,
+        energy_weight: float | None = None,
         stall_speed_mps: float = 0.01,
         stall_time_s: float = 2.0,
         max_episode_steps: int | None = None,
         method: str | None = "VODE",
         render_mode: str | None = None,
         rtol: float | None = VECTOR_RTOL,
+        reward: str = DEFAULT_REWARD,
     ) -> None:
         if (
             isinstance(num_envs, bool)
@@ -152,7 +157,12 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
             )
         if render_mode is not None:
             raise ValueError(f"render_mode: the environment does not render; got {render_mode!r}, use None")
-        self.core = core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s)
+        if callable(reward):
+            raise ValueError(
+                "reward: the vector environment takes a preset name "
+                '("efficiency" or "distance"), not a callable; wrap the vector environment to compute your own'
+            )
+        self.core = core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s, reward)
         self.num_envs = B = int(num_envs)
         self.max_episode_steps = core.max_episode_steps
         if max_episode_steps is not None:
