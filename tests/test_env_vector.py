@@ -161,6 +161,19 @@ def test_errors_and_seeding(short6):
             SnowormVectorEnv(**({"num_envs": 2, "scenario": short6} | kw))
 
 
+def test_the_default_member_tolerance_is_for_vode_stacks(short6):
+    """rtol="auto": 1e-3 a member on VODE (whose stacks divide it by sqrt(k)); the scenario's rtol on
+    LSODA (a max-norm test, no tightening) and with rtol=None; a number as given."""
+    from snoworm.env.vector import VECTOR_RTOL
+
+    rtol = short6.simulation.rtol
+    assert VECTOR_RTOL != rtol
+    assert SnowormVectorEnv(2, short6).scenario.simulation.rtol == VECTOR_RTOL
+    assert SnowormVectorEnv(2, short6, method="LSODA").scenario.simulation.rtol == rtol
+    assert SnowormVectorEnv(2, short6, rtol=None).scenario.simulation.rtol == rtol
+    assert SnowormVectorEnv(2, short6, method="LSODA", rtol=2e-4).scenario.simulation.rtol == 2e-4
+
+
 def test_reward_presets_charge_the_energy_over_the_chains_weight(short6):
     """Issue 34: the default preset "efficiency" rewards progress minus the energy over m g (six
     segments of 90 kg), "distance" the progress alone: each member's reward against its own

@@ -15,7 +15,7 @@ ends at the same time: the B chains are stepped by the one stepper of one chain 
 environment's, with one member): stacks of at most :data:`STACK_MAX_MEMBERS` (64) members and
 :data:`STACK_MAX_STATES` states (:meth:`ChainModel.stack`, the kernel with one more leading axis),
 of sizes that differ by at most one, each integrated over the period on VODE with its tolerances
-divided by sqrt(size) (each member's relative tolerance ``rtol``, default :data:`VECTOR_RTOL` = 1e-3,
+divided by sqrt(size) (each member's relative tolerance ``rtol``, by default :data:`VECTOR_RTOL` = 1e-3,
 not the scenario's: a stack steps at the pace of its hardest member, so its other members are
 solved far more finely than their tolerance; every member stays within 5e-3 of an rtol 1e-9
 reference in normalised observation units with stacks of 64), restarted at a period whose command changed and carried on while every
@@ -49,7 +49,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 from gymnasium.error import ResetNeeded
@@ -91,8 +91,8 @@ def _rtol(value: Any) -> float:
     ):
         raise ValueError(
             f"rtol: must be a relative tolerance between 0 and 1 (exclusive), got {quote(value, 60)}; "
-            f"the default {VECTOR_RTOL:g} keeps each member within 5e-3 of a tight reference with stacks of 64 members, "
-            "None uses the scenario's simulation.rtol"
+            f'the default, "auto", is {VECTOR_RTOL:g} on VODE (each member within 5e-3 of a tight reference with stacks '
+            "of 64 members); None uses the scenario's simulation.rtol"
         )
     return float(value)
 
@@ -115,15 +115,18 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         Solver of the stacked periods: ``"VODE"`` (default; its tolerances divided by the square
         root of the stack's size), another ``simulation.method`` (a stack of several members then
         runs on LSODA, as a batched sweep), or None: the scenario's.
-    rtol : float or None
-        Each member's relative tolerance (default :data:`VECTOR_RTOL`, 1e-3), in place of the
-        scenario's ``simulation.rtol``; a stack of k members runs VODE at ``rtol / sqrt(k)`` (and
-        the scenario's absolute tolerances / sqrt(k)).  With stacks of 64 members (B = 64 and its
-        multiples) every member stays within 5e-3 of an rtol 1e-9 reference in normalised
-        observation units over 20 s of random actions, at ~7x the single environment's env-steps
-        per CPU second (docs/performance.md, "Vector environment": accuracy and speed against B;
-        smaller stacks are less accurate at the same rtol).  None: the scenario's ``simulation.rtol``
-        (the single environment's accuracy, ~2.5x its speed).
+    rtol : float, "auto" or None
+        Each member's relative tolerance, in place of the scenario's ``simulation.rtol``; a stack of
+        k members runs VODE at ``rtol / sqrt(k)`` (and the scenario's absolute tolerances /
+        sqrt(k)).  ``"auto"`` (default): :data:`VECTOR_RTOL` (1e-3) when the stacks run on VODE
+        (``method="VODE"``, the default), the scenario's rtol on another method (LSODA's max-norm
+        test has no sqrt(k) tightening, so 1e-3 there would give each member the accuracy of one chain
+        alone at 1e-3: 2-8e-2 from the reference).  With stacks of 64 members (B = 64 and its multiples) the default keeps every
+        member within 5e-3 of an rtol 1e-9 reference in normalised observation units over 20 s of
+        random actions, at ~7x the single environment's env-steps per CPU second (docs/performance.md,
+        "Vector environment: accuracy and cost against B"; smaller stacks are less accurate at the
+        same rtol).  None: the scenario's ``simulation.rtol`` (the single environment's accuracy, ~2.7x
+        its speed).
     render_mode : None
         No rendering.
     """
@@ -142,7 +145,7 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         max_episode_steps: int | None = None,
         method: str | None = "VODE",
         render_mode: str | None = None,
-        rtol: float | None = VECTOR_RTOL,
+        rtol: float | Literal["auto"] | None = "auto",
         reward: str = DEFAULT_REWARD,
     ) -> None:
         if (
@@ -176,6 +179,8 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         sc = core.scenario
         if method is not None and method != sc.simulation.method:
             sc = sc.with_({"simulation.method": method})
+        if isinstance(rtol, str) and rtol == "auto":
+            rtol = VECTOR_RTOL if sc.simulation.method == "VODE" else None
         if rtol is not None:
             sc = sc.with_({"simulation.rtol": _rtol(rtol)})
         self.scenario, self.dt_s, self.render_mode = sc, core.dt_s, None
