@@ -9,6 +9,7 @@ import failing) is printed and makes the build fail (exit status 1).  ``make doc
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import pkgutil
 import sys
 import warnings
@@ -21,6 +22,8 @@ import snoworm
 
 #: Modules that run something when imported, or are only the CLI's plumbing.
 SKIP = {"snoworm.__main__"}
+#: Modules of an optional extra that import it when imported: documented where it is installed.
+OPTIONAL = {"snoworm.env.sb3": "stable_baselines3"}
 
 
 def modules() -> list:
@@ -34,7 +37,7 @@ def modules() -> list:
     names = ["snoworm"] + [m.name for m in pkgutil.walk_packages(snoworm.__path__, "snoworm.")]
     walked, out = set(), []  # walked: packages whose submodules pdoc reaches by itself
     for name in names:
-        if name in SKIP:
+        if name in SKIP or (name in OPTIONAL and importlib.util.find_spec(OPTIONAL[name]) is None):
             continue
         if name.rpartition(".")[0] not in walked:
             out.append(name)

@@ -183,3 +183,132 @@ def test_markdown_links_and_cited_sections_exist():
             if not any(h.strip().startswith(section) for h in heads):
                 broken.append(f"{src.relative_to(ROOT)}: {doc}, {section!r} (no such section)")
     assert not broken, "\n".join(broken)
+
+
+# ------------------------------------------------------------------ shell commands of the docs
+
+#: An HTML comment on the line before a fenced block (invisible on GitHub) that keeps some of its
+#: commands out of :func:`test_every_shell_command_of_the_docs_runs`, with the reason said:
+#: ``<!-- docs-test: skip: REASON -->`` (the whole block) or ``<!-- docs-test: skip 1,3-5: REASON -->``
+#: (those commands of the block, counted from 1).
+SKIP_MARK = re.compile(r"<!-- docs-test: skip(?: ([\d,\-]+))?: (.+?) -->")
+#: The first word of a command in an untagged block (a block of output has none of them).
+COMMAND_WORDS = ("snoworm", "python", "make", "pip")
+
+
+def _numbers(spec):
+    out = set()
+    for part in spec.split(","):
+        a, _, b = part.partition("-")
+        out.update(range(int(a), int(b or a) + 1))
+    return out
+
+
+def doc_commands(page):
+    """``[(line, command, skip reason or None)]``: the shell commands of the fenced blocks of a
+    Markdown page.  A ``console``/``sh``/``bash``/``shell`` block, or an untagged one whose first
+    line starts with one of :data:`COMMAND_WORDS` or ``$``; in a block with ``$`` prompts only the
+    prompted lines are commands (the rest is their output); a trailing ``\\`` continues a line."""
+    text = page.read_text(encoding="utf-8")
+    out = []
+    for m in re.finditer(r"^```(\w*)\n(.*?)^```", text, re.S | re.M):
+        lang, body = m.group(1), m.group(2)
+        first = body.lstrip().split(" ", 1)[0]
+        if not (lang in ("console", "sh", "bash", "shell") or (not lang and (first in COMMAND_WORDS or first == "$"))):
+            continue
+        prompted = any(ln.startswith("$ ") for ln in body.splitlines())
+        commands, current = [], None
+        for ln in body.splitlines():
+            if current is not None:
+                current += " " + ln.strip()
+            elif prompted and not ln.startswith("$ "):
+                continue
+            else:
+                current = ln.removeprefix("$ ").strip()
+            if current.endswith("\\"):
+                current = current[:-1].rstrip()
+            else:
+                if current:
+                    commands.append(current)
+                current = None
+        before = text[: m.start()].rstrip("\n").rsplit("\n", 1)[-1]
+        mark = SKIP_MARK.fullmatch(before.strip())
+        skipped = set(range(1, len(commands) + 1)) if mark and not mark.group(1) else set()
+        if mark and mark.group(1):
+            skipped = _numbers(mark.group(1))
+            assert skipped <= set(range(1, len(commands) + 1)), f"{page.name}: {before} names no such command"
+        line = text[: m.start()].count("\n") + 1
+        out += [(line, c, mark.group(2) if k in skipped else None) for k, c in enumerate(commands, 1)]
+    return out
+
+
+def doc_pages():
+    return [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def test_the_docs_shell_commands_are_found_and_skips_say_why():
+    """The reader of :func:`test_every_shell_command_of_the_docs_runs` finds the commands the docs
+    show (a regression of the parser would silently run none), and every skip gives a reason."""
+    found = {(p.name, c): why for p in doc_pages() for _, c, why in doc_commands(p)}
+    assert (
+        "sweeps.md",
+        "snoworm sweep scenarios/tow6_uniform.yaml --set terrain.xt=0.6:1.0:9 "
+        "--set tow.force_N=0,100,200 -j 2 --out sw/",
+    ) in found
+    assert found[("groundtruth.md", "snoworm groundtruth --out out/groundtruth")] is None
+    assert found[("paper.md", "snoworm paper --out out/paper --quick    # CI: inchworm runs shortened to 10 s")] is None
+    assert not any(c.startswith(("inchworm6:", "case", "sweep [")) for _, c in found)  # output is not run
+    assert all(why is None or len(why) > 20 for why in found.values())
+
+
+def test_every_shell_command_of_the_docs_runs(tmp_path):
+    """Every shell command in a fenced block of README.md and docs/*.md (:func:`doc_commands`) runs
+    with exit status 0 in a fresh folder (``scenarios/`` linked there, ``snoworm`` and ``python``
+    this checkout's), each distinct command once; the ones marked with :data:`SKIP_MARK` do not."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for name, line in (
+        ("snoworm", f'exec "{sys.executable}" -m snoworm "$@"'),
+        ("python", f'exec "{sys.executable}" "$@"'),
+    ):
+        (bin_dir / name).write_text(f"#!/bin/sh\n{line}\n")
+        (bin_dir / name).chmod(0o755)
+    work = tmp_path / "work"
+    work.mkdir()
+    (work / "scenarios").symlink_to(ROOT / "scenarios")
+    paths = [str(ROOT), *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
+    env = dict(os.environ, PATH=f"{bin_dir}{os.pathsep}{os.environ['PATH']}", PYTHONPATH=os.pathsep.join(paths))
+    env["MPLBACKEND"] = "agg"
+    done, failed = set(), []
+    for page in doc_pages():
+        for line, command, why in doc_commands(page):
+            key = " ".join(command.split("#", 1)[0].split())
+            if why is not None or key in done:
+                continue
+            done.add(key)
+            r = subprocess.run(["bash", "-c", command], cwd=work, env=env, capture_output=True, text=True, timeout=600)
+            if r.returncode != 0:
+                failed.append(f"{page.name}:{line}: {command}\n  exit {r.returncode}: {r.stderr[-1500:]}")
+    assert done and not failed, "\n".join(failed)
+
+
+def test_test_files_named_in_the_docs_exist():
+    """Issue 34: the docs named tests/test_env.py, tests/test_vecenv.py and tests/test_mobility.py
+    after the files were renamed.  Every ``tests/...py`` named in README.md, docs/, examples/ or the
+    package's and the benchmarks' docstrings exists (CHANGELOG.md is history and keeps old names)."""
+    sources = [
+        ROOT / "README.md",
+        *ROOT.glob("docs/*.md"),
+        *ROOT.glob("docs/*.py"),
+        *ROOT.glob("examples/**/*.md"),
+        *ROOT.glob("examples/**/*.py"),
+        *ROOT.glob("snoworm/**/*.py"),
+        *ROOT.glob("benchmarks/*.py"),
+    ]
+    missing = [
+        f"{src.relative_to(ROOT)}: {name}"
+        for src in sources
+        for name in sorted(set(re.findall(r"tests/[\w/]+\.py", src.read_text(encoding="utf-8"))))
+        if not (ROOT / name).exists()
+    ]
+    assert not missing, "\n".join(missing)

@@ -205,3 +205,53 @@ def test_observation_carries_the_grade_under_each_segment(short6):
     j = OBSERVATION_FIELDS.index("grade_deg") * 6
     np.testing.assert_allclose(obs[j : j + 6], 6.0 / 90.0, rtol=1e-6)  # float32
     np.testing.assert_allclose(env.observation.grade_deg, 6.0, rtol=1e-12)
+
+
+def _episode(env, action):
+    """One episode under a constant action: (return, progress of the mean position [m], energy [J])."""
+    env.reset(seed=0)
+    x0 = float(np.mean(env.observation.x_m))
+    total, energy, done = 0.0, 0.0, False
+    while not done:
+        _, r, terminated, truncated, info = env.step(action)
+        total, energy, done = total + r, energy + info["motor_energy_J"], terminated or truncated
+    return total, float(np.mean(env.observation.x_m)) - x0, energy
+
+
+def test_the_default_reward_pays_driving_more_than_standing_still():
+    """Issue 34: with the former default reward (progress - 1e-3 x energy) standing still won on
+    tow6; the default preset "efficiency" charges the energy over the chain's weight m g (the height
+    it would lift the chain), so driving at the paper's 1.8 m/s over a 20 s episode returns more
+    than standing still, while the former weight still ranks standing still first."""
+    sc = load_scenario(SCENARIOS / "tow6_uniform.yaml")
+    env = SnowormEnv(sc)
+    weight_N = 6 * 90.0 * 9.81  # six FrostyBoy segments of 90 kg (the parameter set's mass)
+    assert env.core.energy_weight == pytest.approx(1.0 / weight_N, rel=1e-12)
+    still = np.full(6, -1.0, np.float32)  # set-point 0 m/s
+    drive = np.full(6, 2 * 1.8 / env.core.high[0] - 1, np.float32)  # 1.8 m/s on [-1, 1]
+    r_still, d_still, e_still = _episode(env, still)
+    r_drive, d_drive, e_drive = _episode(env, drive)
+    # the return is the progress minus the weight times the energy, step by step (by hand here)
+    assert r_drive == pytest.approx(d_drive - e_drive / weight_N, rel=1e-9, abs=1e-9)
+    assert r_still == pytest.approx(d_still - e_still / weight_N, rel=1e-9, abs=1e-9)
+    assert abs(r_still) < 0.05 and d_drive > 20.0  # standing still goes nowhere; 1.8 m/s for ~19 s
+    assert r_drive > r_still + 10.0
+    # the former default weight (1e-3 per J): standing still would have paid best
+    assert d_still - 1e-3 * e_still > d_drive - 1e-3 * e_drive
+    old = SnowormEnv(sc, energy_weight=1e-3)
+    assert _episode(old, still)[0] > _episode(old, drive)[0]
+    # "distance": progress only
+    dist = SnowormEnv(sc.with_({"simulation.duration_s": 1.0}), reward="distance")
+    r, d, e = _episode(dist, drive)
+    assert dist.core.energy_weight == 0.0 and e > 0 and r == pytest.approx(d, rel=1e-9, abs=1e-12)
+
+
+def test_reward_presets_and_their_errors(short6):
+    for kw, msg in (
+        ({"reward": "speed"}, "reward: expected one of the presets 'efficiency', 'distance'"),
+        ({"reward": 5}, "reward: expected one of the presets"),
+        ({"reward": "distance", "energy_weight": 1e-3}, 'energy_weight: reward="distance" does not charge'),
+        ({"energy_weight": float("nan")}, "energy_weight"),
+    ):
+        with pytest.raises(ValueError, match=msg):
+            SnowormEnv(**({"scenario": short6} | kw))

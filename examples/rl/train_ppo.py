@@ -1,6 +1,7 @@
 """PPO (stable-baselines3) on snoworm's native vector environment (docs/controllers.md, examples/rl/README.md).
 
-    pip install -e ".[rl]"                 # gymnasium + stable-baselines3 (which pulls torch)
+    pip install torch --index-url https://download.pytorch.org/whl/cpu   # CPU-only torch first
+    pip install -e ".[rl]"                 # gymnasium + stable-baselines3
     python examples/rl/train_ppo.py --steps 100000 --envs 64
 
 Trains an MLP policy on ``snoworm/Snoworm-v0`` (tow6_uniform, actions: the six wheel-speed
@@ -18,56 +19,9 @@ import time
 import gymnasium
 import numpy as np
 from stable_baselines3 import PPO
-from stable_baselines3.common.vec_env import VecEnv
 
 import snoworm.env  # noqa: F401  (registers snoworm/Snoworm-v0)
-
-
-class SB3Adapter(VecEnv):
-    """A Gymnasium 1.x vector env (NEXT_STEP autoreset) as stable-baselines3's VecEnv (same-step
-    reset with ``terminal_observation`` in the info): an ended member is reset at once through
-    ``reset(options={"reset_mask": ...})``."""
-
-    def __init__(self, venv):
-        self.venv = venv
-        super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
-
-    def reset(self):
-        seed = self._seeds[0]
-        obs, _ = self.venv.reset(seed=seed)
-        self._reset_seeds()
-        return obs
-
-    def step_async(self, actions):
-        self._actions = np.asarray(actions, np.float32)
-
-    def step_wait(self):
-        obs, rew, term, trunc, info = self.venv.step(self._actions)
-        done = term | trunc
-        infos = [{} for _ in range(self.num_envs)]
-        if done.any():
-            for b in np.flatnonzero(done):
-                infos[b] = {
-                    "terminal_observation": obs[b].copy(),
-                    "TimeLimit.truncated": bool(trunc[b] and not term[b]),
-                }
-            obs, _ = self.venv.reset(options={"reset_mask": done})
-        return obs, rew.astype(np.float32), done, infos
-
-    def close(self):
-        self.venv.close()
-
-    def get_attr(self, attr_name, indices=None):
-        return [getattr(self.venv, attr_name)] * len(self._get_indices(indices))
-
-    def set_attr(self, attr_name, value, indices=None):
-        raise NotImplementedError("the members share one vector environment")
-
-    def env_method(self, method_name, *args, indices=None, **kwargs):
-        raise NotImplementedError("the members share one vector environment")
-
-    def env_is_wrapped(self, wrapper_class, indices=None):
-        return [False] * len(self._get_indices(indices))
+from snoworm.env.sb3 import SB3VecEnv
 
 
 def episode_return(env, policy, seed=0):
@@ -90,8 +44,9 @@ def main(argv=None):
         "--energy-weight",
         type=float,
         default=1e-4,
-        help="reward weight of the motors' energy [1/J per m] (the environment's default 1e-3 "
-        "makes standing still pay best on tow6)",
+        help="reward weight of the motors' energy [m per J] (1e-4, the runs of examples/rl/README.md; the "
+        "environment's default preset, reward='efficiency', weighs it by 1/(m g), 1.9e-4 on tow6; 1e-3, "
+        "the default before issue 34, makes standing still pay best on tow6)",
     )
     ap.add_argument("--save", help="save the trained policy to this .zip file")
     args = ap.parse_args(argv)
@@ -102,7 +57,7 @@ def main(argv=None):
         vectorization_mode="vector_entry_point",
         energy_weight=args.energy_weight,
     )
-    env = SB3Adapter(venv.unwrapped)
+    env = SB3VecEnv(venv.unwrapped)  # same-step resets with terminal_observation, as SB3 expects
     env.seed(args.seed)
     model = PPO(
         "MlpPolicy",

@@ -26,9 +26,13 @@ package could register without being imported.
   quantities of the results' tables), each divided by a scale of the vehicle or the scenario
   (:data:`OBSERVATION_SCALES`), then the time as a fraction of ``simulation.duration_s``; a value
   beyond 10 scales is clipped to the box.  ``env.observation`` is the physical Observation.
-* **Reward** (default :func:`default_reward`): progress of the chain's mean position in the step
-  [m] minus ``energy_weight`` times the electrical energy the motors drew in it [J] (trapezoid
-  rule on the scenario's output grid).  ``reward=f(prev_obs, obs, info)`` replaces it.
+* **Reward** (:func:`default_reward`): progress of the chain's mean position in the step [m] minus
+  ``energy_weight`` times the electrical energy the motors drew in it [J] (trapezoid rule on the
+  scenario's output grid).  ``reward=`` names a preset of :data:`REWARD_PRESETS`:
+  ``"efficiency"`` (default: the weight is 1 / the chain's weight m g, so the energy counts as the
+  height it would lift the chain, and driving beats standing still wherever the cost of transport is
+  below 1; ``energy_weight=`` sets another weight) or ``"distance"`` (progress only).  The single
+  environment also takes ``reward=f(prev_obs, obs, info)``.
 * **Terminated** when the chain is immobilised: its mean ground speed stays below
   ``stall_speed_mps`` for ``stall_time_s`` while a wheel command is held.  **Truncated** at
   ``simulation.duration_s`` (``max_episode_steps`` = ceil(duration / dt_s) steps).  Stepping on
@@ -55,11 +59,22 @@ try:
 except ImportError as exc:  # pragma: no cover - depends on the installed extras
     raise ImportError("snoworm.env needs gymnasium: pip install 'snoworm[gym]'") from exc
 
-from .core import ENV_ID, OBS_LIMIT, OBSERVATION_FIELDS, OBSERVATION_SCALES, EnvCore, default_reward, table_fields
+from .core import (
+    DEFAULT_REWARD,
+    ENV_ID,
+    OBS_LIMIT,
+    OBSERVATION_FIELDS,
+    OBSERVATION_SCALES,
+    REWARD_PRESETS,
+    EnvCore,
+    default_reward,
+    table_fields,
+)
 from .single import SnowormEnv, make_env
 from .vector import SnowormVectorEnv
 
 __all__ = [
+    "DEFAULT_REWARD",
     "ENV_ID",
     "SnowormEnv",
     "SnowormVectorEnv",
@@ -67,6 +82,7 @@ __all__ = [
     "OBSERVATION_FIELDS",
     "OBSERVATION_SCALES",
     "OBS_LIMIT",
+    "REWARD_PRESETS",
     "default_reward",
     "make_env",
     "register",

@@ -24,11 +24,13 @@ if TYPE_CHECKING:
 RewardFunction = Callable[[Observation, Observation, dict[str, Any]], float]
 
 __all__ = [
+    "DEFAULT_REWARD",
     "ENV_ID",
     "EnvCore",
     "OBSERVATION_FIELDS",
     "OBSERVATION_SCALES",
     "OBS_LIMIT",
+    "REWARD_PRESETS",
     "default_reward",
     "table_fields",
 ]
@@ -64,10 +66,26 @@ OBS_LIMIT = 10.0
 _PAIRS = (("wheel_speed_mps", "wheel_torque_Nm"), ("joint_force_N", "joint_length_m"))
 
 
-def default_reward(
-    prev_obs: Observation, obs: Observation, info: Mapping[str, Any], energy_weight: float = 1e-3
-) -> float:
-    """Progress of the chain's mean position [m] minus ``energy_weight`` times the motors' energy [J]."""
+#: The reward presets (``reward=`` of both environments), each a weight of the motors' energy in
+#: :func:`default_reward` (progress [m] minus the weight times the energy [J]):
+#:
+#: * ``"efficiency"`` (the default): the weight is 1 / (the chain's weight m g [N]) unless
+#:   ``energy_weight`` is given, so the energy is charged as the height [m] it would lift the chain:
+#:   driving pays while the cost of transport E / (m g d) is below 1 (tow6: 0.51-0.54 at every
+#:   constant set-point, so driving beats standing still, and faster pays more).
+#: * ``"distance"``: progress only (weight 0; ``energy_weight`` is refused).
+#:
+#: A fixed weight such as the 1e-3 per J of the environments before issue 34 depends on the vehicle:
+#: on tow6 (5 297 N, ~2 800 J/m) any weight above ~1/2 900 per J makes standing still pay best.
+REWARD_PRESETS = ("efficiency", "distance")
+#: The reward preset of both environments by default.
+DEFAULT_REWARD = "efficiency"
+
+
+def default_reward(prev_obs: Observation, obs: Observation, info: Mapping[str, Any], energy_weight: float) -> float:
+    """Progress of the chain's mean position [m] minus ``energy_weight`` times the motors' energy
+    ``info["motor_energy_J"]`` [J]: the reward of every preset of :data:`REWARD_PRESETS`, with its
+    weight (:attr:`EnvCore.energy_weight`)."""
     return float(np.mean(obs.x_m) - np.mean(prev_obs.x_m)) - energy_weight * info["motor_energy_J"]
 
 
@@ -105,8 +123,13 @@ class EnvCore:
     action_keys : sequence of str
         Command keys that make up the action (not both keys of a pair such as
         ``wheel_speed_mps`` and ``wheel_torque_Nm``).
-    energy_weight : float
-        Weight of the motors' electrical energy in the default reward [1/J per m], >= 0.
+    energy_weight : float or None
+        Weight of the motors' electrical energy in the reward [m per J], >= 0; None: the preset's
+        (:data:`REWARD_PRESETS`; 1 / (m g) for ``"efficiency"``).
+    reward : str
+        A preset of :data:`REWARD_PRESETS` (default :data:`DEFAULT_REWARD`): the weight of the
+        energy when ``energy_weight`` is None.  (The single environment also takes a callable,
+        :class:`~snoworm.env.single.SnowormEnv`, and then passes ``"efficiency"`` here.)
     stall_speed_mps, stall_time_s : float
         Immobilisation test: mean speed below ``stall_speed_mps`` (>= 0) for ``stall_time_s`` (> 0).
     """
@@ -116,13 +139,26 @@ class EnvCore:
         scenario: Scenario | str | os.PathLike[str],
         dt_s: float = 0.1,
         action_keys: str | Sequence[str] = ("wheel_speed_mps",),
-        energy_weight: float = 1e-3,
+        energy_weight: float | None = None,
         stall_speed_mps: float = 0.01,
         stall_time_s: float = 2.0,
+        reward: str = DEFAULT_REWARD,
     ) -> None:
         self.scenario = _resolve(scenario)
         self.dt_s = _number("dt_s", dt_s, f"a number of seconds >= {DT_MIN_S:g}", lambda v: v >= DT_MIN_S)
-        self.energy_weight = _number("energy_weight", energy_weight, "a finite number >= 0", lambda v: v >= 0)
+        if not isinstance(reward, str) or reward not in REWARD_PRESETS:
+            raise ValueError(
+                f"reward: expected one of the presets {', '.join(map(repr, REWARD_PRESETS))} "
+                f"(or, for the single environment, a callable reward(prev_obs, obs, info)), got {quote(reward, 60)}"
+            )
+        if energy_weight is not None:
+            energy_weight = _number("energy_weight", energy_weight, "a finite number >= 0 [m per J]", lambda v: v >= 0)
+            if reward == "distance":
+                raise ValueError(
+                    f'energy_weight: reward="distance" does not charge the energy; got {energy_weight!r}, '
+                    'leave it out or use reward="efficiency"'
+                )
+        self.reward = reward
         self.stall_speed_mps = _number(
             "stall_speed_mps", stall_speed_mps, "a finite speed >= 0 [m/s]", lambda v: v >= 0
         )
@@ -134,6 +170,10 @@ class EnvCore:
         self.duration_s = float(self.scenario.simulation.duration_s)
         #: steps until truncation: the first step whose end reaches ``simulation.duration_s``
         self.max_episode_steps = max(1, math.ceil(self.duration_s / self.dt_s - 1e-9))
+        #: the weight of the motors' energy in the reward [m per J] (:data:`REWARD_PRESETS`)
+        self.energy_weight = 0.0 if reward == "distance" else 1.0 / self.scales()["weight"]
+        if energy_weight is not None:
+            self.energy_weight = float(energy_weight)
         self.low, self.high, self.sizes = self._action_bounds()
         self.scale = self._observation_scale()
         n_act, n_obs = self.low.size, self.scale.size + 1

@@ -12,7 +12,7 @@ from gymnasium.error import ResetNeeded
 from ..model.quantities import output_series
 from ..modes.command import Observation
 from ..simulation.stepwise import Simulator
-from .core import OBSERVATION_FIELDS, EnvCore, RewardFunction, table_fields
+from .core import DEFAULT_REWARD, OBSERVATION_FIELDS, EnvCore, RewardFunction, table_fields
 from .render import RENDER_MODES, ChainRenderer, check_render_mode
 
 if TYPE_CHECKING:
@@ -32,9 +32,11 @@ class SnowormEnv(gymnasium.Env["NDArray[np.float32]", "ArrayLike"]):
     ----------
     scenario : Scenario, str or path
         The scenario, a shipped scenario's name or a YAML path (default ``"tow6_uniform"``).
-    reward : callable, optional
-        ``reward(prev_obs, obs, info) -> float`` with physical Observations; default
-        :func:`snoworm.env.core.default_reward` with ``energy_weight``.
+    reward : str or callable
+        A preset of :data:`snoworm.env.core.REWARD_PRESETS`: ``"efficiency"`` (default: progress [m]
+        minus the motors' energy [J] over the chain's weight m g [N], or times ``energy_weight``)
+        or ``"distance"`` (progress only); or ``reward(prev_obs, obs, info) -> float`` with
+        physical Observations.
     dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s
         As :class:`snoworm.env.core.EnvCore`.
     method : str or None
@@ -53,10 +55,10 @@ class SnowormEnv(gymnasium.Env["NDArray[np.float32]", "ArrayLike"]):
     def __init__(
         self,
         scenario: Scenario | str | os.PathLike[str] = "tow6_uniform",
-        reward: RewardFunction | None = None,
+        reward: str | RewardFunction = DEFAULT_REWARD,
         dt_s: float = 0.1,
         action_keys: str | Sequence[str] = ("wheel_speed_mps",),
-        energy_weight: float = 1e-3,
+        energy_weight: float | None = None,
         stall_speed_mps: float = 0.01,
         stall_time_s: float = 2.0,
         method: str | None = "VODE",
@@ -64,13 +66,13 @@ class SnowormEnv(gymnasium.Env["NDArray[np.float32]", "ArrayLike"]):
         render_mode: str | None = None,
     ) -> None:
         self.render_mode = check_render_mode(render_mode)
-        if reward is not None and not callable(reward):
-            raise ValueError(f"reward: expected a callable reward(prev_obs, obs, info), got {reward!r}")
-        self.core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s)
+        preset = DEFAULT_REWARD if callable(reward) else reward
+        self.core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s, preset)
         sc = self.core.scenario
         if method is not None and method != sc.simulation.method:
             sc = sc.with_({"simulation.method": method})
-        self.scenario, self.dt_s, self.reward_fn = sc, self.core.dt_s, reward
+        self.scenario, self.dt_s = sc, self.core.dt_s
+        self.reward_fn: RewardFunction | None = reward if callable(reward) else None
         self.action_keys = self.core.action_keys
         self.max_episode_steps = self.core.max_episode_steps
         self.sim = Simulator(sc, record=record)

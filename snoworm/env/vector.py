@@ -15,7 +15,10 @@ ends at the same time: the B chains are stepped by the one stepper of one chain 
 environment's, with one member): stacks of at most :data:`STACK_MAX_MEMBERS` (64) members and
 :data:`STACK_MAX_STATES` states (:meth:`ChainModel.stack`, the kernel with one more leading axis),
 of sizes that differ by at most one, each integrated over the period on VODE with its tolerances
-divided by sqrt(size), restarted at a period whose command changed and carried on while every
+divided by sqrt(size) (each member's relative tolerance ``rtol``, by default :data:`VECTOR_RTOL` = 1e-3,
+not the scenario's: a stack steps at the pace of its hardest member, so its other members are
+solved far more finely than their tolerance; every member stays within 5e-3 of an rtol 1e-9
+reference in normalised observation units with stacks of 64), restarted at a period whose command changed and carried on while every
 member holds its command (as the single environment).  One stack of all B members cost more per member as
 B grew (its steps follow its most demanding member at tighter tolerances, and past 10 000 states
 VODE's BLAS calls start threads: 67 s a period for B = 1 000 against 0.3 s for 64); with stacks
@@ -38,14 +41,15 @@ different times of their episodes share one period.
   and is reset at the next step; the other members go on.
 * **info**: ``t_s``, ``motor_energy_J`` and ``solver_failure`` per member (each with its ``_key``
   mask, as Gymnasium's vector infos).
-* A ``reward`` callable is not taken (wrap the vector environment instead).
+* **Reward**: a preset of :data:`snoworm.env.core.REWARD_PRESETS` (default ``"efficiency"``); a
+  ``reward`` callable is not taken (wrap the vector environment instead).
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 from gymnasium.error import ResetNeeded
@@ -58,7 +62,7 @@ from ..modes.command import CommandState
 from ..simulation.driver import assemble
 from ..simulation.interval import output_grid
 from ..simulation.stepper import STACK_MAX_MEMBERS, STACK_MAX_STATES, ChainStepper, stack_size
-from .core import EnvCore, table_fields
+from .core import DEFAULT_REWARD, EnvCore, table_fields
 from .render import RENDER_MODES, ChainRenderer, check_render_mode
 
 if TYPE_CHECKING:
@@ -67,11 +71,31 @@ if TYPE_CHECKING:
     from ..config.scenario import Scenario
     from ..model.inputs import Controls
 
-__all__ = ["SnowormVectorEnv", "MAX_NUM_ENVS", "STACK_MAX_MEMBERS", "STACK_MAX_STATES", "stack_size"]
+__all__ = ["SnowormVectorEnv", "MAX_NUM_ENVS", "VECTOR_RTOL", "STACK_MAX_MEMBERS", "STACK_MAX_STATES", "stack_size"]
+
+#: Each member's relative tolerance by default (``SnowormVectorEnv(rtol=...)``): a stack of k members
+#: runs VODE at ``VECTOR_RTOL / sqrt(k)``; measured with stacks of 64 to keep every member within
+#: 5e-3 of an rtol 1e-9 reference (normalised observation units; docs/performance.md).
+VECTOR_RTOL = 1e-3
 
 #: Most members of a vector environment: the range over which the cost per member was measured flat
 #: (docs/performance.md, "Vector environment"); more are refused (run several environments instead).
 MAX_NUM_ENVS = 1024
+
+
+def _rtol(value: Any) -> float:
+    """``value`` as a relative tolerance in (0, 1); else ValueError naming ``rtol``."""
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not 0 < float(value) < 1
+    ):
+        raise ValueError(
+            f"rtol: must be a relative tolerance between 0 and 1 (exclusive), got {quote(value, 60)}; "
+            f'the default, "auto", is {VECTOR_RTOL:g} on VODE (each member within 5e-3 of a tight reference with stacks '
+            "of 64 members); None uses the scenario's simulation.rtol"
+        )
+    return float(value)
 
 
 class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[Any]"]):
@@ -83,12 +107,27 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         Number of members B, 1 to :data:`MAX_NUM_ENVS` (ValueError beyond).
     scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s
         As :class:`snoworm.env.single.SnowormEnv`.
+    reward : str
+        A preset of :data:`snoworm.env.core.REWARD_PRESETS` (default ``"efficiency"``); a callable
+        is refused (wrap the vector environment instead).
     max_episode_steps : int, optional
         Truncate an episode after this many steps if that comes before ``simulation.duration_s``.
     method : str or None
         Solver of the stacked periods: ``"VODE"`` (default; its tolerances divided by the square
         root of the stack's size), another ``simulation.method`` (a stack of several members then
         runs on LSODA, as a batched sweep), or None: the scenario's.
+    rtol : float, "auto" or None
+        Each member's relative tolerance, in place of the scenario's ``simulation.rtol``; a stack of
+        k members runs VODE at ``rtol / sqrt(k)`` (and the scenario's absolute tolerances /
+        sqrt(k)).  ``"auto"`` (default): :data:`VECTOR_RTOL` (1e-3) when the stacks run on VODE
+        (``method="VODE"``, the default), the scenario's rtol on another method (LSODA's max-norm
+        test has no sqrt(k) tightening, so 1e-3 there would give each member the accuracy of one chain
+        alone at 1e-3: 2-8e-2 from the reference).  With stacks of 64 members (B = 64 and its multiples) the default keeps every
+        member within 5e-3 of an rtol 1e-9 reference in normalised observation units over 20 s of
+        random actions, at ~7x the single environment's env-steps per CPU second (docs/performance.md,
+        "Vector environment: accuracy and cost against B"; smaller stacks are less accurate at the
+        same rtol).  None: the scenario's ``simulation.rtol`` (the single environment's accuracy, ~2.7x
+        its speed).
     render_mode : {None, "rgb_array"}
         ``"rgb_array"``: :meth:`render` returns member 0's chain as an ``H x W x 3`` uint8 image (the
         single environment's picture, :mod:`snoworm.env.render`; one member, since a tile of 64
@@ -103,12 +142,14 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         scenario: Scenario | str | os.PathLike[str] = "tow6_uniform",
         dt_s: float = 0.1,
         action_keys: str | Sequence[str] = ("wheel_speed_mps",),
-        energy_weight: float = 1e-3,
+        energy_weight: float | None = None,
         stall_speed_mps: float = 0.01,
         stall_time_s: float = 2.0,
         max_episode_steps: int | None = None,
         method: str | None = "VODE",
         render_mode: str | None = None,
+        rtol: float | Literal["auto"] | None = "auto",
+        reward: str = DEFAULT_REWARD,
     ) -> None:
         if (
             isinstance(num_envs, bool)
@@ -121,7 +162,12 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
                 "(docs/performance.md); for more, run several vector environments (e.g. one per process)"
             )
         render_mode = check_render_mode(render_mode)
-        self.core = core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s)
+        if callable(reward):
+            raise ValueError(
+                "reward: the vector environment takes a preset name "
+                '("efficiency" or "distance"), not a callable; wrap the vector environment to compute your own'
+            )
+        self.core = core = EnvCore(scenario, dt_s, action_keys, energy_weight, stall_speed_mps, stall_time_s, reward)
         self.num_envs = B = int(num_envs)
         self.max_episode_steps = core.max_episode_steps
         if max_episode_steps is not None:
@@ -135,6 +181,10 @@ class SnowormVectorEnv(VectorEnv["NDArray[np.float32]", "ArrayLike", "NDArray[An
         sc = core.scenario
         if method is not None and method != sc.simulation.method:
             sc = sc.with_({"simulation.method": method})
+        if isinstance(rtol, str) and rtol == "auto":
+            rtol = VECTOR_RTOL if sc.simulation.method == "VODE" else None
+        if rtol is not None:
+            sc = sc.with_({"simulation.rtol": _rtol(rtol)})
         self.scenario, self.dt_s, self.render_mode = sc, core.dt_s, render_mode
         self.metadata = {**self.metadata, "render_fps": 1.0 / core.dt_s}
         self.renderer = ChainRenderer(sc)
