@@ -24,6 +24,7 @@ from ..model.quantities import output_series
 from . import frames
 from .copies import copy_inputs, input_problem
 from .energy import energy_along, energy_metrics
+from .step import step_responses
 
 __all__ = ["Result", "ResultFileError", "SEGMENT_COLUMNS", "LINK_COLUMNS", "load_result", "read_back"]
 
@@ -169,7 +170,18 @@ class Result:
             "sources": self.scenario.sources,
         }
         s.update(self.mode_summary)
+        steps = step_responses(self)
+        if steps is not None:
+            s["step_response"] = steps
         return s
+
+    def step_info(self) -> list | None:
+        """Step-response metrics of a controlled run (:func:`snoworm.results.step.step_responses`,
+        python-control's ``step_info`` conventions): rise time (10-90 %), settling time (2 %),
+        overshoot and undershoot [%], peak, steady-state error, one dict per response (the chain's
+        speed against its set-point; in force control each controlled link's force against its
+        reference).  None for a gait.  Also in ``summary.json`` as ``step_response``."""
+        return step_responses(self)
 
     # ------------------------------------------------------------------ data and figures
     @property
