@@ -13,6 +13,7 @@ from .style import (
     COLOURS,
     LINESTYLES,
     MARKERS,
+    blank_figure,
     figure_function,
     legend_outside,
     new_figure,
@@ -70,7 +71,10 @@ def plot_terrain_curves(curves, title=None, *, ax=None, fig=None):
     """Tractive, resistive and net force per wheel against slip at each X_t (paper Figure 3).
 
     ``title``: the figure's title (default: the normal load and direction)."""
-    fig, axes = new_figure(ax, fig, 1, 1, figsize=(9, 5) if target_width() >= 5.0 else (3.5, 3.8))
+    wide = target_width() >= 5.0
+    if ax is None and fig is None and not wide:  # a column: the legend above in two columns, 3 entries per X_t
+        fig = blank_figure((3.5, 3.8), 1.6 + 0.15 * 3 * len(curves.xt))
+    fig, axes = new_figure(ax, fig, 1, 1, figsize=(9, 5) if wide else (3.5, 3.8))
     a = axes[0, 0]
     for m, x in enumerate(curves.xt):
         col = COLOURS[m % len(COLOURS)]
@@ -99,8 +103,8 @@ def plot_terrain_curves(curves, title=None, *, ax=None, fig=None):
         )
     )
     a.grid(alpha=0.3)
-    wide = fig.get_figwidth() >= 5.0  # wide: one column beside; narrow: a column per X_t above
-    legend_outside(a, ncol=(1 if len(curves.xt) < 4 else 2) if wide else min(len(curves.xt), 3))
+    wide = fig.get_figwidth() >= 5.0  # wide: one column beside; narrow: two columns above
+    legend_outside(a, ncol=(1 if len(curves.xt) < 4 else 2) if wide else 2)
     return fig
 
 
