@@ -123,8 +123,9 @@ def plot_forces(result, *, ax=None, fig=None):
     Two panels (links, segments), a line each, except for a gait (inchworm, supervisor) with more
     than :data:`OVERLAY_MAX` links on a figure of ours: small multiples, a panel per link and per
     segment with shared axes (its square waves would tangle in one panel); beyond
-    :data:`MULTIPLES_MAX` links: two colour charts.
-    Gait phases are shaded.  ``ax``: two axes (links, segments) of your own (lines); ``fig``: a
+    :data:`MULTIPLES_MAX` links: two colour charts.  Small multiples are named by their y labels,
+    and the slot under the last link holds the legend of the shading.
+    Gait phases are shaded (keyed in the legend; one grey band when too short to read).  ``ax``: two axes (links, segments) of your own (lines); ``fig``: a
     figure to draw in.  ``size``: print size (:func:`snoworm.plotting.style.parse_size`).
     Returns the Figure.
     """
@@ -295,9 +296,12 @@ def plot_speeds(result, *, ax=None, fig=None):
     """Ground speed per segment and the wheel-speed set-points against time (paper Figs 5, 8, 9, 11).
 
     An inchworm run gets one speed panel per moving group (as the paper's Fig 5), other modes
-    one panel with every segment (distinct colour, line style and marker each).  The last panel
-    shows the set-points: as a chart (a row per segment, a colour per value) when they switch
-    between a few values (a gait), else as lines.  Gait phases are shaded.  Returns the Figure.
+    one panel with every segment (distinct colour, line style and marker each; the markers of
+    coinciding traces in turn).  A set-point every segment shares (uniform mode) is a dashed line in
+    the speed panel; otherwise a last panel shows the set-points: as a chart (a row per segment, a
+    colour per value) when they switch between a few values (a gait), else as lines.  Gait phases
+    are shaded (one grey band when too short to read, :func:`.phases.readable`).  ``ax``: one axes
+    per panel.  Returns the Figure.
     """
     own = ax is None and fig is None
     groups = moving_groups(result) or [tuple(range(result.n_segments))]

@@ -314,15 +314,20 @@ _REGION_COLOURS = ["#d9d9d9", COLOURS[1], COLOURS[5]]
 
 
 def _plot_grade_map(mmap, *, ax=None, fig=None):
-    """Regions (rolling, inching only, immobile) over X_t and grade, one panel per tow, with the steady
-    maximum grade of a rolling chain (:func:`snoworm.steady.max_grade_deg`) as a line."""
+    """Regions (rolling, inching only, immobile) over X_t and grade, one panel per tow (side by side;
+    one above the other in a column), with the steady maximum grade of a rolling chain
+    (:func:`snoworm.steady.max_grade_deg`) as a line."""
     REGIONS = tuple(mmap["regions"])
     xts, grades = np.asarray(mmap["xts"], float), np.asarray(mmap["grades"], float)
     code = {r: j for j, r in enumerate(REGIONS)}
     tows = list(mmap["tows"])
-    fig, axes = new_figure(ax, fig, 1, len(tows), figsize=(5.5 * len(tows) + 2, 4.8))
+    narrow = ax is None and target_width() < 5.0  # a column: the panels one above the other
+    shape = (len(tows), 1) if narrow else (1, len(tows))
+    fig, axes = new_figure(
+        ax, fig, *shape, figsize=(3.5, 2.6 * len(tows) + 1.2) if narrow else (5.5 * len(tows) + 2, 4.8)
+    )
     xe, ye = _cell_edges(xts), _cell_edges(grades)
-    for a, f in zip(axes[0], tows):
+    for a, f in zip(axes.flat, tows):
         Z = np.zeros((grades.size, xts.size))
         for r in mmap["rows"]:
             if r["tow_N"] == f:
@@ -347,8 +352,8 @@ def _plot_grade_map(mmap, *, ax=None, fig=None):
         a.set_ylabel("grade [deg]")
         a.set_title(f"{mmap['scenario']}, tow {f:g} N")
     handles = [Patch(color=c, label=lab) for c, lab in zip(_REGION_COLOURS, REGIONS)]
-    handles += axes[0][-1].get_legend_handles_labels()[0]
-    legend_outside(axes[0][-1], handles=handles)
+    handles += axes.flat[-1].get_legend_handles_labels()[0]
+    legend_outside(axes.flat[0] if narrow else axes.flat[-1], handles=handles)
     return fig
 
 
