@@ -274,8 +274,10 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     a1.set_ylabel("tow force [N]")
     if tows.size == 1:
         a1.set_yticks([tows[0]])
-    a1.set_title(wrap_title(f"{mmap['scenario']}: which modes move the vehicle", fig.get_figwidth() / (2 - narrow)))
-    _energy_panel(a2, mmap, fig.get_figwidth() / (2 - narrow))
+    # a panel's width: the figure's in a column; side by side, each panel shares its half with its legend
+    panel_in = fig.get_figwidth() * (1.0 if narrow else 0.3)
+    a1.set_title(wrap_title(f"{mmap['scenario']}: which modes move the vehicle", panel_in))
+    _energy_panel(a2, mmap, panel_in)
     return fig
 
 
