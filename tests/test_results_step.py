@@ -82,7 +82,9 @@ def test_a_controlled_run_has_step_response_in_summary_json_and_from_the_api(tmp
     on_disk = json.loads((tmp_path / "o" / "summary.json").read_text())["step_response"]
     assert on_disk == json.loads(json.dumps(steps))
     # read back, the series carry the CSV files' 6 significant digits: the metrics agree to that
-    back = load_result(tmp_path / "o").step_info()
+    loaded = load_result(tmp_path / "o")
+    assert "step_response" not in loaded.mode_summary  # the run's own, not the mode's
+    back = loaded.step_info()
     assert [b["response"] for b in back] == [s["response"] for s in steps]
     for b, s in zip(back, steps):
         for k, v in s.items():
@@ -99,3 +101,5 @@ def test_speed_response_of_a_uniform_run_and_none_for_a_gait():
     assert 0.0 < s["rise_time_s"] < s["settling_time_s"] <= s["window_s"]
     inch = simulate(load_scenario("inchworm2", ["simulation.duration_s=2"]))
     assert inch.step_info() is None and "step_response" not in inch.summary()
+    early = simulate(load_scenario("tow6_uniform", ["simulation.duration_s=0.5"]))  # the step is at 1 s
+    assert early.step_info() is None

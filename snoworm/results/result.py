@@ -329,6 +329,7 @@ _SUMMARY_KEYS = (
     "solver",
     "events",
     "sources",
+    "step_response",
 )
 
 

@@ -140,11 +140,14 @@ def _t_step(result) -> float:
 def step_responses(result) -> list | None:
     """The step-response metrics of a controlled run (:data:`STEP_MODES`), one dict per response:
     :func:`step_info` plus ``response`` (what is measured, with its unit) and ``t_step_s``.  None for
-    other modes (a gait has no single step).  See the module docstring for which responses."""
+    other modes (a gait has no single step) and for a run that ends before its step.  See the module
+    docstring for which responses."""
     mode = getattr(result.scenario.mode, "type", None)
     if mode not in STEP_MODES or result.t.size < 2:
         return None
     t0 = _t_step(result)
+    if np.count_nonzero(result.t >= t0 - 1e-12) < 2:  # the run ends before the step: no response
+        return None
     if mode == "force_control":
         fc = result.mode_summary.get("force_control", {})
         refs, F = fc.get("link_force_refs_N", []), result.links["force_N"]
