@@ -269,21 +269,25 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     handles += a1.get_legend_handles_labels()[0]
     if any(r["inching_cheaper"] for r in mmap["rows"]):
         handles.append(Line2D([], [], ls="", marker="*", color=COLOURS[0], label="inching cheaper per metre"))
-    legend_outside(a1, handles=handles)
     a1.set_xlabel("terrain coefficient X_t")
     a1.set_ylabel("tow force [N]")
     if tows.size == 1:
         a1.set_yticks([tows[0]])
-    # a panel's width: the figure's in a column; side by side, each panel shares its half with its legend
-    panel_in = fig.get_figwidth() * (1.0 if narrow else 0.3)
+    below = ax is None and not narrow  # our own page-wide figure: one legend under both panels
+    panel_in = fig.get_figwidth() * (1.0 if narrow else 0.45)
     a1.set_title(wrap_title(f"{mmap['scenario']}: which modes move the vehicle", panel_in))
-    _energy_panel(a2, mmap, panel_in)
+    _energy_panel(a2, mmap, panel_in, legend=not below)
+    if below:
+        handles += a2.get_legend_handles_labels()[0]
+        fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4), frameon=False)
+    else:
+        legend_outside(a1, handles=handles)
     return fig
 
 
-def _energy_panel(a2, mmap, panel_width):
+def _energy_panel(a2, mmap, panel_width, legend=True):
     """The mobility map's right panel: electrical energy per metre against X_t, rolling and inching, a
-    colour per tow."""
+    colour per tow (with its own legend unless ``legend`` is false)."""
     for j, f in enumerate(mmap["tows"]):
         rs = sorted((r for r in mmap["rows"] if r["tow_N"] == f), key=lambda r: r["xt"])
         xr = [r["xt"] for r in rs if r["rolling"]]
@@ -307,7 +311,7 @@ def _energy_panel(a2, mmap, panel_width):
     a2.set_xlabel("terrain coefficient X_t")
     a2.set_ylabel("electrical energy per metre [J/m]")
     a2.grid(alpha=0.3, which="both")
-    if a2.get_legend_handles_labels()[0]:
+    if legend and a2.get_legend_handles_labels()[0]:
         legend_outside(a2)
     a2.set_title(wrap_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)", panel_width))
 
