@@ -20,6 +20,7 @@ from .commands.common import (
     EXIT_INPUT,
     EXIT_SOLVER,
     CommandGroup,
+    CpuClock,
     allow_code_option,
     code_check,
     command_line,
@@ -86,7 +87,9 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
     code_check(sc, allow_code, "running")
     check_output_folder(out_dir, overwrite)
     with progress_bar(sc.simulation.duration_s, sc.name, "s simulated") as bar:
+        clock = CpuClock()
         res = simulate(sc, progress=bar.set, allow_code=allow_code)
+        cpu_s = clock.seconds()[1]
     paths = res.write(
         out_dir,
         plot=not no_plot,
@@ -95,7 +98,7 @@ def run(scenario, out_dir, sets, no_plot, plot_format, figure_size, overwrite, a
         figure_size=figure_size,
         command=command_line(),
     )
-    echo_run(sc.name, res, paths, out_dir)
+    echo_run(sc.name, res, paths, out_dir, cpu_s)
     if sc.terrain.route is not None:  # one line on stderr when the run left the route file's end
         from .config.routes import route_end_warning  # lazy: start-up
 
@@ -224,13 +227,14 @@ def sweep(scenario, sets, out_dir, no_plot, **options):
 
     # options: jobs, scheduler, zip_, save_cases, series, plot_format, figure_size, batch, overwrite, allow_code,
     # restart
+    clock = CpuClock()
     try:
         table = run_sweep(scenario, sets, out_dir=out_dir, plot=not no_plot, command=command_line(), **options)
     except SweepExecutionError as exc:
         fail(str(exc), EXIT_SOLVER)
     except KeyboardInterrupt as exc:
         sweep_interrupted(exc, out_dir)
-    echo_sweep(table, out_dir)
+    echo_sweep(table, out_dir, clock)
 
 
 # ------------------------------------------------------------------------------ snoworm odds (issue 33)

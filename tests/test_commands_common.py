@@ -6,6 +6,7 @@ so that each mapping (exception -> message and exit status) is seen on its own.
 
 import logging
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -173,3 +174,32 @@ def test_long_paths_are_cut_in_messages_and_an_unusable_out_is_exit_2(tmp_path, 
     for args in (["validate", too_long], ["run", "tow6_uniform", "--out", too_long, "--no-plot"]):
         r = CliRunner().invoke(main, args)
         assert r.exit_code == EXIT_INPUT and "internal error" not in r.output and len(r.output) < 1200, r.output[:300]
+
+
+def test_cpu_clock_counts_this_process_and_its_exited_children():
+    """Issue 34: the speed line gives CPU time beside wall time.  The clock's CPU seconds include
+    a finished child process's own CPU time (as a worker pool's, once shut down), read from the
+    child itself; the tolerance is the rusage accounting's granularity (a clock tick, 10 ms)."""
+    from snoworm.commands.common import CpuClock
+
+    clock = CpuClock()
+    burn = "import time\ns=0\nfor i in range(3_000_000): s+=i*i\nprint(time.process_time())"
+    child_cpu = float(subprocess.run([sys.executable, "-c", burn], capture_output=True, text=True, check=True).stdout)
+    wall, cpu = clock.seconds()
+    assert child_cpu > 0.05  # the child really worked
+    assert cpu >= child_cpu - 0.02
+    assert wall >= 0.0
+    assert re.fullmatch(r"\d+\.\d\d s wall, \d+\.\d\d s CPU", clock.text())
+
+
+def test_the_run_line_gives_wall_and_cpu_time(tmp_path):
+    """``snoworm run``'s first line: "<name>: 2.0 s simulated in W s wall, C s CPU (Nx real time)"."""
+    from snoworm.cli import main
+
+    r = CliRunner().invoke(
+        main, ["run", "tow6_uniform", "--out", str(tmp_path / "o"), "--set", "simulation.duration_s=2", "--no-plot"]
+    )
+    assert r.exit_code == 0, r.output
+    m = re.search(r"tow6_uniform: 2\.0 s simulated in ([0-9.]+) s wall, ([0-9.]+) s CPU \((\d+)x real time\)", r.output)
+    assert m, r.output
+    assert float(m.group(1)) > 0.0 and float(m.group(2)) >= 0.0

@@ -263,7 +263,7 @@ def test_the_docs_shell_commands_are_found_and_skips_say_why():
 
 def test_every_shell_command_of_the_docs_runs(tmp_path):
     """Every shell command in a fenced block of README.md and docs/*.md (:func:`doc_commands`) runs
-    with exit status 0 in a fresh folder (``scenarios/`` linked there, ``snoworm`` and ``python``
+    with exit status 0 in a fresh folder (``scenarios/`` and ``examples/`` linked there, ``snoworm`` and ``python``
     this checkout's), each distinct command once; the ones marked with :data:`SKIP_MARK` do not."""
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
@@ -276,6 +276,7 @@ def test_every_shell_command_of_the_docs_runs(tmp_path):
     work = tmp_path / "work"
     work.mkdir()
     (work / "scenarios").symlink_to(ROOT / "scenarios")
+    (work / "examples").symlink_to(ROOT / "examples")  # e.g. the README's GPX track
     paths = [str(ROOT), *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
     env = dict(os.environ, PATH=f"{bin_dir}{os.pathsep}{os.environ['PATH']}", PYTHONPATH=os.pathsep.join(paths))
     env["MPLBACKEND"] = "agg"

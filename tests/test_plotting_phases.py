@@ -3,6 +3,7 @@
 from types import SimpleNamespace
 
 import numpy as np
+from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 
 from snoworm.plotting.phases import PHASE_COLOURS, gait_spans, shade_phases
@@ -43,3 +44,43 @@ def test_shading_one_colour_per_phase():
     assert [h.get_label() for h in handles] == ["moving 0, 3", "moving 1, 4"]
     assert a.patches[0].get_facecolor() == a.patches[2].get_facecolor() != a.patches[1].get_facecolor()
     assert len(PHASE_COLOURS) >= 3
+
+
+def _cycles(n, t0=11.0, period=2.4):
+    """``n`` gait cycles of three phases from ``t0`` (as traverse_patch's 31 cycles in 74 s)."""
+    out = []
+    for c in range(n):
+        for k in range(3):
+            a = t0 + c * period + k * period / 3
+            out.append((a, a + period / 3, k, f"{k}, {k + 3}"))
+    return out
+
+
+def test_phases_too_short_to_read_become_one_band_with_the_cycle_count():
+    """Issue 34: traverse_patch's 31 gait cycles (93 phases of 0.8 s on a 100 s axis) shaded as a
+    striped band.  On a page-wide panel a 0.8 s phase is 0.8 / 100 * ~6 in = 0.05 in, below
+    MIN_SPAN_IN: the gait is one grey band keyed "gait (31 cycles)"."""
+    from snoworm.plotting.phases import GAIT_COLOUR, MIN_SPAN_IN, gait_blocks, readable
+
+    spans = _cycles(31)
+    fig = Figure(figsize=(7.16, 3))
+    a = fig.subplots()
+    a.plot([0, 100], [0, 1])
+    width_in = a.get_position().width * 7.16
+    assert 0.8 / 100 * width_in < MIN_SPAN_IN and not readable([a], spans)  # every phase 0.8 s: the median
+    assert gait_blocks(spans) == [(11.0, spans[-1][1], 31)]
+    keys = shade_phases([a], spans, legend_ax=a)
+    assert [k.get_label() for k in keys] == ["gait (31 cycles)"]
+    assert len(a.patches) == 1 and to_rgb(a.patches[0].get_facecolor()) == to_rgb(GAIT_COLOUR)
+
+
+def test_phases_wide_enough_are_shaded_one_by_one():
+    from snoworm.plotting.phases import readable
+
+    spans = _cycles(2, t0=1.0, period=3.0)  # 1 s phases on a 10 s axis: 0.1 of the width
+    fig = Figure(figsize=(3.5, 2.5))
+    a = fig.subplots()
+    a.plot([0, 10], [0, 1])
+    assert readable([a], spans)
+    keys = shade_phases([a], spans, legend_ax=a)
+    assert len(a.patches) == 6 and [k.get_label() for k in keys] == ["moving 0, 3", "moving 1, 4", "moving 2, 5"]

@@ -134,3 +134,57 @@ def test_study_figures_readable_at_column_width():
     )
     for name, fig in figs.items():
         assert problems(fig, FIGURE_SIZES["column"]) == [], name
+
+
+def _grade_map():
+    """X_t 0.3: only inching moves (0 and 5 deg); 0.6: rolling up to 5 deg, inching simulated only at
+    10 deg (failed); 0.9 (every cell simulated): rolling on level ground only, inching up to 10 deg."""
+    moves = {  # (xt, grade) -> (rolling, inching: None = not simulated)
+        (0.3, 0): (False, True),
+        (0.3, 5): (False, True),
+        (0.3, 10): (False, False),
+        (0.6, 0): (True, None),
+        (0.6, 5): (True, None),
+        (0.6, 10): (False, False),
+        (0.9, 0): (True, True),
+        (0.9, 5): (False, True),
+        (0.9, 10): (False, True),
+    }
+    rows = []
+    for (x, g), (roll, inch) in moves.items():
+        rows.append(
+            {
+                "xt": x,
+                "tow_N": 0.0,
+                "grade_deg": g,
+                "rolling": roll,
+                "rolling_speed_mps": 1.0 * x - 0.01 * g if roll else 0.0,
+                "rolling_energy_per_metre_J_per_m": 1000.0 + 10 * g if roll else None,
+                "inching": inch,
+                "inching_speed_mps": None if inch is None else (0.1 - 0.001 * g if inch else 0.0),
+                "inching_energy_per_metre_J_per_m": 5000.0 + 100 * g if inch else None,
+            }
+        )
+    from snoworm.studies.gradeability import gradeability
+
+    m = {"rows": rows, "xts": [0.3, 0.6, 0.9], "tows": [0.0], "grades": [0, 5, 10], "scenario": "test"}
+    m["rolling_max_grade_deg"] = {0.0: {0.3: -5.0, 0.6: 6.0, 0.9: 2.0}}
+    m["gradeability"] = {0.0: gradeability(m, 0.0)}
+    return m
+
+
+def test_gradeability_compares_the_gaits_at_one_grade_per_xt():
+    """Issue 34: the energy panel compared rolling at its steepest grade with inching at its own.
+    Now both are read at the steepest grid grade every moving gait climbed (by hand from the map
+    above: 5, 5 and 0 deg), and level inching-only cells (energy per metre climbed undefined) show."""
+    m = _grade_map()
+    got = studies.compared_grades(m, 0.0, ["rolling", "inching"])
+    assert [g for g, _ in got] == [5, 5, 0]
+    assert got[0][1] == {"inching": (0.1 - 0.005, 5500.0)}
+    assert got[1][1] == {"rolling": (0.6 - 0.05, 1050.0)}
+    assert got[2][1] == {"rolling": (0.9, 1000.0), "inching": (0.1, 5000.0)}
+    fig = studies.plot_gradeability(m)
+    speed_panel = fig.axes[1]
+    drawn = sorted((float(x), float(y)) for ln in speed_panel.get_lines() for x, y in zip(*ln.get_data()))
+    want = sorted([(0.3, 0.095), (0.6, 0.55), (0.9, 0.9), (0.9, 0.1)])
+    assert np.allclose(drawn, want, rtol=0, atol=1e-12)  # float rounding of the hand values only

@@ -10,6 +10,7 @@ import sys
 import click
 
 from .common import (
+    CpuClock,
     command_line,
     echo_claims,
     echo_written,
@@ -257,6 +258,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot
     # options: grade_spec, gaits, rolling_speed_mps, slip_cap, inch_duration_s, jobs, every_cell, plot_format,
     # figure_size, overwrite
     # (run_mobility_map's names)
+    clock = CpuClock()
     with progress_bar(1, "mobility map", "inching runs") as bar:
         _, text, paths = run_mobility_map(
             scenario,
@@ -270,7 +272,7 @@ def mobility_map(scenario, xt_spec, tow_spec, out_dir, sets, no_inching, no_plot
             command=command_line(),
             **options,
         )
-    echo_written(text, paths, out_dir)
+    echo_written(text, paths, out_dir, clock)
 
 
 # ---------------------------------------------------------------- paper reproduction (snoworm/studies/paper/)
@@ -314,6 +316,7 @@ def paper(out_dir, quick, strict, jobs, plot_format, figure_size, overwrite):
     """
     from ..studies.paper import default_jobs, run_paper  # lazy: start-up
 
+    clock = CpuClock()
     rep = run_paper(
         out_dir,
         quick=quick,
@@ -324,7 +327,7 @@ def paper(out_dir, quick, strict, jobs, plot_format, figure_size, overwrite):
         figure_size=figure_size,
         command=command_line(),
     )
-    if echo_claims(rep, out_dir, quick) < len(rep.claims) and strict:
+    if echo_claims(rep, out_dir, quick, clock) < len(rep.claims) and strict:
         sys.exit(1)
 
 

@@ -87,7 +87,7 @@ def compare(results, kind="speeds", labels=None, *, ax=None, fig=None):
     curve, xl, yl = COMPARE_KINDS[kind]
     for k, (r, lab) in enumerate(zip(results, labels)):
         x, y = curve(r)
-        a.plot(x, y, label=str(lab), **series_style(k, len(x)))
+        a.plot(x, y, label=str(lab), **series_style(k, len(x), len(results)))
     a.set_xlabel(xl)
     a.set_ylabel(yl)
     a.grid(alpha=0.3)

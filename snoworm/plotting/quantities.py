@@ -23,7 +23,7 @@ def per_segment(a, fig, t, Y, ylabel, symmetric=False, chart=False):
     ``chart``), else a colour chart (a row per segment; a gait's square waves read better so)."""
     if Y.shape[1] <= LINES_MAX and not chart:
         for k in range(Y.shape[1]):
-            a.plot(t, Y[:, k], label=seg_label(k), **series_style(k, t.size))
+            a.plot(t, Y[:, k], label=seg_label(k), **series_style(k, t.size, Y.shape[1]))
         a.set_ylabel(ylabel)
         a.grid(alpha=0.3)
         return False
@@ -101,7 +101,7 @@ def plot_energy(result, *, ax=None, fig=None):
     if np.any(e["joint_electrical_J"] > 0):
         parts.append(("joints", e["joint_electrical_J"]))
     for k, (lab, E) in enumerate(parts):
-        style = series_style(k, E.size)
+        style = series_style(k, E.size, len(parts))
         a1.plot(e["distance_m"], E / 1e3, label=lab, **style)
         a2.plot(e["t_s"], E / 1e3, label=lab, **style)
     a1.set_xlabel("distance [m]")

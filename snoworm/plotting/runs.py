@@ -6,10 +6,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
 from matplotlib.ticker import MaxNLocator
 
-from .phases import PHASE_COLOURS, gait_spans, shade_phases
+from .phases import GAIT_COLOUR, PHASE_COLOURS, gait_blocks, gait_spans, readable, shade_phases
 from .style import (
     blank_figure,
     figure_function,
@@ -67,7 +68,8 @@ def _tow_line(a, tow, F):
 
 
 def _force_multiples(fig, result, own):
-    """Links (left) and segments (right), one small panel each, shared axes."""
+    """Links (left) and segments (right), one small panel each, shared axes; each panel named by its
+    y label (not over its trace); the slot under the last link holds the legend of the shading."""
     t, F, net = result.t, result.links["force_N"], result.segments["net_force_N"]
     n = net.shape[1]
     axes = fig.subplots(n, 2, sharex=True, squeeze=False)
@@ -78,15 +80,18 @@ def _force_multiples(fig, result, own):
         a_l, a_s = axes[j]
         if j < F.shape[1]:
             a_l.plot(t, F[:, j], color="#0072B2", lw=1.0)
-            a_l.text(0.01, 0.95, f"link {j} ({j}-{j + 1})", transform=a_l.transAxes, va="top", fontsize=small_pt())
-        else:
-            a_l.set_visible(False)
+            a_l.set_ylabel(f"link {j}\n({j}-{j + 1})")
         a_s.plot(t, net[:, j], color="#D55E00", lw=1.0)
-        a_s.text(0.01, 0.95, seg_label(j), transform=a_s.transAxes, va="top", fontsize=small_pt())
-        for a in (a_l, a_s):
+        a_s.set_ylabel("leader 0" if j == 0 else f"follower\n{j}")
+        for a in (a_l, a_s) if j < F.shape[1] else (a_s,):
             a.grid(alpha=0.3)
             a.axhline(0.0, color="0.6", lw=0.5)
-    shade_phases(list(axes.flat), gait_spans(result), legend_ax=None)
+    drawn = [a for a in axes.flat if a.get_lines()]
+    keys = shade_phases(drawn, gait_spans(result), legend_ax=drawn[0])
+    for a in axes[F.shape[1] :, 0]:  # the empty slot(s) under the last link: the shading's key
+        a.axis("off")
+    if keys and F.shape[1] < n:
+        axes[F.shape[1], 0].legend(handles=keys, loc="center", frameon=False, title="shading")
     axes[0, 0].set_title("connector force [N]\n(tension +)")
     axes[0, 1].set_title("net wheel force [N]\n(forward +)")
     axes[-1, 1].set_xlabel("time [s]")
@@ -118,8 +123,9 @@ def plot_forces(result, *, ax=None, fig=None):
     Two panels (links, segments), a line each, except for a gait (inchworm, supervisor) with more
     than :data:`OVERLAY_MAX` links on a figure of ours: small multiples, a panel per link and per
     segment with shared axes (its square waves would tangle in one panel); beyond
-    :data:`MULTIPLES_MAX` links: two colour charts.
-    Gait phases are shaded.  ``ax``: two axes (links, segments) of your own (lines); ``fig``: a
+    :data:`MULTIPLES_MAX` links: two colour charts.  Small multiples are named by their y labels,
+    and the slot under the last link holds the legend of the shading.
+    Gait phases are shaded (keyed in the legend; one grey band when too short to read).  ``ax``: two axes (links, segments) of your own (lines); ``fig``: a
     figure to draw in.  ``size``: print size (:func:`snoworm.plotting.style.parse_size`).
     Returns the Figure.
     """
@@ -137,18 +143,19 @@ def plot_forces(result, *, ax=None, fig=None):
         _force_chart(a2, fig, t, net, "net wheel force [N]\n(forward +)", "segment")
     else:
         for j in range(nl):
-            a1.plot(t, F[:, j], label=f"link {j} ({j}-{j + 1})", **series_style(j, t.size))
+            a1.plot(t, F[:, j], label=f"link {j} ({j}-{j + 1})", **series_style(j, t.size, nl))
         if result.scenario.tow.force_N:
             _tow_line(a1, result.scenario.tow.force_N, F)
         a1.set_ylabel("connector force [N]\n(tension +)")
         for k in range(net.shape[1]):
-            a2.plot(t, net[:, k], label=seg_label(k), **series_style(k, t.size))
+            a2.plot(t, net[:, k], label=seg_label(k), **series_style(k, t.size, net.shape[1]))
         a2.set_ylabel("net wheel force [N]\n(forward +)")
-        for a in (a1, a2):
+        keys = shade_phases([a1, a2], gait_spans(result), legend_ax=a1)
+        for a, extra in ((a1, keys), (a2, [])):
             a.grid(alpha=0.3)
-            if a.get_legend_handles_labels()[0]:
-                legend_outside(a)
-        shade_phases([a1, a2], gait_spans(result), legend_ax=None)
+            handles = a.get_legend_handles_labels()[0] + extra
+            if handles:
+                legend_outside(a, handles=handles)
     a2.set_xlabel("time [s]")
     title(fig, axes, f"{result.scenario.name}: connector and net forces", own)
     return fig
@@ -202,20 +209,54 @@ def _switching_setpoints(result) -> bool:
 def _setpoint_lines(a, result):
     t, sp = result.t, result.segments["speed_setpoint_mps"]
     for k in range(sp.shape[1]):
-        a.plot(t, sp[:, k], label=seg_label(k), **series_style(k, t.size))
+        a.plot(t, sp[:, k], label=seg_label(k), **series_style(k, t.size, sp.shape[1]))
     a.set_ylabel("wheel-speed\nset-point [m/s]")
     a.grid(alpha=0.3)
     legend_outside(a)
 
 
-def _legend_with_phase(a, grp, spans):
-    """The panel's legend, with a patch keying the shading of the gait phase in which ``grp`` moves."""
+def _legend_with_phase(a, grp, spans, axes=None):
+    """The panel's legend, with a patch keying the shading of the gait phase in which ``grp`` moves
+    (or the grey band of a gait too fast to shade phase by phase, :func:`.phases.readable` on
+    ``axes``)."""
     handles = a.get_legend_handles_labels()[0]
-    key = ", ".join(str(k) for k in grp)
-    phases = sorted({k for *_, k, moving in spans if moving == key})
-    if phases:
-        handles.append(Patch(color=PHASE_COLOURS[phases[0] % len(PHASE_COLOURS)], label="their phase"))
+    if spans and not readable(axes or [a], spans):
+        n = sum(c for *_, c in gait_blocks(spans))
+        handles.append(Patch(color=GAIT_COLOUR, label=f"gait ({n} cycles)"))
+    else:
+        key = ", ".join(str(k) for k in grp)
+        phases = sorted({k for *_, k, moving in spans if moving == key})
+        if phases:
+            handles.append(Patch(color=PHASE_COLOURS[phases[0] % len(PHASE_COLOURS)], label="their phase"))
     legend_outside(a, handles=handles)
+
+
+def _shared_setpoint(result):
+    """The wheel-speed set-point series when every segment has the same one (uniform mode: drawn as
+    a reference line in the speed panel, not as a panel of its own), else None."""
+    sp = result.segments["speed_setpoint_mps"]
+    if sp.shape[1] and np.all(sp == sp[:, :1]):
+        return sp[:, 0]
+    return None
+
+
+def _setpoint_reference(a, t, sp, v):
+    """The shared set-point as a dashed line in the speed panel ``a``, or a note where it lies far off
+    the speeds' scale (it would squash them into a flat band)."""
+    top = max(float(np.max(np.abs(v))), 1e-9)
+    if float(np.max(sp)) <= 2.0 * top:
+        a.plot(t, sp, color="0.35", ls=(0, (4, 2)), lw=1.0, label="wheel-speed set-point\n(every segment)", zorder=1)
+    else:
+        a.text(
+            0.99,
+            0.97,
+            f"wheel-speed set-point {float(np.max(sp)):.2f} m/s (off scale)",
+            transform=a.transAxes,
+            ha="right",
+            va="top",
+            fontsize=small_pt(),
+            color="0.35",
+        )
 
 
 @figure_function
@@ -231,14 +272,14 @@ def plot_groups(result, groups=None, *, ax=None, fig=None):
     t, v = result.t, result.segments["v_mps"]
     for a, grp in zip(axes[:, 0], groups):
         for k in grp:
-            a.plot(t, v[:, k], label=seg_label(k), lw=1.4, **series_style(k, t.size))
+            a.plot(t, v[:, k], label=seg_label(k), lw=1.4, **series_style(k, t.size, len(grp)))
         a.axhline(0.0, color="0.5", lw=0.6)
         a.set_ylabel("speed [m/s]")
         a.grid(alpha=0.3)
     spans = gait_spans(result)
     shade_phases(list(axes[:, 0]), spans)
     for a, grp in zip(axes[:, 0], groups):
-        _legend_with_phase(a, grp, spans)
+        _legend_with_phase(a, grp, spans, list(axes[:, 0]))
     axes[-1, 0].set_xlabel("time [s]")
     title(
         fig,
@@ -255,31 +296,44 @@ def plot_speeds(result, *, ax=None, fig=None):
     """Ground speed per segment and the wheel-speed set-points against time (paper Figs 5, 8, 9, 11).
 
     An inchworm run gets one speed panel per moving group (as the paper's Fig 5), other modes
-    one panel with every segment (distinct colour, line style and marker each).  The last panel
-    shows the set-points: as a chart (a row per segment, a colour per value) when they switch
-    between a few values (a gait), else as lines.  Gait phases are shaded.  Returns the Figure.
+    one panel with every segment (distinct colour, line style and marker each; the markers of
+    coinciding traces in turn).  A set-point every segment shares (uniform mode) is a dashed line in
+    the speed panel; otherwise a last panel shows the set-points: as a chart (a row per segment, a
+    colour per value) when they switch between a few values (a gait), else as lines.  Gait phases
+    are shaded (one grey band when too short to read, :func:`.phases.readable`).  ``ax``: one axes
+    per panel.  Returns the Figure.
     """
     own = ax is None and fig is None
     groups = moving_groups(result) or [tuple(range(result.n_segments))]
     n = len(groups)
-    chart = _switching_setpoints(result)
+    shared = _shared_setpoint(result)
+    chart = shared is None and _switching_setpoints(result)
+    panels = n + (shared is None)
     last = max(1.0, 0.25 * result.n_segments) if chart else 1.6
     fig, axes = new_figure(
-        ax, fig, n + 1, 1, figsize=(9, 1.9 * n + 2.6), sharex=True, gridspec_kw={"height_ratios": [2.2] * n + [last]}
+        ax,
+        fig,
+        panels,
+        1,
+        figsize=(9, 1.9 * n + (2.6 if shared is None else 0.8)),
+        sharex=True,
+        gridspec_kw={"height_ratios": [2.2] * n + ([last] if shared is None else [])},
     )
     t, v = result.t, result.segments["v_mps"]
     for a, grp in zip(axes[:n, 0], groups):
         for k in grp:
-            a.plot(t, v[:, k], label=seg_label(k), lw=1.3, **series_style(k, t.size))
+            a.plot(t, v[:, k], label=seg_label(k), lw=1.3, **series_style(k, t.size, len(grp)))
+        if shared is not None:
+            _setpoint_reference(a, t, shared, v)
         a.set_ylabel("ground speed\n[m/s]")
         a.grid(alpha=0.3)
     spans = gait_spans(result)
     shade_phases(list(axes[:n, 0]), spans)
     for a, grp in zip(axes[:n, 0], groups):
-        _legend_with_phase(a, grp, spans)
+        _legend_with_phase(a, grp, spans, list(axes[:n, 0]))
     if chart:
         _setpoint_chart(axes[n, 0], fig, result)
-    else:
+    elif shared is None:
         _setpoint_lines(axes[n, 0], result)
     axes[-1, 0].set_xlabel("time [s]")
     title(fig, axes, f"{result.scenario.name}: speeds" + (" (one panel per moving group)" if n > 1 else ""), own)
@@ -315,7 +369,7 @@ def plot_positions(result, *, ax=None, fig=None):
         a1 = axes[0, 0]
         a1.set_ylabel("position [m]")
     for k in range(x.shape[1]):
-        a1.plot(t, x[:, k], label=seg_label(k), **series_style(k, t.size))
+        a1.plot(t, x[:, k], label=seg_label(k), **series_style(k, t.size, x.shape[1]))
     phase_keys = shade_phases([a1], gait_spans(result), legend_ax=a1)
     # mode switches (supervisor mode): a marked line at the switch, the leader's position there
     sw_style = {
@@ -347,38 +401,165 @@ def plot_positions(result, *, ax=None, fig=None):
     title(
         fig,
         axes,
-        f"{result.scenario.name}: position-time diagram" + ("" if varies else f" (uniform terrain, X_t = {X[0]:g})"),
+        f"{result.scenario.name}: position-time diagram"
+        + ("" if varies else f" (X_t = {X[0]:g} throughout, {_grade_words(result)})"),
         own,
     )
     return fig
 
 
+def _grade_words(result) -> str:
+    """The grade of the run's terrain in words: "level", "10 deg grade" or "grades up to 5.2 deg"."""
+    elev = result.scenario.terrain.elevation_profile()
+    if elev is None or elev.is_level:
+        return "level"
+    if elev.is_constant:
+        g = float(elev.grade_deg)
+        return f"{abs(g):g} deg {'uphill' if g > 0 else 'downhill'} grade"
+    return f"grades up to {elev.max_abs_grade_deg():.1f} deg"
+
+
+def cycle_means(result):
+    """The chain's speed averaged over each gait cycle (and sample by sample outside the gait):
+    ``(position_m, speed_mps, lowest_mps, highest_mps, t_start_s)`` arrays, the chain's mean position
+    at the middle of each window, its mean advance per second over the window, the slowest and
+    fastest segment's speed in it (the envelope) and the window's start time.  A gait cycle runs from one start of the gait's first
+    phase to the next (:func:`.phases.gait_spans`)."""
+    t, x, v = result.t, result.segments["x_m"], result.segments["v_mps"]
+    xc = x.mean(1)
+    spans = gait_spans(result)
+    blocks = gait_blocks(spans)
+    first = spans[0][2] if spans else None
+    inside = np.zeros(t.size, bool)
+    for b0, b1, _ in blocks:
+        inside |= (t >= b0 - 1e-9) & (t < b1 - 1e-9)
+    cuts = [t0 for t0, _, k, _ in spans if k == first] + [b1 for _, b1, _ in blocks]
+    edges = set(np.flatnonzero(~inside).tolist()) | set(np.searchsorted(t, np.array(cuts) - 1e-9).tolist())
+    edges = sorted(e for e in edges if e < t.size)
+    pos, spd, lo, hi, ts = [], [], [], [], []
+    for e0, e1 in zip(edges[:-1], edges[1:]):
+        dt = t[e1] - t[e0]
+        if dt <= 0:
+            continue
+        pos.append(0.5 * (xc[e0] + xc[e1]))
+        spd.append((xc[e1] - xc[e0]) / dt)
+        lo.append(float(v[e0 : e1 + 1].min()))
+        hi.append(float(v[e0 : e1 + 1].max()))
+        ts.append(float(t[e0]))
+    return np.array(pos), np.array(spd), np.array(lo), np.array(hi), np.array(ts)
+
+
+def _route_speeds(a0, result):
+    """The speed panel of the route figure: each segment's speed against its position for a rolling
+    run; the chain's cycle-averaged speed (and the segments' envelope) for a run with a gait."""
+    x, v = result.segments["x_m"], result.segments["v_mps"]
+    if not gait_spans(result):
+        for k in range(x.shape[1]):
+            a0.plot(x[:, k], v[:, k], label=seg_label(k), lw=1.2, **series_style(k, x.shape[0], x.shape[1]))
+        return
+    pos, spd, lo, hi, _ = cycle_means(result)
+    a0.fill_between(pos, lo, hi, color="#cfe3f3", lw=0, label="segments' range", zorder=0)
+    a0.plot(pos, spd, color=COLOURS_ROUTE, lw=1.4, label="chain, cycle mean")
+
+
+COLOURS_ROUTE = "#0072B2"
+
+
+def _route_marks(axes, result):
+    """Patches of other snow (shaded spans) and the supervisor's mode switches (lines at the
+    leader's position) on every panel of the route figure; returns their legend handles."""
+    handles = []
+    for p in result.scenario.terrain.patches or ():
+        for a in axes:
+            a.axvspan(p.start_m, p.end_m, color="#8c510a", alpha=0.12, lw=0, zorder=0)
+    if result.scenario.terrain.patches:
+        handles.append(Patch(color="#8c510a", alpha=0.12, label="patch of other snow"))
+    styles = {"switch_to_inching": ("#D55E00", "to inching"), "switch_to_rolling": ("#009E73", "to rolling")}
+    seen = set()
+    xc = result.segments["x_m"].mean(1)
+    for ev in result.events:
+        if ev.get("kind") in styles:
+            c, lab = styles[ev["kind"]]
+            at = float(np.interp(ev["t_s"], result.t, xc))  # the chain's centre, as the speed curve
+            for a in axes:
+                a.axvline(at, color=c, ls="--", lw=1.0, zorder=1)
+            if lab not in seen:
+                seen.add(lab)
+                handles.append(Line2D([], [], color=c, ls="--", lw=1.0, label=f"switch {lab}"))
+    return handles
+
+
+def route_varies(result) -> bool:
+    """True when the run's terrain changes along the way (a grade, a route, patches, an X_t
+    profile): the route figure is drawn for it."""
+    terrain = result.scenario.terrain
+    if terrain.elevation_profile() is not None:
+        return True
+    x = result.segments["x_m"]
+    return _terrain_varies(result, np.linspace(x.min() - 1.0, x.max() + 1.0, 400))[0]
+
+
 #: ``Result.plot(kind)``: kind -> function drawing it.
 @figure_function
 def plot_route(result, *, ax=None, fig=None):
-    """The run along the route (docs/model.md section 7): each segment's ground speed against its
-    position, over the elevation z(s) and the terrain coefficient X_t(s) of the stretch driven
-    (shared distance axis).  Drawn for every run on a grade.  Returns the Figure."""
+    """The run along the route (docs/model.md section 7): speed against position over the elevation
+    z(s), the grade [deg] and X_t(s) of the stretch driven (shared distance axis).
+
+    Speed: each segment's against its position for a rolling run; for a run with a gait (inchworm,
+    the supervisor's inching) the chain's speed averaged over each gait cycle, with the range of the
+    segments' speeds as a light band (the raw speeds of a gait are a comb), against the chain's centre
+    (mean position).  The grade and X_t get a
+    panel when they change along the stretch, else they are named in the title.  Patches of other
+    snow are shaded and mode switches marked (at the chain's centre) on every panel; the elevation
+    panel is left out on level ground.  Drawn for every run on a grade or on
+    terrain that changes along the way.  ``ax``: as many axes as panels (1 to 4).  Returns the Figure.
+    """
     own = ax is None and fig is None
-    x, v = result.segments["x_m"], result.segments["v_mps"]
-    fig, axes = new_figure(ax, fig, 3, 1, figsize=(9, 7.5), sharex=True, gridspec_kw={"height_ratios": [2.2, 1.4, 1.0]})
-    a0, a1, a2 = axes[:, 0]
-    for k in range(x.shape[1]):
-        a0.plot(x[:, k], v[:, k], label=seg_label(k), lw=1.2, **series_style(k, x.shape[0]))
-    a0.set_ylabel("ground speed\n[m/s]")
-    legend_outside(a0)
+    x = result.segments["x_m"]
     xs = np.linspace(x.min() - 1.0, x.max() + 1.0, 600)
     elev = result.scenario.terrain.elevation_profile()
     z = np.zeros_like(xs) if elev is None else np.asarray(elev.elevation(xs), float)
-    a1.fill_between(xs, z.min() - 0.05 * (np.ptp(z) + 1.0), z, color="#d9d9d9")
-    a1.plot(xs, z, color="0.25")
-    a1.set_ylabel("elevation\n[m]")
-    a2.plot(xs, np.asarray(result.scenario.terrain.compile()(xs), float), color="#8c510a")
-    a2.set_ylabel("X_t")
-    a2.set_xlabel("distance along the route [m]")
-    for a in (a0, a1, a2):
+    grade = np.degrees(np.arcsin(np.clip(np.gradient(z, xs), -1.0, 1.0)))  # z is along the track: dz/ds = sin
+    X = np.asarray(result.scenario.terrain.compile()(xs), float)
+    show_elev = elev is not None and not elev.is_level
+    show_grade, show_xt = bool(np.ptp(grade) > 1e-6), bool(np.ptp(X) > 1e-12)
+    heights = [2.2] + [1.2] * show_elev + [1.0] * show_grade + [1.0] * show_xt
+    if own:  # room for the legend above the panels on a narrow figure: one row more
+        fig = blank_figure((9, 1.5 * sum(heights) + 1.2), len(heights) + 1)
+    fig, axes = new_figure(ax, fig, len(heights), 1, sharex=True, gridspec_kw={"height_ratios": heights})
+    col = list(axes[:, 0])
+    a0 = col[0]
+    _route_speeds(a0, result)
+    a0.set_ylabel("ground speed\n[m/s]")
+    rest = iter(col[1:])
+    if show_elev:
+        a1 = next(rest)
+        a1.fill_between(xs, z.min() - 0.05 * (np.ptp(z) + 1.0), z, color="#d9d9d9")
+        a1.plot(xs, z, color="0.25")
+        a1.set_ylabel("elevation\n[m]")
+    if show_grade:
+        a2 = next(rest)
+        a2.plot(xs, grade, color="0.25")
+        a2.axhline(0.0, color="0.6", lw=0.5)
+        a2.set_ylabel("grade\n[deg]")
+    if show_xt:
+        a3 = next(rest)
+        a3.plot(xs, X, color="#8c510a")
+        a3.set_ylabel("X_t")
+    col[-1].set_xlabel("distance along the route [m]")
+    extra = _route_marks(col, result)
+    handles = a0.get_legend_handles_labels()[0] + extra
+    legend_outside(a0, handles=handles, **({} if fig.get_figwidth() >= 5.0 else {"ncol": 2}))
+    for a in col:
         a.grid(alpha=0.3)
-    title(fig, axes, f"{result.scenario.name}: speeds along the route, elevation and X_t", own)
+    words = [] if show_xt else [f"X_t = {X[0]:g} throughout"]
+    words += [] if show_grade else [_grade_words(result)]
+    title(
+        fig,
+        axes,
+        f"{result.scenario.name}: speed along the route" + (f" ({', '.join(words)})" if words else ""),
+        own,
+    )
     return fig
 
 
@@ -493,5 +674,5 @@ def plot_result(result, out_dir, fmt: str = "png", size=None) -> list:
     """
     out = Path(out_dir)
     names = ["forces", "speeds", "positions"] + list(getattr(result.scenario.mode, "extra_plots", ()))
-    names += ["route"] if result.scenario.terrain.elevation_profile() is not None else []
+    names += ["route"] if route_varies(result) else []
     return [write_figure(out / f"{name}.{fmt}", PLOT_KINDS[name], result, fmt=fmt, size=size) for name in names]

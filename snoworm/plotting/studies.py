@@ -13,12 +13,14 @@ from .style import (
     COLOURS,
     LINESTYLES,
     MARKERS,
+    blank_figure,
     figure_function,
     legend_outside,
     new_figure,
     quantity_label,
     small_pt,
     target_width,
+    title,
     wrap_title,
 )
 
@@ -29,6 +31,7 @@ __all__ = [
     "plot_sweep_heatmap",
     "plot_mobility_map",
     "plot_gradeability",
+    "compared_grades",
 ]
 
 
@@ -68,7 +71,10 @@ def plot_terrain_curves(curves, title=None, *, ax=None, fig=None):
     """Tractive, resistive and net force per wheel against slip at each X_t (paper Figure 3).
 
     ``title``: the figure's title (default: the normal load and direction)."""
-    fig, axes = new_figure(ax, fig, 1, 1, figsize=(9, 5) if target_width() >= 5.0 else (3.5, 3.8))
+    wide = target_width() >= 5.0
+    if ax is None and fig is None and not wide:  # a column: the legend above in two columns, 3 entries per X_t
+        fig = blank_figure((3.5, 3.8), 1.6 + 0.15 * 3 * len(curves.xt))
+    fig, axes = new_figure(ax, fig, 1, 1, figsize=(9, 5) if wide else (3.5, 3.8))
     a = axes[0, 0]
     for m, x in enumerate(curves.xt):
         col = COLOURS[m % len(COLOURS)]
@@ -97,8 +103,8 @@ def plot_terrain_curves(curves, title=None, *, ax=None, fig=None):
         )
     )
     a.grid(alpha=0.3)
-    wide = fig.get_figwidth() >= 5.0  # wide: one column beside; narrow: a column per X_t above
-    legend_outside(a, ncol=(1 if len(curves.xt) < 4 else 2) if wide else min(len(curves.xt), 3))
+    wide = fig.get_figwidth() >= 5.0  # wide: one column beside; narrow: two columns above
+    legend_outside(a, ncol=(1 if len(curves.xt) < 4 else 2) if wide else 2)
     return fig
 
 
@@ -263,19 +269,25 @@ def plot_mobility_map(mmap, *, ax=None, fig=None):
     handles += a1.get_legend_handles_labels()[0]
     if any(r["inching_cheaper"] for r in mmap["rows"]):
         handles.append(Line2D([], [], ls="", marker="*", color=COLOURS[0], label="inching cheaper per metre"))
-    legend_outside(a1, handles=handles)
     a1.set_xlabel("terrain coefficient X_t")
     a1.set_ylabel("tow force [N]")
     if tows.size == 1:
         a1.set_yticks([tows[0]])
-    a1.set_title(wrap_title(f"{mmap['scenario']}: which modes move the vehicle", fig.get_figwidth() / (2 - narrow)))
-    _energy_panel(a2, mmap, fig.get_figwidth() / (2 - narrow))
+    below = ax is None and not narrow  # our own page-wide figure: one legend under both panels
+    panel_in = fig.get_figwidth() * (1.0 if narrow else 0.45)
+    a1.set_title(wrap_title(f"{mmap['scenario']}: which modes move the vehicle", panel_in))
+    _energy_panel(a2, mmap, panel_in, legend=not below)
+    if below:
+        handles += a2.get_legend_handles_labels()[0]
+        fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4), frameon=False)
+    else:
+        legend_outside(a1, handles=handles)
     return fig
 
 
-def _energy_panel(a2, mmap, panel_width):
+def _energy_panel(a2, mmap, panel_width, legend=True):
     """The mobility map's right panel: electrical energy per metre against X_t, rolling and inching, a
-    colour per tow."""
+    colour per tow (with its own legend unless ``legend`` is false)."""
     for j, f in enumerate(mmap["tows"]):
         rs = sorted((r for r in mmap["rows"] if r["tow_N"] == f), key=lambda r: r["xt"])
         xr = [r["xt"] for r in rs if r["rolling"]]
@@ -299,7 +311,7 @@ def _energy_panel(a2, mmap, panel_width):
     a2.set_xlabel("terrain coefficient X_t")
     a2.set_ylabel("electrical energy per metre [J/m]")
     a2.grid(alpha=0.3, which="both")
-    if a2.get_legend_handles_labels()[0]:
+    if legend and a2.get_legend_handles_labels()[0]:
         legend_outside(a2)
     a2.set_title(wrap_title(f"energy per metre (rolling at {mmap['wheel_speed_mps']:g} m/s wheel speed)", panel_width))
 
@@ -308,15 +320,20 @@ _REGION_COLOURS = ["#d9d9d9", COLOURS[1], COLOURS[5]]
 
 
 def _plot_grade_map(mmap, *, ax=None, fig=None):
-    """Regions (rolling, inching only, immobile) over X_t and grade, one panel per tow, with the steady
-    maximum grade of a rolling chain (:func:`snoworm.steady.max_grade_deg`) as a line."""
+    """Regions (rolling, inching only, immobile) over X_t and grade, one panel per tow (side by side;
+    one above the other in a column), with the steady maximum grade of a rolling chain
+    (:func:`snoworm.steady.max_grade_deg`) as a line."""
     REGIONS = tuple(mmap["regions"])
     xts, grades = np.asarray(mmap["xts"], float), np.asarray(mmap["grades"], float)
     code = {r: j for j, r in enumerate(REGIONS)}
     tows = list(mmap["tows"])
-    fig, axes = new_figure(ax, fig, 1, len(tows), figsize=(5.5 * len(tows) + 2, 4.8))
+    narrow = ax is None and target_width() < 5.0  # a column: the panels one above the other
+    shape = (len(tows), 1) if narrow else (1, len(tows))
+    fig, axes = new_figure(
+        ax, fig, *shape, figsize=(3.5, 2.6 * len(tows) + 1.2) if narrow else (5.5 * len(tows) + 2, 4.8)
+    )
     xe, ye = _cell_edges(xts), _cell_edges(grades)
-    for a, f in zip(axes[0], tows):
+    for a, f in zip(axes.flat, tows):
         Z = np.zeros((grades.size, xts.size))
         for r in mmap["rows"]:
             if r["tow_N"] == f:
@@ -341,62 +358,140 @@ def _plot_grade_map(mmap, *, ax=None, fig=None):
         a.set_ylabel("grade [deg]")
         a.set_title(f"{mmap['scenario']}, tow {f:g} N")
     handles = [Patch(color=c, label=lab) for c, lab in zip(_REGION_COLOURS, REGIONS)]
-    handles += axes[0][-1].get_legend_handles_labels()[0]
-    legend_outside(axes[0][-1], handles=handles)
+    handles += axes.flat[-1].get_legend_handles_labels()[0]
+    legend_outside(axes.flat[0] if narrow else axes.flat[-1], handles=handles)
     return fig
+
+
+def _gait_cells(mmap, lab):
+    """A gait's (``"rolling"`` or an inchworm gait label) view of a map row: (moved, speed, energy per
+    metre travelled); moved is None where the gait was not simulated."""
+
+    def cell(r):
+        if lab == "rolling":
+            return r["rolling"], r.get("rolling_speed_mps"), r.get("rolling_energy_per_metre_J_per_m")
+        c = r.get("inching_by_gait", {}).get(lab, r)
+        return c.get("inching"), c.get("inching_speed_mps"), c.get("inching_energy_per_metre_J_per_m")
+
+    return cell
+
+
+def compared_grades(mmap, tow_N, gaits):
+    """Per X_t of the map: the grade [deg] at which the gaits are compared, the steepest grid grade
+    every gait that moved at this X_t climbed (the least of their steepest grades; None where
+    nothing moved), and ``{gait: (speed, energy per metre travelled)}`` there (gaits not simulated
+    or not moving at that grade left out)."""
+    cells = {(r["xt"], r["grade_deg"]): r for r in mmap["rows"] if r["tow_N"] == tow_N}
+    out = []
+    for x in mmap["xts"]:
+        rows = sorted((r for (xx, _), r in cells.items() if xx == x), key=lambda r: r["grade_deg"])
+        tops = [max((r["grade_deg"] for r in rows if _gait_cells(mmap, g)(r)[0]), default=None) for g in gaits]
+        tops = [t for t in tops if t is not None]
+        if not tops:
+            out.append((None, {}))
+            continue
+        g_star = min(tops)
+        vals = {}
+        for g in gaits:
+            moved, speed, energy = _gait_cells(mmap, g)(cells[(x, g_star)])
+            if moved:
+                vals[g] = (speed, energy)
+        out.append((g_star, vals))
+    return out
+
+
+def _gradeability_keys(gaits, tows):
+    """The gradeability figure's legend entries: a colour and marker per gait, the compared grade's
+    mark, a line style per tow (several tows)."""
+    handles = [
+        Line2D(
+            [],
+            [],
+            color=COLOURS[k % len(COLOURS)],
+            marker=MARKERS[0],
+            mfc="none" if k else None,
+            label=("rolling (top: steady limit)" if k == 0 else f"{lab} (top: grid)"),
+        )
+        for k, lab in enumerate(gaits)
+    ]
+    handles.append(Line2D([], [], ls="", marker="_", ms=11, mew=1.6, color="0.35", label="compared grade (grid)"))
+    if len(tows) > 1:
+        handles += [
+            Line2D(
+                [],
+                [],
+                color="0.2",
+                ls=LINESTYLES[j % len(LINESTYLES)],
+                marker=MARKERS[j % len(MARKERS)],
+                label=f"tow {f:g} N",
+            )
+            for j, f in enumerate(tows)
+        ]
+    return handles
 
 
 @figure_function
 def plot_gradeability(mmap, *, ax=None, fig=None):
-    """Gradeability: the steepest grade climbed against X_t, one curve per gait (rolling: its steady
-    limit; each inchworm gait: the steepest grid grade it climbed), and the electrical energy per
-    metre climbed at that grade (``mmap["gradeability"]``, :func:`snoworm.gradeability.gradeability`).
-    A colour per gait, a line style per tow.  ``ax``: two axes.  Returns the Figure."""
-    narrow = ax is None and target_width() < 5.0  # a column: the two panels one above the other
-    fig, axes = new_figure(ax, fig, *((2, 1) if narrow else (1, 2)), figsize=(3.5, 5.6) if narrow else (13, 4.8))
-    a1, a2 = axes.flat
-    for j, f in enumerate(mmap["tows"]):
+    """Gradeability: the steepest grade climbed against X_t, and the speed and electrical energy per
+    metre travelled of every gait *at one grade* per X_t (``mmap["gradeability"]``,
+    :func:`snoworm.studies.gradeability.gradeability`).
+
+    Top: the steepest grade climbed, one curve per gait (rolling: its steady limit; each inchworm
+    gait: the steepest grid grade it climbed), and the grade the lower panels compare the gaits at
+    (:func:`compared_grades`: the steepest grid grade every gait that moves there climbed, so rolling
+    and inching are never compared at different grades).  Middle and bottom: speed and electrical
+    energy per metre travelled there (defined on level ground too, unlike the energy per metre
+    climbed), for rolling and for every gait simulated there (inching is simulated only where the
+    chain does not roll unless ``--every-cell``), as markers (the compared grade may change from
+    one X_t to the next).  A colour per gait (rolling filled, inching open markers), a marker and
+    line style per tow; one legend under the panels.  ``ax``: three axes.  Returns the Figure.
+    """
+    own = ax is None and fig is None
+    fig, axes = new_figure(ax, fig, 3, 1, figsize=(7.5, 8.0), sharex=True, gridspec_kw={"height_ratios": [1.4, 1, 1]})
+    a1, a2, a3 = axes[:, 0]
+    gaits = ["rolling", *(mmap.get("gait_labels") or ["inching"])]
+    tows = list(mmap["tows"])
+    for j, f in enumerate(tows):
         g = mmap["gradeability"][f]
         ls = LINESTYLES[j % len(LINESTYLES)]
-        sfx = f", tow {f:g} N" if len(mmap["tows"]) > 1 else ""
-
-        def pick(xs, vs):
-            return [(x, v) for x, v in zip(xs, vs) if v is not None]
-
-        curves = [("rolling (steady limit)", "rolling", g["rolling_max_grade_deg"], g["rolling_J_per_m_climbed"], {})]
-        curves += [
-            (
-                f"{'inching' if lab == 'inching' else lab} (grid)",
-                "inching" if lab == "inching" else lab,
-                c["grid_deg"],
-                c["J_per_m_climbed"],
-                {"mfc": "none"},
-            )
-            for lab, c in g["inching"].items()
-        ]
-        for k, (lab1, lab2, grade, energy, kw) in enumerate(curves):
-            c, mk = COLOURS[k % len(COLOURS)], MARKERS[k % len(MARKERS)]
-            for a, vals, lab in ((a1, grade, lab1), (a2, energy, lab2)):
-                pts = pick(g["xt"], vals)
-                if pts:
-                    a.plot(*zip(*pts), ls=ls, marker=mk, color=c, ms=5, label=lab + sfx, **kw)
+        tops = [g["rolling_max_grade_deg"]] + [g["inching"][lab]["grid_deg"] for lab in gaits[1:]]
+        compared = compared_grades(mmap, f, gaits)
+        for k, (lab, top) in enumerate(zip(gaits, tops)):
+            kw = dict(ls=ls, marker=MARKERS[j % len(MARKERS)], color=COLOURS[k % len(COLOURS)], ms=5)
+            if k:
+                kw["mfc"] = "none"
+            pts = [(x, v) for x, v in zip(g["xt"], top) if v is not None]
+            if pts:
+                a1.plot(*zip(*pts), **kw)
+            at = [(x, vals[lab]) for x, (_, vals) in zip(mmap["xts"], compared) if lab in vals]
+            if at:
+                # markers only: the compared grade may differ from one X_t to the next
+                a2.plot([x for x, _ in at], [v[0] for _, v in at], **{**kw, "ls": ""})
+                en = [(x, v[1]) for x, v in at if v[1] is not None and v[1] > 0]
+                if en:
+                    a3.plot(*zip(*en), **{**kw, "ls": ""})
+        cg = [(x, gs) for x, (gs, _) in zip(mmap["xts"], compared) if gs is not None]
+        if cg:
+            a1.plot(*zip(*cg), ls="", marker="_", ms=11, mew=1.6, color="0.35", zorder=1)
     grades = mmap["grades"]
     a1.set_ylim(min(grades) - 1, max(grades) + 1)
-    a1.set_xlabel("terrain coefficient X_t")
-    a1.set_ylabel("steepest grade climbed [deg]")
-    a1.set_title(
-        wrap_title(
-            f"{mmap['scenario']}: gradeability (grid {min(grades):g} to {max(grades):g} deg)",
-            fig.get_figwidth() / (2 - narrow),
-        )
-    )
-    a2.set_xlabel("terrain coefficient X_t")
-    a2.set_ylabel("electrical energy per metre climbed [J/m]")
-    a2.set_title(wrap_title("at the steepest grid grade climbed", fig.get_figwidth() / (2 - narrow)))
-    if a2.get_lines():
-        a2.set_yscale("log")
-    for a in (a1, a2):
+    a1.set_ylabel("steepest grade\nclimbed [deg]")
+    a2.set_ylabel("speed\n[m/s]")
+    a3.set_ylabel("energy per\nmetre [J/m]")
+    a3.set_xlabel("terrain coefficient X_t")
+    if a3.get_lines():
+        a3.set_yscale("log")
+    for a in (a1, a2, a3):
         a.grid(alpha=0.3, which="both")
-        if a.get_legend_handles_labels()[0]:
-            legend_outside(a)
+    handles = _gradeability_keys(gaits, tows)
+    text = (
+        f"{mmap['scenario']}: gradeability on a grid of {min(grades):g} to {max(grades):g} deg; speed and "
+        "energy of each gait at one grade per X_t"
+    )
+    if own:
+        fig.legend(handles=handles, loc="outside lower center", ncol=2, frameon=False)
+        title(fig, axes, text, own)
+    else:
+        legend_outside(a1, handles=handles)
+        a1.set_title(wrap_title(text, a1.get_position().width * fig.get_figwidth()))
     return fig

@@ -264,19 +264,22 @@ def _create(figsize):
     return plt.figure(figsize=figsize, layout="constrained", FigureClass=NotebookFigure)
 
 
-def series_style(k: int, n_points: int = 0) -> dict:
-    """Line keyword arguments of the ``k``-th series: colour, line style, a sparse marker.
+def series_style(k: int, n_points: int = 0, n_series: int = 1) -> dict:
+    """Line keyword arguments of the ``k``-th of ``n_series`` series: colour, line style, a sparse
+    marker.
 
-    Markers are placed at ``n_points // 12``-sample intervals, shifted per series so that the
-    markers of coinciding traces do not hide one another.
+    Each series gets 12 markers when alone or in a pair, fewer with more series (about 24 in all,
+    at least 3 each), placed at ``n_points // markers``-sample intervals and interleaved evenly
+    between the series, so that coinciding traces show one marker at a time instead of a pile.
     """
-    every = max(n_points // 12, 1)
+    per = min(12, max(3, 24 // max(int(n_series), 1)))
+    every = max(n_points // per, 1)
     return {
         "color": COLOURS[k % len(COLOURS)],
         "ls": LINESTYLES[k % len(LINESTYLES)],
         "marker": MARKERS[k % len(MARKERS)],
         "ms": 4,
-        "markevery": (int((k * every) // 7) % every, every) if n_points else None,
+        "markevery": (int(((k % max(n_series, 1)) * every) // max(n_series, 1)) % every, every) if n_points else None,
     }
 
 

@@ -27,6 +27,7 @@ from ..model.quantities import output_series
 from . import frames
 from .copies import copy_inputs, input_problem
 from .energy import energy_along, energy_metrics
+from .step import step_responses
 from .verdict import verdict as judge
 
 if TYPE_CHECKING:
@@ -216,7 +217,18 @@ class Result:
             "sources": self.scenario.sources,
         }
         s.update(self.mode_summary)
+        steps = step_responses(self)
+        if steps is not None:
+            s["step_response"] = steps
         return s
+
+    def step_info(self) -> list | None:
+        """Step-response metrics of a controlled run (:func:`snoworm.results.step.step_responses`,
+        python-control's ``step_info`` conventions): rise time (10-90 %), settling time (2 %),
+        overshoot and undershoot [%], peak, steady-state error, one dict per response (the chain's
+        speed against its set-point; in force control each controlled link's force against its
+        reference).  None for a gait.  Also in ``summary.json`` as ``step_response``."""
+        return step_responses(self)
 
     # ------------------------------------------------------------------ data and figures
     @property
@@ -406,6 +418,7 @@ _SUMMARY_KEYS = (
     "solver",
     "events",
     "sources",
+    "step_response",
 )
 
 
