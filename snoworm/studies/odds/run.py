@@ -17,11 +17,20 @@ import io
 import json
 import os
 import sys
+from collections.abc import Iterable, Sequence
 from contextlib import ExitStack
 from dataclasses import dataclass, field as dc_field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import pandas
+    from numpy.typing import NDArray
+
+    from ...config.scenario import Scenario
+    from ..sweep.run import SweepExecutor
 
 from ..._version import __version__
 from ...config.scenario import apply_overrides, parse_set_option, scenario_from_dict
@@ -47,7 +56,7 @@ from ..sweep.run import _base
 from . import screen
 from .inputs import Uncertainty, parse_vary, parse_xt_field, read_calibration, uncertainty_from_section
 from .outcome import OUTCOME_COLUMNS, STRATEGIES, OddsTask, goal_of, run_draw, strategy_raw
-from .sampling import design
+from .sampling import Design, design
 from .stats import PERCENTILES, percentiles, sobol, wilson
 
 __all__ = ["odds", "OddsResult", "FIDELITIES", "MAX_DRAWS", "DEFINITION_FILE", "summary_text", "load_odds"]
@@ -77,7 +86,7 @@ class OddsResult:
     out_dir: Path | None = None
     figures: list = dc_field(default_factory=list)
 
-    def to_pandas(self):
+    def to_pandas(self) -> pandas.DataFrame:
         """``samples.csv`` as a pandas DataFrame."""
         import pandas as pd  # lazy: optional at import time (results.frames does the same)
 
@@ -86,7 +95,7 @@ class OddsResult:
     def p_go(self, strategy: str) -> float:
         return self.summary["strategies"][strategy]["p_go"]
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return f"OddsResult({self.text!r})"
 
 
@@ -96,12 +105,12 @@ class _Plan:
     raw: dict
     source: str
     base_dir: str | None
-    sc: object
+    sc: Scenario
     unc: Uncertainty
     strategies: list
     strategy_raws: dict
     goal_m: float | None
-    dsg: object
+    dsg: Design
     values: dict  # path -> array over draws
     columns: list
     definition: dict
@@ -489,29 +498,29 @@ def _summary(plan: _Plan, rows: dict) -> dict:
 
 # ------------------------------------------------------------------------------------- the entry
 def odds(  # noqa: PLR0913 - the options of `snoworm odds`, one keyword each
-    scenario,
+    scenario: str | os.PathLike[str] | Scenario | dict[str, Any],
     *,
-    vary=(),
-    xt_field=None,
-    calibration=None,
-    sets=(),
+    vary: str | Sequence[str] = (),
+    xt_field: str | None = None,
+    calibration: str | os.PathLike[str] | None = None,
+    sets: str | Sequence[str] = (),
     samples: int = 1000,
     method: str = "random",
     seed: int = 0,
-    strategies=None,
+    strategies: str | Sequence[str] | None = None,
     sensitivity: bool = False,
     fidelity: str = "transient",
     goal_m: float | None = None,
     rolling_speed: float | None = None,
-    out_dir=None,
+    out_dir: str | os.PathLike[str] | None = None,
     jobs: int = 1,
-    scheduler=None,
-    executor=None,
+    scheduler: str | None = None,
+    executor: SweepExecutor | None = None,
     overwrite: bool = False,
     plot: bool = True,
     plot_format: str = "png",
-    progress=None,
-    allow_code=(),
+    progress: bool | None = None,
+    allow_code: Iterable[str | os.PathLike[str]] = (),
     command: str | None = None,
 ) -> OddsResult:
     """The odds of getting through: sample the uncertain inputs, run each draw for each strategy, estimate P(go).
@@ -650,7 +659,7 @@ def _json(v):
     raise TypeError(f"not JSON: {type(v).__name__}")
 
 
-def route_data(sc, goal_m, rows) -> dict:
+def route_data(sc: Scenario, goal_m: float | None, rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """The route for the stops figure: leader positions from the start to the end (or the farthest
     stop), the elevation and the nominal X_t there."""
     far = max([goal_m or 0.0] + [r["stop_m"] for r in rows if r.get("stop_m") is not None] + [1.0])
@@ -660,7 +669,9 @@ def route_data(sc, goal_m, rows) -> dict:
     return {"x_m": x, "elevation_m": z, "xt": np.asarray(sc.terrain.compile()(x), float), "goal_m": goal_m}
 
 
-def convergence(rows, strategies, independent) -> dict:
+def convergence(
+    rows: Sequence[dict[str, Any]], strategies: Sequence[str], independent: NDArray[np.bool_]
+) -> dict[str, dict[str, NDArray[np.float64]]]:
     """P(go) and its Wilson interval after the first n independent draws, per strategy (n on a log grid)."""
     out = {}
     for s in strategies:
@@ -686,7 +697,7 @@ def _write_figures(res: OddsResult, plan: _Plan, out: Path, plot_format: str) ->
     return odds_plots.write_odds_figures(rows, res.summary, route, curves, out, plot_format)
 
 
-def load_odds(out_dir) -> dict:
+def load_odds(out_dir: str | os.PathLike[str]) -> dict[str, Any]:
     """The ``odds.json`` of an odds study's folder."""
     path = Path(out_dir) / "odds.json"
     try:
