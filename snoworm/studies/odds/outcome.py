@@ -17,20 +17,16 @@ from __future__ import annotations
 
 import dataclasses
 import time
-import traceback
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from ...config.scenario import apply_overrides, scenario_from_dict
 from ...config.schema import ScenarioError, quote
-from ...infra.pool import interrupt_within
-from ...modes.controller import ControllerError
-from ...simulation.driver import SolverError, simulate
+from ...simulation.driver import simulate
 from ...terrain import TerrainProfile, gaussian_field
 from ..mobility import inching_mode_raw
-from ..sweep.metrics import IMMOBILISED_SIGN_FACTOR, IMMOBILISED_SPEED_MPS, LATE_FRACTION, one_line
+from ..sweep.metrics import IMMOBILISED_SIGN_FACTOR, IMMOBILISED_SPEED_MPS, LATE_FRACTION, failure_row
 from .inputs import XT_FIELD_FLOOR
 
 __all__ = [
@@ -295,19 +291,8 @@ def run_draw(task: OddsTask) -> dict:
     try:
         res = simulate(task.scenario(), allow_code=task.allow_code)
         out.update(outcome(res, task.goal_m))
-    except ScenarioError as exc:
-        out.update(status="invalid", error=one_line(exc))
-    except SolverError as exc:
-        out.update(status="solver_failure", error=one_line(exc))
-    except ControllerError as exc:
-        out.update(status="controller_failure", error=one_line(exc))
     except Exception as exc:  # noqa: BLE001 - a draw must never stop the study
-        interrupt = interrupt_within(exc)
-        if interrupt is not None:
-            raise interrupt from None
-        tb = traceback.extract_tb(exc.__traceback__)
-        where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
-        out.update(status="error", error=one_line(f"{type(exc).__name__}: {exc}{where}"))
+        out.update(failure_row(exc))
     out["wall_time_s"] = time.perf_counter() - wall0
     return out
 

@@ -36,6 +36,7 @@ __all__ = [
     "SweepTask",
     "case_metrics",
     "run_case",
+    "failure_row",
     "one_line",
     "save_case_series",
     "IMMOBILISED_SPEED_MPS",
@@ -229,18 +230,28 @@ def run_case(task: SweepTask) -> dict:
         if task.save_dir:
             out.update(save_case_series(res, task.save_dir, task.lock_token))
         del res
-    except ScenarioError as exc:
-        out.update(status="invalid", error=one_line(exc))
-    except SolverError as exc:
-        out.update(status="solver_failure", error=one_line(exc))
-    except ControllerError as exc:
-        out.update(status="controller_failure", error=one_line(exc))
     except Exception as exc:  # noqa: BLE001 - a case must never stop the sweep
-        interrupt = interrupt_within(exc)
-        if interrupt is not None:  # Ctrl-C/SIGTERM inside a C call: the sweep stops, the case is not recorded
-            raise interrupt from None
-        tb = traceback.extract_tb(exc.__traceback__)
-        where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
-        out.update(status="error", error=one_line(f"{type(exc).__name__}: {exc}{where}"))
+        out.update(failure_row(exc))
     out["wall_time_s"] = time.perf_counter() - wall0
     return out
+
+
+def failure_row(exc: Exception) -> dict:
+    """``{"status", "error"}`` of a case (or an odds draw) that raised ``exc``: ``invalid`` (a
+    ScenarioError), ``solver_failure``, ``controller_failure``, else ``error`` with the exception's
+    type and where it was raised.  An interrupt inside it (Ctrl-C/SIGTERM within a C call,
+    :func:`~snoworm.infra.pool.interrupt_within`) is raised instead: the study stops, the case is
+    not recorded."""
+    for kind, status in (
+        (ScenarioError, "invalid"),
+        (SolverError, "solver_failure"),
+        (ControllerError, "controller_failure"),
+    ):
+        if isinstance(exc, kind):
+            return {"status": status, "error": one_line(exc)}
+    interrupt = interrupt_within(exc)
+    if interrupt is not None:
+        raise interrupt from None
+    tb = traceback.extract_tb(exc.__traceback__)
+    where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
+    return {"status": "error", "error": one_line(f"{type(exc).__name__}: {exc}{where}")}
