@@ -474,7 +474,9 @@ def plot_gradeability(mmap, *, ax=None, fig=None):
         if cg:
             a1.plot(*zip(*cg), ls="", marker="_", ms=11, mew=1.6, color="0.35", zorder=1)
     grades = mmap["grades"]
-    a1.set_ylim(min(grades) - 1, max(grades) + 1)
+    # the grid's range, up to a steady rolling limit above it (X_t 1.0 rolls to 28 deg on a 25 deg grid);
+    # limits below the grid (cannot start on level snow) are the printed sentences' to tell
+    a1.set_ylim(min(grades) - 1, np.nanmax([max(grades), a1.dataLim.y1]) + 1)
     a1.set_ylabel("steepest grade\nclimbed [deg]")
     a2.set_ylabel("speed\n[m/s]")
     a3.set_ylabel("energy per\nmetre [J/m]")
