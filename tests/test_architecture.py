@@ -53,8 +53,6 @@ LAZY_OK = {
     "IPython",
     "snoworm.steady",
     "snoworm.modes.force_plan",
-    # issue 32's immobilisation verdict: absent until it lands (studies/odds/outcome.py falls back)
-    "snoworm.results.verdict",
 }
 
 

@@ -67,9 +67,6 @@ IMMOBILISED_SPEED_MPS = 0.05
 #: ``tanh(V / sign_eps_mps) > tanh(5) = 0.9999``, the resistance is saturated and what is left is the
 #: smooth sign's creep (0.006 m/s at X_t 0.5, 0.032 m/s at the rolling limit 0.586 for FrostyBoy).
 IMMOBILISED_SIGN_FACTOR = 5.0
-#: Name of the terrain model's maximum sinkage [m] (docs/model.md section 2, "Slip-sinkage"), used
-#: when ``sinkage_m`` is not given and the model's sinkage law is on.
-SINKAGE_LIMIT_FIELD = "sinkage_max_m"
 #: The default dug-in sinkage as a fraction of the law's maximum: the law approaches its maximum
 #: only asymptotically (its growth falls with 1 - z / z_max), so the limit itself is never reached;
 #: at 90 % the hub is nearly in the snow.
@@ -190,8 +187,8 @@ def criteria_of(scenario, **changes) -> Criteria:
     if speed is None:
         speed = max(IMMOBILISED_SPEED_MPS, IMMOBILISED_SIGN_FACTOR * model.sign_eps_mps)
     sinkage = cfg.sinkage_m
-    if sinkage is None and getattr(model, "sinkage", "off") != "off":
-        sinkage = SINKAGE_LIMIT_FRACTION * getattr(model, SINKAGE_LIMIT_FIELD)
+    if sinkage is None and model.sinkage != "off":
+        sinkage = SINKAGE_LIMIT_FRACTION * model.sinkage_max_m
     crit = Criteria(
         speed_mps=float(speed),
         window_s=float(cfg.window_s),

@@ -23,10 +23,11 @@ import numpy as np
 
 from ...config.scenario import apply_overrides, scenario_from_dict
 from ...config.schema import ScenarioError, quote
+from ...results.verdict import verdict
 from ...simulation.driver import simulate
 from ...terrain import TerrainProfile, gaussian_field
 from ..mobility import inching_mode_raw
-from ..sweep.metrics import IMMOBILISED_SIGN_FACTOR, IMMOBILISED_SPEED_MPS, LATE_FRACTION, failure_row
+from ..sweep.metrics import failure_row
 from .inputs import XT_FIELD_FLOOR
 
 __all__ = [
@@ -168,23 +169,10 @@ def _leader_crossing(t, x, goal):
     return float(t[j - 1] + (goal - x[j - 1]) / (x[j] - x[j - 1]) * (t[j] - t[j - 1]))
 
 
-def _late_speed(result):
-    t = np.asarray(result.t, float)
-    x = result.segments["x_m"]
-    t1, dur = float(t[-1]), float(t[-1] - t[0])
-    j = min(int(np.searchsorted(t, t1 - LATE_FRACTION * dur - 1e-9)), max(len(t) - 2, 0))
-    return float(np.mean(x[-1] - x[j])) / (t1 - float(t[j])) if t1 > t[j] else 0.0
-
-
 def _stop_verdict(result, goal_m=None) -> dict:
-    """Where, when and why the chain stopped: ``{"status", "x_m", "t_s", "reason"}``.
-
-    Uses the immobilisation verdict of ``snoworm.results.verdict`` (issue 32) where it exists.
-    Without it, a PROVISIONAL rule (until that module lands): the leader reached the end if its
-    position reaches ``goal_m``; else it is immobilised when the chain's mean speed over the last
-    quarter of the run is below the sweeps' threshold (``max(0.05 m/s, 5 sign_eps_mps)``,
-    :mod:`snoworm.studies.sweep.metrics`), else still moving; the stop position is then the leader's
-    final position.  "Reached the end" is decided here in both cases (``goal_m``, :func:`goal_of`).
+    """Where, when and why the chain stopped: ``{"status", "x_m", "t_s", "reason"}``, from the run's
+    verdict (:func:`snoworm.results.verdict.verdict`, the test of runs, sweeps and the mobility map);
+    "reached the end" is decided here, from ``goal_m`` (:func:`goal_of`).
     """
     t = np.asarray(result.t, float)
     lead = result.segments["x_m"][:, 0]
@@ -192,31 +180,10 @@ def _stop_verdict(result, goal_m=None) -> dict:
         tg = _leader_crossing(t, lead, goal_m)
         if tg is not None:
             return {"status": "reached_end", "x_m": float(goal_m), "t_s": tg, "reason": "reached the end of the route"}
-    try:
-        from ...results.verdict import verdict  # lazy: issue 32's module, absent before it lands
-    except ImportError:
-        verdict = None
-    if verdict is not None:
-        v = verdict(result)
-        status = "moving" if v.status == "reached_end" else v.status  # the end is goal_m's, decided above
-        x = float(v.x_m) if v.status == "immobilised" else float(lead[-1])
-        return {"status": status, "x_m": x, "t_s": float(v.t_s), "reason": v.reason}
-    eps = result.scenario.terrain.model.sign_eps_mps
-    thr = max(IMMOBILISED_SPEED_MPS, IMMOBILISED_SIGN_FACTOR * eps)
-    late = _late_speed(result)
-    if late < thr:
-        return {
-            "status": "immobilised",
-            "x_m": float(lead[-1]),
-            "t_s": float(t[-1]),
-            "reason": f"mean speed {late:.3g} m/s over the last quarter of the run, below {thr:g} m/s",
-        }
-    return {
-        "status": "moving",
-        "x_m": float(lead[-1]),
-        "t_s": float(t[-1]),
-        "reason": "still moving at the end of the run",
-    }
+    v = verdict(result)
+    status = "moving" if v.status == "reached_end" else v.status  # the end is goal_m's, decided above
+    x = float(v.x_m) if v.status == "immobilised" else float(lead[-1])
+    return {"status": status, "x_m": x, "t_s": float(v.t_s), "reason": v.reason}
 
 
 def _site(result) -> tuple:
